@@ -1,0 +1,1 @@
+"""Performance measurements behind ``pdfem bench`` (figures, not tests)."""

@@ -1,0 +1,1 @@
+"""Ice-structure coupling: surface-element contact, load transfer and subcycling."""

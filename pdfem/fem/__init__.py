@@ -1,0 +1,1 @@
+"""Finite-element structures (scikit-fem): meshes, assembly, explicit time integration."""
