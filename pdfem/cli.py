@@ -1,0 +1,152 @@
+"""The ``pdfem`` command line.
+
+    pdfem run CASE.toml [--out DIR] [--quiet] [--json]
+    pdfem bench {search,step} [--n N] [--json]
+    pdfem info [--json]
+    pdfem --version
+
+Exit status: 0 success, 2 bad input (the message names file and field), 3 a run stopped by a
+detected instability, 1 anything else. With ``--json`` standard output holds exactly one JSON
+object and nothing else.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import platform
+import sys
+import traceback
+import warnings
+from pathlib import Path
+
+from . import __version__
+from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, EXIT_OK, InputError, InstabilityError
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # argparse's own errors are bad input too: exit 2, no traceback
+        self.print_usage(sys.stderr)
+        raise InputError(None, None, f"{self.prog}: {message}")
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="pdfem", description="Ice loads on structures: peridynamic ice, finite-element structures. SI units.")
+    p.add_argument("--version", action="version", version=f"pdfem {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    r = sub.add_parser("run", help="run a case file")
+    r.add_argument("case", help="case file (TOML, SI units)")
+    r.add_argument("--out", default=None, help="output directory (default: results/<case name>)")
+    r.add_argument("--quiet", action="store_true", help="no progress or messages")
+    r.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
+
+    b = sub.add_parser("bench", help="performance measurements (not tests)")
+    b.add_argument("what", choices=["search", "step"])
+    b.add_argument("--n", type=int, default=1_000_000, help="number of particles (default 1,000,000)")
+    b.add_argument("--json", action="store_true", help="print one JSON object")
+
+    i = sub.add_parser("info", help="versions, threads and MPI")
+    i.add_argument("--json", action="store_true", help="print one JSON object")
+    return p
+
+
+def _info() -> dict:
+    import numba
+    out = {"pdfem": __version__, "python": platform.python_version(), "platform": platform.platform(),
+           "numba_threads": numba.get_num_threads()}
+    for mod in ("numpy", "scipy", "numba", "h5py", "meshio", "skfem", "gmsh", "matplotlib", "mpi4py"):
+        try:
+            m = __import__(mod)
+            out[mod] = getattr(m, "__version__", "installed")
+        except Exception as exc:  # an optional part that does not import is reported, not fatal
+            out[mod] = f"unavailable ({type(exc).__name__}: {exc})"
+    try:
+        from mpi4py import MPI
+        out["mpi_library"] = MPI.Get_library_version().splitlines()[0].strip()
+    except Exception as exc:
+        out["mpi_library"] = f"unavailable ({type(exc).__name__})"
+    return out
+
+
+def _cmd_run(args) -> int:
+    from .config import load_case
+    from .driver import run_case
+    case = load_case(args.case)
+    out = Path(args.out) if args.out else Path("results") / Path(args.case).stem
+    if args.json:
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            summary = run_case(case, out, quiet=True)
+        print(json.dumps({"results": str(summary.results), "steps": summary.steps,
+                          "time_step": summary.time_step, "end_time": summary.end_time,
+                          "wall_seconds": summary.wall_seconds, "particles": summary.particles,
+                          "bonds": summary.bonds, "broken_bonds": summary.broken_bonds,
+                          "frames": summary.frames}))
+    else:
+        summary = run_case(case, out, quiet=args.quiet)
+        if not args.quiet:
+            print(summary.text())
+    return EXIT_OK
+
+
+def _cmd_bench(args) -> int:
+    if args.n < 8:
+        raise InputError(None, "--n", "the benchmark needs at least 8 particles", args.n)
+    if args.what == "search":
+        from .bench.search import bench_search as fn
+    else:
+        from .bench.step import bench_step as fn
+    res = fn(n=args.n)
+    if args.json:
+        print(json.dumps(res))
+    else:
+        for k, v in res.items():
+            print(f"{k:>32}: {v}")
+    return EXIT_OK
+
+
+def _cmd_info(args) -> int:
+    info = _info()
+    if args.json:
+        print(json.dumps(info))
+    else:
+        for k, v in info.items():
+            print(f"{k:>14}: {v}")
+    return EXIT_OK
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``pdfem`` console script; returns the exit status."""
+    try:
+        args = _parser().parse_args(argv)
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")
+            warnings.showwarning = lambda msg, *a, **k: print(f"warning: {msg}", file=sys.stderr)
+            return {"run": _cmd_run, "bench": _cmd_bench, "info": _cmd_info}[args.command](args)
+    except InputError as exc:
+        print(exc.text(), file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except InstabilityError as exc:
+        print(f"Run stopped: {exc}", file=sys.stderr)
+        return EXIT_INSTABILITY
+    except KeyboardInterrupt:
+        print("interrupted; results written so far are kept", file=sys.stderr)
+        return EXIT_FAILURE
+    except SystemExit as exc:  # --help / --version
+        return int(exc.code or 0) if isinstance(exc.code, int) else EXIT_OK
+    except Exception:
+        traceback.print_exc()
+        print("pdfem: an internal error stopped the run (exit 1); results written so far are kept.",
+              file=sys.stderr)
+        return EXIT_FAILURE
+
+
+def _entry() -> None:  # pragma: no cover
+    sys.exit(main())
+
+
+if __name__ == "__main__":  # pragma: no cover
+    _entry()

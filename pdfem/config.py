@@ -1,0 +1,361 @@
+"""Case files: TOML text parsed into typed, validated objects.
+
+A case file describes one run in SI units (m, kg, s, Pa, J/m^2). Every field is checked here,
+once, before anything is built; an invalid or unknown field raises :class:`pdfem.errors.InputError`
+naming the file, the field, the value and what would be valid. Case files are data: nothing in
+them is evaluated.
+
+Shape of a case file::
+
+    [run]
+    end_time = 2e-3            # s
+    output_interval = 1e-4     # s between result frames
+    time_step = 0.0            # s; 0 or absent = automatic (Silling & Askari estimate x safety_factor)
+    safety_factor = 0.8        # applied to the automatic step
+    pd_loop = "pairs"          # or "full_family" (the per-particle reference loop)
+    gravity = [0, 0, 0]        # m/s^2
+
+    [[ice]]
+    name = "beam"
+    dx = 0.01                  # m, lattice spacing
+    horizon_factor = 3.015     # horizon = horizon_factor * dx (or give horizon = ... in m)
+    shape = { box = { min = [0, 0, 0], max = [0.6, 0.1, 0.1] } }
+    material = { density = 900, youngs_modulus = 4.1e9, poisson_ratio = 0.3, fracture_energy = 10 }
+    initial_velocity = [0, 0, 0]
+    fixed = [ { box = { min = [...], max = [...] } } ]
+    prescribed_velocity = [ { region = { box = {...} }, velocity = [0, 0, -0.5], ramp_time = 1e-4 } ]
+    no_fail = [ { box = {...} } ]
+    cracks = [ { point = [0.3, 0.05, 0], normal = [1, 0, 0], box = { min = [...], max = [...] } } ]
+
+Shapes and regions are one of ``box = {min, max}``, ``cylinder = {base, axis, radius, length}``,
+``sphere = {center, radius}`` or (shapes only) ``mesh = {file, group}`` for a closed surface mesh
+(path relative to the case file).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import InputError
+from .pd.material import SEA_ICE_DEFAULTS, IceMaterial
+from .shapes import Box, ClosedSurface, Cylinder, Sphere
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+Shape = Box | Cylinder | Sphere | ClosedSurface
+
+
+class Table:
+    """A TOML table being read: typed getters that record which keys were used.
+
+    Every getter raises :class:`InputError` with the file and dotted field path; :meth:`done`
+    rejects keys that no getter asked for (a misspelt key must not be silently ignored).
+    """
+
+    def __init__(self, data: Any, file: str, path: str):
+        if not isinstance(data, dict):
+            raise InputError(file, path or None, "expected a table ({ key = value, ... })", data)
+        self.data, self.file, self.path = data, file, path
+        self.used: set[str] = set()
+
+    def field(self, key: str) -> str:
+        return f"{self.path}.{key}" if self.path else key
+
+    def error(self, key: str, message: str, value: Any = ...) -> InputError:
+        return InputError(self.file, self.field(key), message, value)
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def raw(self, key: str, default: Any = ...) -> Any:
+        self.used.add(key)
+        if key not in self.data:
+            if default is ...:
+                raise self.error(key, "this field is required")
+            return default
+        return self.data[key]
+
+    def number(self, key: str, default: Any = ..., *, low: float | None = None,
+               high: float | None = None, low_open: bool = False, high_open: bool = False,
+               unit: str = "") -> float:
+        v = self.raw(key, default)
+        if v is None:
+            return None
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise self.error(key, f"expected a finite number{' in ' + unit if unit else ''}", v)
+        bad = (low is not None and (v <= low if low_open else v < low)) or \
+              (high is not None and (v >= high if high_open else v > high))
+        if bad:
+            lo = "" if low is None else (f"> {low:g}" if low_open else f">= {low:g}")
+            hi = "" if high is None else (f"< {high:g}" if high_open else f"<= {high:g}")
+            rng = " and ".join(s for s in (lo, hi) if s)
+            raise self.error(key, f"must be {rng}{' ' + unit if unit else ''}", v)
+        return float(v)
+
+    def positive(self, key: str, default: Any = ..., unit: str = "") -> float:
+        return self.number(key, default, low=0.0, low_open=True, unit=unit)
+
+    def vector(self, key: str, default: Any = ..., unit: str = "") -> tuple[float, float, float]:
+        v = self.raw(key, default)
+        ok = isinstance(v, (list, tuple)) and len(v) == 3 and all(
+            isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c) for c in v)
+        if not ok:
+            raise self.error(key, f"expected three finite numbers [x, y, z]{' in ' + unit if unit else ''}", v)
+        return (float(v[0]), float(v[1]), float(v[2]))
+
+    def string(self, key: str, default: Any = ..., choices: tuple[str, ...] | None = None) -> str:
+        v = self.raw(key, default)
+        if not isinstance(v, str) or not v:
+            raise self.error(key, "expected a non-empty string", v)
+        if choices and v not in choices:
+            raise self.error(key, "must be one of " + ", ".join(f'"{c}"' for c in choices), v)
+        return v
+
+    def table(self, key: str, default: Any = ...) -> "Table":
+        v = self.raw(key, default)
+        return Table(v, self.file, self.field(key))
+
+    def tables(self, key: str) -> list["Table"]:
+        v = self.raw(key, [])
+        if isinstance(v, dict):
+            v = [v]
+        if not isinstance(v, list):
+            raise self.error(key, "expected a list of tables", v)
+        return [Table(item, self.file, f"{self.field(key)}[{i}]") for i, item in enumerate(v)]
+
+    def done(self) -> None:
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            known = ", ".join(sorted(self.used)) or "(none)"
+            raise self.error(unknown[0], f"unknown key; the keys read here are: {known}")
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """Time-loop settings (seconds)."""
+
+    end_time: float
+    output_interval: float
+    time_step: float | None = None
+    safety_factor: float = 0.8
+    pd_loop: str = "pairs"
+    gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    title: str = ""
+
+
+@dataclass(frozen=True)
+class VelocityBC:
+    """Particles in ``region`` move with ``velocity`` (m/s), ramped linearly over ``ramp_time`` (s)."""
+
+    region: Shape
+    velocity: tuple[float, float, float]
+    ramp_time: float = 0.0
+    field: str = ""
+
+
+@dataclass(frozen=True)
+class Crack:
+    """A planar pre-crack: the part of the plane (``point``, ``normal``) inside ``box``.
+
+    Every bond crossing it is broken at t = 0.
+    """
+
+    point: tuple[float, float, float]
+    normal: tuple[float, float, float]
+    box: Box
+    field: str = ""
+
+
+@dataclass(frozen=True)
+class IceConfig:
+    """One peridynamic ice body."""
+
+    name: str
+    dx: float
+    horizon: float
+    shape: Shape
+    material: IceMaterial
+    initial_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    fixed: tuple[tuple[Shape, str], ...] = ()
+    prescribed_velocity: tuple[VelocityBC, ...] = ()
+    no_fail: tuple[tuple[Shape, str], ...] = ()
+    cracks: tuple[Crack, ...] = ()
+    field: str = ""
+
+
+@dataclass(frozen=True)
+class Case:
+    """A validated case: what to simulate and how."""
+
+    run: RunConfig
+    ice: tuple[IceConfig, ...]
+    file: str = "<built-in>"
+    text: str = ""
+    directory: Path = field(default_factory=Path.cwd)
+
+
+def _shape(t: Table, base_dir: Path, allow_mesh: bool) -> Shape:
+    kinds = ("box", "cylinder", "sphere") + (("mesh",) if allow_mesh else ())
+    given = [k for k in kinds if t.has(k)]
+    if len(given) != 1:
+        extra = sorted(set(t.data) - set(kinds))
+        what = f"unknown key '{extra[0]}'; " if extra else ""
+        raise InputError(t.file, t.path, what + "expected exactly one of " + ", ".join(kinds), t.data)
+    kind = given[0]
+    s = t.table(kind)
+    try:
+        if kind == "box":
+            shape = Box(s.vector("min", unit="m"), s.vector("max", unit="m"))
+        elif kind == "cylinder":
+            shape = Cylinder(s.vector("base", unit="m"), s.vector("axis"), s.positive("radius", unit="m"),
+                             s.positive("length", unit="m"))
+        elif kind == "sphere":
+            shape = Sphere(s.vector("center", unit="m"), s.positive("radius", unit="m"))
+        else:
+            fname = s.string("file")
+            group = s.string("group", None) if s.has("group") else None
+            path = (base_dir / fname) if not Path(fname).is_absolute() else Path(fname)
+            if not path.is_file():
+                raise s.error("file", f"no such mesh file ({path})", fname)
+            shape = ClosedSurface.from_file(path, group)
+    except ValueError as exc:
+        raise InputError(t.file, t.field(kind), str(exc)) from None
+    s.done()
+    t.done()
+    return shape
+
+
+def _material(t: Table) -> IceMaterial:
+    d = SEA_ICE_DEFAULTS
+    rho = t.positive("density", d["density"], unit="kg/m^3")
+    E = t.positive("youngs_modulus", d["youngs_modulus"], unit="Pa")
+    nu = t.number("poisson_ratio", d["poisson_ratio"], low=-1.0, high=0.5, low_open=True, high_open=True)
+    if t.has("fracture_energy") and t.has("critical_stretch"):
+        raise t.error("critical_stretch", "give either fracture_energy (J/m^2) or critical_stretch, not both")
+    g0 = t.positive("fracture_energy", None if t.has("critical_stretch") else d["fracture_energy"], unit="J/m^2")
+    s0 = t.positive("critical_stretch", None)
+    t.done()
+    return IceMaterial(density=rho, youngs_modulus=E, poisson_ratio=nu, fracture_energy=g0, critical_stretch=s0)
+
+
+def _ice(t: Table, base_dir: Path) -> IceConfig:
+    name = t.string("name")
+    dx = t.positive("dx", unit="m")
+    if t.has("horizon") and t.has("horizon_factor"):
+        raise t.error("horizon", "give either horizon (m) or horizon_factor (multiple of dx), not both")
+    if t.has("horizon"):
+        horizon = t.positive("horizon", unit="m")
+    else:
+        horizon = t.number("horizon_factor", 3.015, low=1.0, low_open=True) * dx
+    if horizon <= dx:
+        raise t.error("horizon", f"the horizon must be larger than the spacing dx = {dx:g} m "
+                      "(3 dx is usual: horizon_factor = 3.015)", horizon)
+    shape = _shape(t.table("shape"), base_dir, allow_mesh=True)
+    lo, hi = shape.bounds()
+    if min(hi[k] - lo[k] for k in range(3)) < dx * (1 - 1e-9):
+        raise t.error("dx", f"the spacing is larger than the body's thinnest extent "
+                      f"({min(hi[k] - lo[k] for k in range(3)):g} m); choose a smaller dx", dx)
+    material = _material(t.table("material", {}))
+    v0 = t.vector("initial_velocity", (0.0, 0.0, 0.0), unit="m/s")
+    fixed = tuple((_shape(r, base_dir, False), r.path) for r in t.tables("fixed"))
+    no_fail = tuple((_shape(r, base_dir, False), r.path) for r in t.tables("no_fail"))
+    bcs = []
+    for r in t.tables("prescribed_velocity"):
+        region = _shape(r.table("region"), base_dir, False)
+        bcs.append(VelocityBC(region, r.vector("velocity", unit="m/s"),
+                              r.number("ramp_time", 0.0, low=0.0, unit="s"), r.path))
+        r.done()
+    cracks = []
+    for r in t.tables("cracks"):
+        point = r.vector("point", unit="m")
+        normal = r.vector("normal")
+        if math.hypot(*normal) == 0.0:
+            raise r.error("normal", "the crack plane's normal must not be zero", list(normal))
+        b = r.table("box")
+        try:
+            box = Box(b.vector("min", unit="m"), b.vector("max", unit="m"))
+        except ValueError as exc:
+            raise InputError(b.file, b.path, str(exc)) from None
+        b.done()
+        r.done()
+        cracks.append(Crack(point, normal, box, r.path))
+    t.done()
+    return IceConfig(name, dx, horizon, shape, material, v0, fixed, tuple(bcs), no_fail,
+                     tuple(cracks), t.path)
+
+
+def _run(t: Table) -> RunConfig:
+    end = t.positive("end_time", unit="s")
+    out = t.positive("output_interval", end / 20, unit="s")
+    if out > end:
+        raise t.error("output_interval", f"longer than the run (end_time = {end:g} s); "
+                      "choose an interval <= end_time", out)
+    dt = t.number("time_step", 0.0, low=0.0, unit="s") or None
+    sf = t.number("safety_factor", 0.8, low=0.0, high=1.0, low_open=True)
+    loop = t.string("pd_loop", "pairs", choices=("pairs", "full_family"))
+    g = t.vector("gravity", (0.0, 0.0, 0.0), unit="m/s^2")
+    title = t.raw("title", "")
+    if not isinstance(title, str):
+        raise t.error("title", "expected a string", title)
+    t.done()
+    return RunConfig(end, out, dt, sf, loop, g, title)
+
+
+def parse_case(text: str, file: str = "<string>", directory: Path | None = None) -> Case:
+    """Parse and validate a case from TOML text.
+
+    Parameters
+    ----------
+    text
+        The TOML source.
+    file
+        Name used in error messages.
+    directory
+        Directory that relative paths in the case (meshes) are resolved against.
+
+    Returns
+    -------
+    Case
+        The validated case.
+
+    Raises
+    ------
+    InputError
+        For malformed TOML, unknown keys, wrong types or out-of-range values.
+    """
+    directory = Path(directory) if directory is not None else Path.cwd()
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(file, None, f"not valid TOML: {exc}") from None
+    top = Table(data, file, "")
+    run = _run(top.table("run"))
+    ice_tables = top.tables("ice")
+    if not ice_tables:
+        raise top.error("ice", "a case needs at least one [[ice]] body")
+    ice = tuple(_ice(t, directory) for t in ice_tables)
+    names = [b.name for b in ice]
+    for i, n in enumerate(names):
+        if n in names[:i]:
+            raise InputError(file, f"ice[{i}].name", "body names must be unique", n)
+    top.done()
+    return Case(run=run, ice=ice, file=file, text=text, directory=directory)
+
+
+def load_case(path: str | Path) -> Case:
+    """Read and validate a case file (see :func:`parse_case`)."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(str(path), None, "no such case file")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(str(path), None, f"cannot read the case file: {exc}") from None
+    return parse_case(text, str(path), p.resolve().parent)

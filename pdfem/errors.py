@@ -1,0 +1,53 @@
+"""Errors that the command line turns into exit statuses and one-paragraph messages.
+
+``InputError`` (exit 2) is for anything the user gave us that is wrong: it names the file,
+the field, the value and what would be valid. ``InstabilityError`` (exit 3) stops a run whose
+state blew up. Every other exception is a bug or an environment failure (exit 1).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+EXIT_OK = 0
+EXIT_FAILURE = 1
+EXIT_BAD_INPUT = 2
+EXIT_INSTABILITY = 3
+
+
+class InputError(Exception):
+    """Bad user input: a case file, a mesh or a parameter.
+
+    Parameters
+    ----------
+    file
+        The file the input came from (``None`` for command-line values).
+    field
+        Dotted path of the offending field, e.g. ``ice[0].material.poisson_ratio``.
+    message
+        What is wrong and what would be valid, as a sentence.
+    value
+        The offending value (shown with ``repr``), if any.
+    """
+
+    def __init__(self, file: str | None, field: str | None, message: str, value: Any = ...):
+        self.file = file
+        self.field = field
+        self.value = value
+        self.message = message
+        super().__init__(self.text())
+
+    def text(self) -> str:
+        """The one-paragraph message shown to the user."""
+        where = []
+        if self.file:
+            where.append(f"in {self.file}")
+        if self.field:
+            where.append(f"field '{self.field}'")
+        head = ("Error " + ", ".join(where) + ": ") if where else "Error: "
+        val = "" if self.value is ... else f" (got {self.value!r})"
+        return head + self.message.rstrip(".") + val + "."
+
+
+class InstabilityError(Exception):
+    """A run stopped because its state became unphysical (NaN, runaway motion, energy growth)."""

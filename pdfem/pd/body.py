@@ -1,0 +1,260 @@
+"""An ice body: particles, bonds and state arrays, advanced by velocity-Verlet steps.
+
+The class holds flat arrays and calls the numba kernels of :mod:`pdfem.pd.kernels`; it has no
+loops over particles or bonds of its own. Particles are numbered in cell order (the order the
+neighbour search sorts them into), so bond partners sit close in memory.
+
+One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (kg/m^3)::
+
+    v += dt/2 (f/rho + g)        kick
+    v = prescribed on constrained particles
+    y += dt v                    drift
+    theta(y); f(y, theta)        dilatation, then forces and bond breaking
+    v += dt/2 (f/rho + g)        kick
+    v = prescribed on constrained particles
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import kernels
+from .bonds import bond_lengths, cut_crack
+from .family import build_family
+from .lattice import fill
+from .material import IceMaterial
+from .search import cell_pairs
+
+
+@dataclass
+class VelocityConstraint:
+    """Particles ``index`` move with ``velocity`` (m/s) scaled by min(1, t / ramp_time)."""
+
+    index: np.ndarray
+    velocity: np.ndarray
+    ramp_time: float = 0.0
+
+    def value(self, t: float) -> np.ndarray:
+        s = 1.0 if self.ramp_time <= 0.0 else min(1.0, max(t, 0.0) / self.ramp_time)
+        return self.velocity * s
+
+    def acceleration(self, t: float) -> np.ndarray:
+        if self.ramp_time > 0.0 and t < self.ramp_time:
+            return self.velocity / self.ramp_time
+        return np.zeros(3)
+
+
+@dataclass
+class IceBody:
+    """State of one peridynamic ice body (all arrays SI, particles in cell order).
+
+    Build one with :meth:`from_points` (or :func:`pdfem.pd.build.build_ice_body` from a case).
+    """
+
+    name: str
+    x0: np.ndarray            # (N,3) reference positions, m
+    vol: np.ndarray           # (N,) particle volumes, m^3
+    material: IceMaterial
+    dx: float                 # lattice spacing, m
+    delta: float              # horizon, m
+    row_ptr: np.ndarray       # (N+1,) int64
+    nbr: np.ndarray           # (P,) int32, unique pairs i < nbr
+    xi_len: np.ndarray        # (P,) reference bond lengths, m
+    broken: np.ndarray        # (P,) uint8
+    nofail: np.ndarray        # (N,) uint8
+    y: np.ndarray = None      # (N,3) positions, m
+    v: np.ndarray = None      # (N,3) velocities, m/s
+    f: np.ndarray = None      # (N,3) force density, N/m^3
+    m: np.ndarray = None      # (N,) weighted volume, m^5
+    theta: np.ndarray = None  # (N,) dilatation
+    loop: str = "pairs"
+    gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    fixed: np.ndarray = None  # (N,) bool
+    constraints: list = field(default_factory=list)
+    external_work: float = 0.0
+    time: float = 0.0
+
+    @classmethod
+    def from_points(cls, name: str, x: np.ndarray, material: IceMaterial, dx: float, delta: float,
+                    *, loop: str = "pairs", volume: np.ndarray | None = None) -> "IceBody":
+        """Build a body from particle positions: cell-sort them, find bonds, set up state.
+
+        Parameters
+        ----------
+        name
+            Body name (used in results).
+        x
+            (N,3) particle positions, m; renumbered into cell order.
+        material
+            Ice material.
+        dx
+            Lattice spacing, m (particle volume dx^3 unless ``volume`` is given).
+        delta
+            Horizon, m.
+        loop
+            ``"pairs"`` (the particle-pair loop) or ``"full_family"`` (per-particle reference).
+        volume
+            Optional (N,) particle volumes, m^3, in the order of ``x``.
+        """
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        perm, row_ptr, nbr = cell_pairs(x, delta)
+        x0 = np.ascontiguousarray(x[perm])
+        n = x0.shape[0]
+        vol = (np.full(n, dx ** 3) if volume is None
+               else np.ascontiguousarray(np.asarray(volume, dtype=np.float64)[perm]))
+        body = cls(name=name, x0=x0, vol=vol, material=material, dx=float(dx), delta=float(delta),
+                   row_ptr=row_ptr, nbr=nbr, xi_len=bond_lengths(x0, row_ptr, nbr),
+                   broken=np.zeros(nbr.shape[0], dtype=np.uint8), nofail=np.zeros(n, dtype=np.uint8),
+                   loop=loop)
+        body.y = x0.copy()
+        body.v = np.zeros_like(x0)
+        body.f = np.zeros_like(x0)
+        body.theta = np.zeros(n)
+        body.fixed = np.zeros(n, dtype=bool)
+        body.m = kernels.weighted_volume(row_ptr, nbr, body.xi_len, vol, body.delta, body.dx)
+        if loop == "full_family":
+            body._family = build_family(row_ptr, nbr, n)
+        elif loop != "pairs":
+            raise ValueError(f"unknown PD loop {loop!r}; valid: 'pairs', 'full_family'")
+        return body
+
+    @classmethod
+    def from_shape(cls, name: str, shape, material: IceMaterial, dx: float, delta: float,
+                   **kwargs) -> "IceBody":
+        """Fill ``shape`` (a :mod:`pdfem.shapes` object) with a cubic lattice of spacing ``dx``."""
+        return cls.from_points(name, fill(shape, dx), material, dx, delta, **kwargs)
+
+    # -- set-up ------------------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of particles."""
+        return self.x0.shape[0]
+
+    @property
+    def n_bonds(self) -> int:
+        """Number of unique bonds (pairs)."""
+        return self.nbr.shape[0]
+
+    @property
+    def s0(self) -> float:
+        """Critical stretch (inf when the material cannot break)."""
+        return self.material.s0(self.delta)
+
+    def cut_crack(self, point, normal, lo, hi) -> int:
+        """Break the bonds crossing a planar pre-crack (see :func:`pdfem.pd.bonds.cut_crack`)."""
+        nrm = np.asarray(normal, dtype=np.float64)
+        nrm = nrm / np.linalg.norm(nrm)
+        return cut_crack(self.x0, self.row_ptr, self.nbr, self.broken, np.asarray(point, np.float64),
+                         nrm, np.asarray(lo, np.float64), np.asarray(hi, np.float64))
+
+    def add_velocity_constraint(self, mask: np.ndarray, velocity, ramp_time: float = 0.0) -> None:
+        """Prescribe the velocity (m/s) of the particles in ``mask`` (ramped over ``ramp_time`` s)."""
+        idx = np.flatnonzero(mask).astype(np.int64)
+        c = VelocityConstraint(idx, np.asarray(velocity, dtype=np.float64), float(ramp_time))
+        self.constraints.append(c)
+        self.v[idx] = c.value(self.time)
+
+    def fix(self, mask: np.ndarray) -> None:
+        """Hold the particles in ``mask`` at their reference positions."""
+        self.fixed |= mask
+        self.v[self.fixed] = 0.0
+
+    # -- physics -------------------------------------------------------------------------------
+    def compute_forces(self) -> int:
+        """Dilatation, then force density and bond breaking at the current positions.
+
+        Returns the number of bonds that broke.
+        """
+        mat = self.material
+        if self.loop == "pairs":
+            kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
+                               self.m, self.delta, self.dx, self.theta)
+            return kernels.forces(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
+                                  self.m, self.theta, mat.K, mat.mu, self.delta, self.dx, self.s0,
+                                  self.nofail, self.f)
+        fam_ptr, fam_nbr, fam_bond = self._family
+        kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.broken,
+                                  self.vol, self.m, self.delta, self.dx, self.theta)
+        return kernels.forces_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.broken,
+                                     self.vol, self.m, self.theta, mat.K, mat.mu, self.delta, self.dx,
+                                     self.s0, self.nofail, self.f)
+
+    def _apply_constraints(self, t: float) -> None:
+        self.v[self.fixed] = 0.0
+        for c in self.constraints:
+            self.v[c.index] = c.value(t)
+
+    def _constraint_force(self, t: float) -> float:
+        """Sum over constraints of R.v: the power (W) that supports and drivers put in."""
+        rho = self.material.density
+        power = 0.0
+        for c in self.constraints:
+            idx = c.index
+            a = c.acceleration(t)
+            # reaction = m a_prescribed - (internal + body) force on the constrained particles
+            r = (rho * a[None, :] - self.f[idx] - rho * self.gravity[None, :]) * self.vol[idx, None]
+            power += float(np.sum(r @ c.value(t)))
+        return power
+
+    def stable_time_step(self) -> float:
+        """Silling & Askari's stable step estimate (s) for this body (no safety factor)."""
+        return kernels.stable_time_step(self.row_ptr, self.nbr, self.xi_len, self.vol, self.delta,
+                                        self.dx, self.material.density, self.material.K)
+
+    def start(self) -> None:
+        """Compute the forces of the initial state (call once before the first step)."""
+        self._apply_constraints(self.time)
+        self.compute_forces()
+
+    def step(self, dt: float) -> int:
+        """Advance by ``dt`` (s) with velocity Verlet; returns the number of bonds broken."""
+        inv_rho = 1.0 / self.material.density
+        half = 0.5 * dt
+        t0 = self.time
+        p0 = self._constraint_force(t0) if self.constraints else 0.0
+        self.v += half * (self.f * inv_rho + self.gravity)
+        self._apply_constraints(t0 + half)
+        self.y += dt * self.v
+        self.time = t0 + dt
+        nbroken = self.compute_forces()
+        self.v += half * (self.f * inv_rho + self.gravity)
+        self._apply_constraints(self.time)
+        if self.constraints:
+            self.external_work += half * (p0 + self._constraint_force(self.time))
+        return nbroken
+
+    # -- diagnostics ---------------------------------------------------------------------------
+    def displacement(self) -> np.ndarray:
+        """(N,3) displacement y - x0, m."""
+        return self.y - self.x0
+
+    def damage(self) -> np.ndarray:
+        """(N,) broken fraction of each particle's initial bonds."""
+        return kernels.damage(self.row_ptr, self.nbr, self.broken, self.n)
+
+    def kinetic_energy(self) -> float:
+        """Kinetic energy, J."""
+        return 0.5 * self.material.density * float(np.sum(self.vol * np.einsum("ij,ij->i", self.v, self.v)))
+
+    def strain_energy(self) -> float:
+        """Elastic energy of the unbroken bonds at the current positions, J."""
+        mat = self.material
+        theta = np.empty(self.n)  # of the current bond set (bonds broken this step excluded)
+        kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
+                           self.m, self.delta, self.dx, theta)
+        W = kernels.strain_energy(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
+                                  self.m, theta, mat.K, mat.mu, self.delta, self.dx)
+        return float(np.dot(W, self.vol))
+
+    def gravity_potential(self) -> float:
+        """Potential energy in the gravity field relative to the reference positions, J."""
+        if not np.any(self.gravity):
+            return 0.0
+        u = self.y - self.x0
+        return -self.material.density * float(np.sum(self.vol * (u @ self.gravity)))
+
+    def momentum(self) -> np.ndarray:
+        """Linear momentum (3,), kg m/s."""
+        return self.material.density * (self.vol @ self.v)

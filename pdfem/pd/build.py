@@ -1,0 +1,62 @@
+"""Ice bodies from validated case entries: fill the shape, find bonds, apply regions.
+
+Each region in the case (fixed, prescribed velocity, no-fail, cracks) must select something;
+one that selects no particle (or cuts no bond) is a user error, reported with its field name.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import IceConfig, RunConfig
+from ..errors import InputError
+from .body import IceBody
+
+
+def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:
+    """Build the ice body that ``cfg`` describes.
+
+    Parameters
+    ----------
+    cfg
+        A validated ``[[ice]]`` entry.
+    run
+        The run settings (PD loop, gravity).
+    file
+        Case-file name for error messages.
+
+    Returns
+    -------
+    IceBody
+        The body at rest in its reference state (initial velocity applied), forces not yet computed.
+    """
+    try:
+        body = IceBody.from_shape(cfg.name, cfg.shape, cfg.material, cfg.dx, cfg.horizon, loop=run.pd_loop)
+    except ValueError as exc:
+        raise InputError(file, f"{cfg.field}.shape", str(exc)) from None
+    if body.n < 2:
+        raise InputError(file, f"{cfg.field}.dx", f"the shape holds {body.n} particle(s) at this spacing; "
+                         "choose a smaller dx", cfg.dx)
+    body.gravity = np.asarray(run.gravity, dtype=np.float64)
+    body.v[:] = np.asarray(cfg.initial_velocity)
+
+    def select(region, field: str) -> np.ndarray:
+        mask = region.contains(body.x0)
+        if not mask.any():
+            lo, hi = region.bounds()
+            raise InputError(file, field, "this region contains no particle of the body "
+                             f"(region bounds {np.round(lo, 6).tolist()} to {np.round(hi, 6).tolist()} m); "
+                             "check its coordinates against the ice shape")
+        return mask
+
+    for region, field in cfg.no_fail:
+        body.nofail[select(region, field)] = 1
+    for crack in cfg.cracks:
+        if body.cut_crack(crack.point, crack.normal, crack.box.min, crack.box.max) == 0:
+            raise InputError(file, crack.field, "this crack cuts no bond; the plane through 'point' "
+                             "with 'normal' must pass through the ice inside 'box'")
+    for region, field in cfg.fixed:
+        body.fix(select(region, field))
+    for bc in cfg.prescribed_velocity:
+        body.add_velocity_constraint(select(bc.region, f"{bc.field}.region"), bc.velocity, bc.ramp_time)
+    return body

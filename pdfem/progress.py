@@ -1,0 +1,56 @@
+"""Progress of a long run on the terminal: simulated time, steps per second, time left.
+
+Quiet when asked, and when standard error is not a terminal (logs and CI stay clean).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+
+class Progress:
+    """Rate-limited one-line progress report on standard error.
+
+    Parameters
+    ----------
+    end_time
+        Simulated end time, s.
+    enabled
+        Force on/off; ``None`` means "when standard error is a terminal".
+    interval
+        Minimum wall-clock seconds between updates.
+    """
+
+    def __init__(self, end_time: float, enabled: bool | None = None, interval: float = 0.5):
+        self.end_time = end_time
+        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.interval = interval
+        self.t_start = time.perf_counter()
+        self.t_last = -1e30
+        self.steps = 0
+
+    def update(self, sim_time: float, steps: int) -> None:
+        """Report that ``steps`` steps have run and the simulation is at ``sim_time`` s."""
+        self.steps = steps
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if now - self.t_last < self.interval:
+            return
+        self.t_last = now
+        wall = now - self.t_start
+        frac = min(1.0, sim_time / self.end_time) if self.end_time > 0 else 1.0
+        rate = steps / wall if wall > 0 else 0.0
+        eta = wall * (1 - frac) / frac if frac > 0 else float("nan")
+        sys.stderr.write(f"\r  t = {sim_time:.4e} s of {self.end_time:.4e} s ({100 * frac:5.1f} %)"
+                         f"  {rate:8.1f} steps/s  ETA {eta:7.1f} s ")
+        sys.stderr.flush()
+
+    def finish(self) -> float:
+        """End the progress line; returns the wall-clock seconds since the start."""
+        wall = time.perf_counter() - self.t_start
+        if self.enabled:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+        return wall
