@@ -1,0 +1,283 @@
+"""An elastic structure: FE model, explicit solver state, loads and the contact surface.
+
+:class:`ElasticStructure` ties together a mesh (:mod:`pdfem.fem.mesh`), the assembled stiffness
+and lumped mass (:mod:`pdfem.fem.elasticity`), the central-difference solver
+(:mod:`pdfem.fem.explicit`) and stress recovery (:mod:`pdfem.fem.stress`). Named groups of the
+mesh give the clamped supports (all three displacement components held at zero) and the contact
+surface, which the contact code reaches through the :class:`pdfem.fem.surface.ContactSurface`
+interface shared with rigid bodies.
+
+Forces on the structure in a step are the sum of
+
+- constant nodal forces (N) set with :meth:`ElasticStructure.set_nodal_forces`,
+- surface tractions / pressures (Pa) added with :meth:`ElasticStructure.add_surface_load`,
+- the contact forces (N) accumulated on the surface nodes with
+  :meth:`ElasticStructure.add_surface_forces`. They stay applied in every later step until
+  :meth:`ElasticStructure.clear_surface_forces` (so a contact load can be held over FE substeps).
+
+Small displacements: stiffness, loads and stresses use the reference configuration; surface
+positions and normals reported to the contact code use the current one (reference + u).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from skfem.io.meshio import HEX_MAPPING
+
+from ..errors import InstabilityError
+from .elasticity import (DofMap, ElasticMaterial, element_volumes, lumped_mass, stiffness_matrix,
+                         surface_load, vector_basis)
+from .explicit import CentralDifference
+from .mesh import FEMesh, load_mesh
+from .stress import (centre_basis, element_stress, kinetic_energy, nodal_average, reaction_force,
+                     strain_energy, von_mises)
+from .surface import SurfaceBody, split_quads
+
+
+class ElasticStructure(SurfaceBody):
+    """A linear-elastic FE structure advanced by explicit central differences.
+
+    Parameters
+    ----------
+    mesh
+        The volume mesh with its named groups.
+    material
+        Density (kg/m^3), Young's modulus (Pa), Poisson's ratio.
+    fixed_groups
+        Names of groups whose nodes are clamped (u = 0).
+    contact_group
+        Name of the surface group the contact code sees (``None``: no contact surface).
+    prescribed
+        ``{group: displacement}``: the nodes of each group move with a uniform prescribed
+        displacement (m), a (3,) vector or a callable ``t -> (3,)`` of the time (s). Nodes in
+        both a fixed and a prescribed group follow the prescribed displacement.
+    name
+        Name of the structure (for messages and output).
+    rayleigh_alpha, rayleigh_beta
+        Rayleigh damping ``C = alpha M + beta K`` (alpha in 1/s, beta in s).
+    safety_factor
+        Factor on the critical step in :meth:`stable_time_step`.
+    max_eigenvalue
+        A known ``omega_max^2`` (1/s^2) of the constrained system, to skip the power iteration.
+
+    Raises
+    ------
+    ValueError
+        If a named group is missing (the message lists the groups of the file).
+    """
+
+    def __init__(self, mesh: FEMesh, material: ElasticMaterial, fixed_groups: Sequence[str] = (),
+                 contact_group: str | None = None, prescribed: Mapping | None = None,
+                 name: str = "structure",
+                 rayleigh_alpha: float = 0.0, rayleigh_beta: float = 0.0,
+                 safety_factor: float = 0.9, max_eigenvalue: float | None = None):
+        if isinstance(fixed_groups, str):
+            fixed_groups = [fixed_groups]
+        prescribed = dict(prescribed or {})
+        for g in list(fixed_groups) + list(prescribed):  # check names before the assembly
+            mesh.group_nodes(g)
+        if contact_group is not None:
+            mesh.group_facets(contact_group)
+        self.name = name
+        self.mesh = mesh
+        self.material = material
+        self.fixed_groups = list(fixed_groups)
+        self.contact_group = contact_group
+        self.basis = vector_basis(mesh)
+        self.dofmap = DofMap(self.basis.nodal_dofs)
+        self.K = stiffness_matrix(self.basis, material)
+        self.mass = lumped_mass(self.basis, material.density)
+        fixed_nodes = [mesh.group_nodes(g) for g in self.fixed_groups + list(prescribed)]
+        self.fixed_nodes = (np.unique(np.concatenate(fixed_nodes)).astype(np.int32)
+                            if fixed_nodes else np.zeros(0, dtype=np.int32))
+        self.solver = CentralDifference(self.K, self.mass, self.dofmap.dofs_of(self.fixed_nodes),
+                                        rayleigh_alpha=rayleigh_alpha, rayleigh_beta=rayleigh_beta,
+                                        safety_factor=safety_factor, max_eigenvalue=max_eigenvalue)
+        if prescribed:
+            self.solver.prescribe(self._prescribed_values(prescribed))
+        self._x0 = mesh.points
+        self._stress_basis = centre_basis(mesh)
+        self._volumes = element_volumes(mesh)
+        if contact_group is not None:
+            faces = mesh.group_facets(contact_group)
+            nodes, local = np.unique(faces, return_inverse=True)
+            self.surface_nodes = nodes.astype(np.int32)
+            self.surface_triangles = split_quads(local.reshape(faces.shape))
+        else:
+            self.surface_nodes = np.zeros(0, dtype=np.int32)
+            self.surface_triangles = np.zeros((0, 3), dtype=np.int32)
+        self._surface_forces = np.zeros((len(self.surface_nodes), 3))
+        # DOF index of (surface node, component), node-major like _surface_forces.ravel()
+        self._surface_dofs = self.dofmap.nodal_dofs[:, self.surface_nodes].T.ravel()
+        self._nodal_forces = np.zeros((mesh.n_nodes, 3))
+        self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
+        self._load_dofs = np.zeros(self.dofmap.n_dofs)   # nodal forces + surface loads, as DOFs
+        self.solver.initialize()
+
+    def _prescribed_values(self, prescribed: Mapping):
+        """Callable ``t -> values on the Dirichlet DOFs`` for the prescribed groups."""
+        fixed = self.solver.fixed
+        parts = []
+        for group, disp in prescribed.items():
+            for c in range(3):
+                dofs = self.dofmap.dofs_of(self.mesh.group_nodes(group), (c,))
+                pos = np.searchsorted(fixed, dofs)
+                parts.append((pos, c, disp))
+        for _, _, disp in parts:
+            if not callable(disp) and np.asarray(disp, dtype=np.float64).shape != (3,):
+                raise ValueError("a prescribed displacement must be a (3,) vector or a callable "
+                                 "t -> (3,)")
+
+        def values(t: float) -> np.ndarray:
+            out = np.zeros(fixed.size)
+            for pos, c, disp in parts:
+                d = disp(t) if callable(disp) else disp
+                out[pos] = float(np.asarray(d, dtype=np.float64).reshape(3)[c])
+            return out
+
+        return values
+
+    @classmethod
+    def from_file(cls, path: str | os.PathLike, material: ElasticMaterial,
+                  **kwargs) -> "ElasticStructure":
+        """Build from a gmsh ``.msh`` file; ``kwargs`` as for the constructor."""
+        return cls(load_mesh(path), material, **kwargs)
+
+    # ------------------------------------------------------------------ geometry
+    @property
+    def points(self) -> np.ndarray:
+        """(Nn, 3) reference node coordinates (m)."""
+        return self._x0
+
+    @property
+    def cell_type(self) -> str:
+        """meshio cell type of the elements: ``"tetra"`` or ``"hexahedron"``."""
+        return "tetra" if self.mesh.kind == "tet" else "hexahedron"
+
+    @property
+    def cells(self) -> np.ndarray:
+        """(Ne, 4 or 8) int32 element connectivity in meshio / VTK node order (for output)."""
+        t = self.mesh.mesh.t
+        if self.mesh.kind == "hex":
+            t = t[HEX_MAPPING[:8]]
+        return np.ascontiguousarray(t.T, dtype=np.int32)
+
+    @property
+    def time(self) -> float:
+        """Current time (s)."""
+        return self.solver.time
+
+    # ------------------------------------------------------------------ state
+    def displacement(self) -> np.ndarray:
+        """(Nn, 3) displacement (m)."""
+        return self.dofmap.to_nodal(self.solver.u).copy()
+
+    def velocity(self) -> np.ndarray:
+        """(Nn, 3) velocity (m/s)."""
+        return self.dofmap.to_nodal(self.solver.v).copy()
+
+    def acceleration(self) -> np.ndarray:
+        """(Nn, 3) acceleration (m/s^2)."""
+        return self.dofmap.to_nodal(self.solver.a).copy()
+
+    def set_state(self, displacement: np.ndarray | None = None,
+                  velocity: np.ndarray | None = None) -> None:
+        """Set (Nn, 3) displacement (m) and velocity (m/s) (default zero; clamped nodes stay at
+        zero) and recompute the acceleration from the current loads."""
+        u = None if displacement is None else self.dofmap.to_dofs(displacement)
+        v = None if velocity is None else self.dofmap.to_dofs(velocity)
+        self.solver.initialize(u, v, self.external_force_dofs(), time=self.solver.time)
+
+    # ------------------------------------------------------------------ loads
+    def set_nodal_forces(self, forces: np.ndarray) -> None:
+        """Set constant external nodal forces (N), (Nn, 3) (replaces earlier ones)."""
+        forces = np.asarray(forces, dtype=np.float64)
+        if forces.shape != (self.mesh.n_nodes, 3):
+            raise ValueError(f"nodal forces must have shape ({self.mesh.n_nodes}, 3), got "
+                             f"{forces.shape}")
+        self._nodal_forces = forces.copy()
+        self._load_dofs = self.dofmap.to_dofs(self._nodal_forces) + self._pressure_dofs
+
+    def add_surface_load(self, group: str, traction=(0.0, 0.0, 0.0), pressure: float = 0.0) -> None:
+        """Add a constant uniform traction (Pa, (3,)) and/or pressure (Pa, positive pushing into
+        the structure) on a named surface group."""
+        f = surface_load(self.mesh, group, traction, pressure)
+        self._pressure_dofs = self._pressure_dofs + f
+        self._load_dofs = self._load_dofs + f
+
+    def clear_loads(self) -> None:
+        """Remove the nodal forces and surface loads (not the contact forces)."""
+        self._nodal_forces = np.zeros((self.mesh.n_nodes, 3))
+        self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
+        self._load_dofs = np.zeros(self.dofmap.n_dofs)
+
+    def external_force_dofs(self) -> np.ndarray:
+        """(3 Nn,) total external force (N) of the next step: loads plus contact forces."""
+        f = self._load_dofs.copy()
+        f[self._surface_dofs] += self._surface_forces.ravel()
+        return f
+
+    # ------------------------------------------------------------------ surface interface
+    def surface_points(self) -> np.ndarray:
+        """(Ns, 3) current positions of the contact-surface nodes (m)."""
+        u = self.dofmap.to_nodal(self.solver.u)
+        return self._x0[self.surface_nodes] + u[self.surface_nodes]
+
+    def surface_velocities(self) -> np.ndarray:
+        """(Ns, 3) current velocities of the contact-surface nodes (m/s)."""
+        return self.dofmap.to_nodal(self.solver.v)[self.surface_nodes]
+
+    # ------------------------------------------------------------------ time stepping
+    def max_eigenvalue(self) -> float:
+        """``omega_max^2`` (1/s^2) of the constrained ``M^-1 K`` (cached power iteration)."""
+        return self.solver.max_eigenvalue()
+
+    def stable_time_step(self) -> float:
+        """Stable step (s): safety factor x 2 / omega_max (damping-reduced)."""
+        return self.solver.stable_time_step()
+
+    def step(self, dt: float) -> None:
+        """Advance by ``dt`` (s) under the current loads and accumulated contact forces.
+
+        Raises
+        ------
+        InstabilityError
+            If the displacement becomes NaN or infinite (a step above the stable step).
+        """
+        self.solver.step(dt, self.external_force_dofs())
+        if not np.isfinite(self.solver.u).all():
+            raise InstabilityError(
+                f"structure '{self.name}': displacement became non-finite at t = "
+                f"{self.solver.time:.6e} s; the step {dt:.3e} s exceeds the stable step "
+                f"{self.stable_time_step():.3e} s or the loads are unbounded")
+
+    # ------------------------------------------------------------------ results
+    def kinetic_energy(self) -> float:
+        """Kinetic energy 1/2 v.M v (J)."""
+        return kinetic_energy(self.mass, self.solver.v)
+
+    def strain_energy(self) -> float:
+        """Strain energy 1/2 u.K u (J)."""
+        return strain_energy(self.K, self.solver.u)
+
+    def stresses(self) -> np.ndarray:
+        """(Ne, 3, 3) element stress tensors (Pa), at the element centres."""
+        return element_stress(self._stress_basis, self.solver.u, self.material)
+
+    def von_mises(self) -> np.ndarray:
+        """(Ne,) von Mises stress per element (Pa)."""
+        return von_mises(self.stresses())
+
+    def nodal_von_mises(self) -> np.ndarray:
+        """(Nn,) volume-weighted nodal average of the element von Mises stress (Pa)."""
+        return nodal_average(self.mesh, self.von_mises(), self._volumes)
+
+    def reaction(self, group: str) -> np.ndarray:
+        """(3,) force (N) that the supports at the named group's nodes exert on the structure
+        (``K u + C v + M a - f_ext`` summed over those nodes; zero for a group that is not
+        clamped)."""
+        nodes = self.mesh.group_nodes(group)
+        return reaction_force(self.solver.residual_force(), self.dofmap, nodes)
