@@ -1,6 +1,7 @@
 """The ``pdfem`` command line.
 
     pdfem run CASE.toml [--out DIR] [--quiet] [--json]
+    pdfem mesh MODEL [--set key=value ...] [-o FILE.msh] [--json]
     pdfem bench {search,step} [--n N] [--json]
     pdfem info [--json]
     pdfem --version
@@ -42,6 +43,13 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--out", default=None, help="output directory (default: results/<case name>)")
     r.add_argument("--quiet", action="store_true", help="no progress or messages")
     r.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
+
+    m = sub.add_parser("mesh", help="mesh a model of models/ (or a .py file) with gmsh")
+    m.add_argument("model", help="model name (hull_panel, propeller_blade, indenters) or a .py file with build()")
+    m.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="model parameter (SI units), repeatable")
+    m.add_argument("-o", "--output", default=None, help="output .msh file (default: <model>.msh)")
+    m.add_argument("--json", action="store_true", help="print the mesh report as one JSON object")
 
     b = sub.add_parser("bench", help="performance measurements (not tests)")
     b.add_argument("what", choices=["search", "step"])
@@ -92,6 +100,13 @@ def _cmd_run(args) -> int:
     return EXIT_OK
 
 
+def _cmd_mesh(args) -> int:
+    from .meshing import mesh_model, parse_set
+    report = mesh_model(args.model, parse_set(args.set), Path(args.output) if args.output else None)
+    print(json.dumps(report.as_dict()) if args.json else report.text())
+    return EXIT_OK
+
+
 def _cmd_bench(args) -> int:
     if args.n < 8:
         raise InputError(None, "--n", "the benchmark needs at least 8 particles", args.n)
@@ -125,7 +140,8 @@ def main(argv: list[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("default")
             warnings.showwarning = lambda msg, *a, **k: print(f"warning: {msg}", file=sys.stderr)
-            return {"run": _cmd_run, "bench": _cmd_bench, "info": _cmd_info}[args.command](args)
+            return {"run": _cmd_run, "mesh": _cmd_mesh, "bench": _cmd_bench,
+                    "info": _cmd_info}[args.command](args)
     except InputError as exc:
         print(exc.text(), file=sys.stderr)
         return EXIT_BAD_INPUT
