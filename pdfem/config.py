@@ -27,6 +27,18 @@ Shape of a case file::
     no_fail = [ { box = {...} } ]
     cracks = [ { point = [0.3, 0.05, 0], normal = [1, 0, 0], box = { min = [...], max = [...] } } ]
 
+    [[structure]]              # an elastic FE structure (or kind = "rigid")
+    name = "panel"
+    kind = "elastic"
+    mesh = "hull_panel"        # a model of models/, a .py model file, or a .msh file
+    params = { element_size = 0.08 }                  # model parameters (SI), models only
+    material = { density = 7850, youngs_modulus = 210e9, poisson_ratio = 0.3 }
+    fixed_groups = ["fixed"]
+    contact_group = "contact"
+    damping = { alpha = 0.0, beta = 0.0 }             # Rayleigh: alpha (1/s), beta (s)
+    loads = [ { group = "contact", pressure = 1e5, pulse = { start = 0, rise = 1e-3, hold = 2e-3, fall = 1e-3 } } ]
+    # kind = "rigid": motion = { velocity = [..] (m/s), angular_velocity = [..] (rad/s), center = [..] (m) }
+
 Shapes and regions are one of ``box = {min, max}``, ``cylinder = {base, axis, radius, length}``,
 ``sphere = {center, radius}`` or (shapes only) ``mesh = {file, group}`` for a closed surface mesh
 (path relative to the case file).
@@ -191,11 +203,70 @@ class IceConfig:
 
 
 @dataclass(frozen=True)
+class Pulse:
+    """Trapezoidal time history (s): 0 before ``start``, rises linearly over ``rise`` to 1,
+    holds for ``hold``, falls linearly over ``fall`` to 0. ``hold = inf`` keeps it on."""
+
+    start: float = 0.0
+    rise: float = 0.0
+    hold: float = math.inf
+    fall: float = 0.0
+
+    def __call__(self, t: float) -> float:
+        s = t - self.start
+        if s < 0.0:
+            return 0.0
+        if s < self.rise:
+            return s / self.rise
+        s -= self.rise
+        if s <= self.hold:
+            return 1.0
+        s -= self.hold
+        if s < self.fall:
+            return 1.0 - s / self.fall
+        return 0.0
+
+
+@dataclass(frozen=True)
+class SurfaceLoad:
+    """A uniform pressure (Pa, positive into the structure) and/or traction (Pa) on a group."""
+
+    group: str
+    pressure: float = 0.0
+    traction: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    pulse: Pulse = Pulse()
+    field: str = ""
+
+
+@dataclass(frozen=True)
+class StructureConfig:
+    """One structure: an elastic FE model or a rigid body with prescribed motion."""
+
+    name: str
+    kind: str
+    mesh: str
+    params: dict = field(default_factory=dict)
+    density: float = 7850.0
+    youngs_modulus: float = 210e9
+    poisson_ratio: float = 0.3
+    fixed_groups: tuple[str, ...] = ()
+    contact_group: str = "contact"
+    damping_alpha: float = 0.0
+    damping_beta: float = 0.0
+    loads: tuple[SurfaceLoad, ...] = ()
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    angular_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    field: str = ""
+
+
+@dataclass(frozen=True)
 class Case:
     """A validated case: what to simulate and how."""
 
     run: RunConfig
     ice: tuple[IceConfig, ...]
+    structures: tuple[StructureConfig, ...] = ()
     file: str = "<built-in>"
     text: str = ""
     directory: Path = field(default_factory=Path.cwd)
@@ -291,6 +362,69 @@ def _ice(t: Table, base_dir: Path) -> IceConfig:
                      tuple(cracks), t.path)
 
 
+def _strings(t: Table, key: str, default: tuple = ()) -> tuple[str, ...]:
+    v = t.raw(key, list(default))
+    if isinstance(v, str):
+        v = [v]
+    if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):
+        raise t.error(key, "expected a list of group names", v)
+    return tuple(v)
+
+
+def _structure(t: Table, base_dir: Path) -> StructureConfig:
+    name = t.string("name")
+    kind = t.string("kind", "elastic", choices=("elastic", "rigid"))
+    mesh = t.string("mesh")
+    if mesh.endswith((".msh", ".py")):
+        path = Path(mesh) if Path(mesh).is_absolute() else base_dir / mesh
+        if not path.is_file():
+            raise t.error("mesh", f"no such file ({path}); give a .msh file, a .py model file, "
+                          "or the name of a model in models/", mesh)
+        mesh = str(path)
+    params = t.raw("params", {})
+    if not isinstance(params, dict):
+        raise t.error("params", "expected a table of model parameters", params)
+    if params and mesh.endswith(".msh"):
+        raise t.error("params", "model parameters apply to a model (name or .py), not to a .msh file")
+    mat = t.table("material", {})
+    rho = mat.positive("density", 7850.0, unit="kg/m^3")
+    E = mat.positive("youngs_modulus", 210e9, unit="Pa")
+    nu = mat.number("poisson_ratio", 0.3, low=-1.0, high=0.5, low_open=True, high_open=True)
+    mat.done()
+    fixed = _strings(t, "fixed_groups")
+    contact = t.string("contact_group", "contact")
+    damp = t.table("damping", {})
+    alpha = damp.number("alpha", 0.0, low=0.0, unit="1/s")
+    beta = damp.number("beta", 0.0, low=0.0, unit="s")
+    damp.done()
+    loads = []
+    for r in t.tables("loads"):
+        group = r.string("group")
+        pressure = r.number("pressure", 0.0, unit="Pa")
+        traction = r.vector("traction", (0.0, 0.0, 0.0), unit="Pa")
+        pt = r.table("pulse", {})
+        pulse = Pulse(pt.number("start", 0.0, low=0.0, unit="s"), pt.number("rise", 0.0, low=0.0, unit="s"),
+                      pt.number("hold", math.inf, low=0.0, unit="s") if pt.has("hold") else math.inf,
+                      pt.number("fall", 0.0, low=0.0, unit="s"))
+        pt.done()
+        r.done()
+        loads.append(SurfaceLoad(group, pressure, traction, pulse, r.path))
+    motion = t.table("motion", {}) if kind == "rigid" else None
+    if motion is not None:
+        vel = motion.vector("velocity", (0.0, 0.0, 0.0), unit="m/s")
+        omega = motion.vector("angular_velocity", (0.0, 0.0, 0.0), unit="rad/s")
+        center = motion.vector("center", (0.0, 0.0, 0.0), unit="m")
+        motion.done()
+        if fixed or loads:
+            raise t.error("fixed_groups" if fixed else "loads",
+                          "a rigid structure moves as prescribed by 'motion'; it takes no supports or loads")
+    else:
+        vel = omega = center = (0.0, 0.0, 0.0)
+    t.done()
+    return StructureConfig(name, kind, mesh, dict(params), rho, E, nu, fixed, contact, alpha, beta,
+                           tuple(loads), vel, omega, center, t.path)
+
+
 def _run(t: Table) -> RunConfig:
     end = t.positive("end_time", unit="s")
     out = t.positive("output_interval", end / 20, unit="s")
@@ -337,16 +471,17 @@ def parse_case(text: str, file: str = "<string>", directory: Path | None = None)
         raise InputError(file, None, f"not valid TOML: {exc}") from None
     top = Table(data, file, "")
     run = _run(top.table("run"))
-    ice_tables = top.tables("ice")
-    if not ice_tables:
-        raise top.error("ice", "a case needs at least one [[ice]] body")
-    ice = tuple(_ice(t, directory) for t in ice_tables)
-    names = [b.name for b in ice]
+    ice = tuple(_ice(t, directory) for t in top.tables("ice"))
+    structures = tuple(_structure(t, directory) for t in top.tables("structure"))
+    if not ice and not structures:
+        raise top.error("ice", "a case needs at least one [[ice]] body or [[structure]]")
+    names = [b.name for b in ice] + [s.name for s in structures]
+    fields = [b.field for b in ice] + [s.field for s in structures]
     for i, n in enumerate(names):
         if n in names[:i]:
-            raise InputError(file, f"ice[{i}].name", "body names must be unique", n)
+            raise InputError(file, f"{fields[i]}.name", "body and structure names must be unique", n)
     top.done()
-    return Case(run=run, ice=ice, file=file, text=text, directory=directory)
+    return Case(run=run, ice=ice, structures=structures, file=file, text=text, directory=directory)
 
 
 def load_case(path: str | Path) -> Case:

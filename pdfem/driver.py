@@ -21,6 +21,8 @@ from . import __version__
 from .config import Case
 from .errors import InstabilityError
 from .io import ResultsWriter
+from .fem.build import build_structure
+from .fem.structure import ElasticStructure
 from .pd.body import IceBody
 from .pd.build import build_ice_body
 from .progress import Progress
@@ -49,15 +51,32 @@ class RunSummary:
                 "in ParaView)")
 
 
-def choose_time_step(case: Case, bodies: list[IceBody], log=print) -> float:
+def critical_step(obj) -> float:
+    """Stable-step limit (s) of an ice body (Silling & Askari) or a structure (2/omega_max)."""
+    if isinstance(obj, IceBody):
+        return obj.stable_time_step()
+    if isinstance(obj, ElasticStructure):
+        return obj.solver.critical_time_step()
+    return math.inf  # rigid bodies move as prescribed
+
+
+def choose_time_step(case: Case, bodies: list, log=print) -> float:
     """The global step (s): the case's ``time_step`` or safety_factor x the smallest stable step."""
-    estimate = min(b.stable_time_step() for b in bodies)
+    estimate = min(critical_step(b) for b in bodies)
+    if not math.isfinite(estimate):
+        estimate = case.run.output_interval / 10
     if case.run.time_step is None:
         return case.run.safety_factor * estimate
     if case.run.time_step > estimate:
         warnings.warn(f"{case.file}: run.time_step = {case.run.time_step:.3e} s exceeds the stable "
                       f"estimate {estimate:.3e} s (Silling & Askari); the run may blow up", stacklevel=2)
     return case.run.time_step
+
+
+def _structure_fields(s) -> dict[str, np.ndarray]:
+    if isinstance(s, ElasticStructure):
+        return {"u": s.displacement(), "von_mises": s.von_mises()}
+    return {"u": s.surface_points() - s.x0}
 
 
 def _energies(bodies: list[IceBody]) -> dict[str, float]:
@@ -105,7 +124,8 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     out.mkdir(parents=True, exist_ok=True)
     t_setup = time.perf_counter()
     bodies = [build_ice_body(cfg, case.run, case.file) for cfg in case.ice]
-    dt = choose_time_step(case, bodies)
+    structures = [build_structure(cfg, out, case.file) for cfg in case.structures]
+    dt = choose_time_step(case, bodies + structures)
     end = case.run.end_time
     nsteps = max(1, math.ceil(end / dt - 1e-9))
     dt = end / nsteps
@@ -116,6 +136,12 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     for b in bodies:
         say(f"  ice '{b.name}': {b.n:,} particles, {b.n_bonds:,} bonds, dx = {b.dx:g} m, "
             f"horizon = {b.delta:g} m, s0 = {b.s0:.3e}, stable step {b.stable_time_step():.3e} s")
+    for st in structures:
+        if isinstance(st, ElasticStructure):
+            say(f"  structure '{st.name}': {st.mesh.n_nodes:,} nodes, {st.mesh.n_elements:,} {st.cell_type} "
+                f"elements, critical step {st.solver.critical_time_step():.3e} s")
+        else:
+            say(f"  rigid body '{st.name}': {len(st.x0):,} surface nodes")
     say(f"  time step {dt:.3e} s, {nsteps:,} steps to {end:g} s; about {mem / 2**20:.0f} MiB of state")
 
     path = out / "results.h5"
@@ -124,10 +150,26 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     for b in bodies:
         writer.add_ice_body(b.name, b.x0, b.vol)
         b.start()
+    for st in structures:
+        if isinstance(st, ElasticStructure):
+            writer.add_structure(st.name, st.points, st.cells, st.cell_type)
+        else:
+            writer.add_structure(st.name, st.x0, st.surface_triangles, "triangle")
 
     def frame(t: float) -> None:
-        writer.write_frame(t, {b.name: {"u": b.displacement(), "v": b.v, "damage": b.damage()}
-                               for b in bodies})
+        ice = {b.name: {"u": b.displacement(), "v": b.v, "damage": b.damage()} for b in bodies}
+        if structures:
+            writer.write_frame(t, ice, structures={st.name: _structure_fields(st) for st in structures})
+        else:
+            writer.write_frame(t, ice)
+        for st in structures:
+            if isinstance(st, ElasticStructure):
+                hist = {"kinetic": st.kinetic_energy(), "strain": st.strain_energy()}
+                for g in case.structures[structures.index(st)].fixed_groups:
+                    hist[f"reaction_{g}"] = st.reaction(g)
+                writer.append_history(f"structures/{st.name}", t, hist)
+        if not bodies:
+            return
         e = _energies(bodies)
         e0 = initial_energy
         e["dissipated"] = e0 + e["external_work"] - (e["kinetic"] + e["strain"] + e["gravity_potential"])
@@ -145,6 +187,8 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         for step in range(1, nsteps + 1):
             for b in bodies:
                 broken += b.step(dt)
+            for st in structures:
+                st.step(dt)
             t = step * dt
             if t >= next_out * (1 - 1e-9) or step == nsteps:
                 _check_finite(bodies, t)

@@ -35,7 +35,7 @@ def test_good_case_parses_with_si_values():
     ("end_time = 1e-4", "end_time = -1e-4", "run.end_time"),
     ("end_time = 1e-4", "end_time = 'soon'", "run.end_time"),
     ("output_interval = 2e-5", "output_interval = 1.0", "run.output_interval"),
-    ("output_interval = 2e-5", "output_interval = 2e-5\nendtime = 3", "endtime"),
+    ("output_interval = 2e-5", "output_interval = 2e-5\nendtime = 3", "run.endtime"),
     ("dx = 0.01", "dx = 0", "ice[0].dx"),
     ("dx = 0.01", "dx = 0.01\nhorizon = 0.005", "ice[0].horizon"),
     ("dx = 0.01", "dx = 0.2", "ice[0].dx"),

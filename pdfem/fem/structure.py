@@ -115,6 +115,7 @@ class ElasticStructure(SurfaceBody):
         self._nodal_forces = np.zeros((mesh.n_nodes, 3))
         self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
         self._load_dofs = np.zeros(self.dofmap.n_dofs)   # nodal forces + surface loads, as DOFs
+        self._timed_loads: list = []                      # (DOF vector, t -> factor)
         self.solver.initialize()
 
     def _prescribed_values(self, prescribed: Mapping):
@@ -201,10 +202,18 @@ class ElasticStructure(SurfaceBody):
         self._nodal_forces = forces.copy()
         self._load_dofs = self.dofmap.to_dofs(self._nodal_forces) + self._pressure_dofs
 
-    def add_surface_load(self, group: str, traction=(0.0, 0.0, 0.0), pressure: float = 0.0) -> None:
-        """Add a constant uniform traction (Pa, (3,)) and/or pressure (Pa, positive pushing into
-        the structure) on a named surface group."""
+    def add_surface_load(self, group: str, traction=(0.0, 0.0, 0.0), pressure: float = 0.0,
+                         history=None) -> None:
+        """Add a uniform traction (Pa, (3,)) and/or pressure (Pa, positive pushing into the
+        structure) on a named surface group.
+
+        ``history`` (optional) is a callable ``t -> factor`` (t in s) that scales this load in
+        time, e.g. a pressure pulse; without it the load is constant.
+        """
         f = surface_load(self.mesh, group, traction, pressure)
+        if history is not None:
+            self._timed_loads.append((f, history))
+            return
         self._pressure_dofs = self._pressure_dofs + f
         self._load_dofs = self._load_dofs + f
 
@@ -213,10 +222,15 @@ class ElasticStructure(SurfaceBody):
         self._nodal_forces = np.zeros((self.mesh.n_nodes, 3))
         self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
         self._load_dofs = np.zeros(self.dofmap.n_dofs)
+        self._timed_loads = []
 
-    def external_force_dofs(self) -> np.ndarray:
-        """(3 Nn,) total external force (N) of the next step: loads plus contact forces."""
+    def external_force_dofs(self, time: float | None = None) -> np.ndarray:
+        """(3 Nn,) total external force (N) at ``time`` (s; default the current time): loads
+        (time histories evaluated at ``time``) plus the accumulated contact forces."""
         f = self._load_dofs.copy()
+        t = self.solver.time if time is None else time
+        for dofs, history in self._timed_loads:
+            f += float(history(t)) * dofs
         f[self._surface_dofs] += self._surface_forces.ravel()
         return f
 
@@ -247,7 +261,7 @@ class ElasticStructure(SurfaceBody):
         InstabilityError
             If the displacement becomes NaN or infinite (a step above the stable step).
         """
-        self.solver.step(dt, self.external_force_dofs())
+        self.solver.step(dt, self.external_force_dofs(self.solver.time + dt))
         if not np.isfinite(self.solver.u).all():
             raise InstabilityError(
                 f"structure '{self.name}': displacement became non-finite at t = "

@@ -113,7 +113,8 @@ class IceBody:
         body.f = np.zeros_like(x0)
         body.theta = np.zeros(n)
         body.fixed = np.zeros(n, dtype=bool)
-        body.m = kernels.weighted_volume(row_ptr, nbr, body.xi_len, vol, body.delta, body.dx)
+        body._ws = kernels.PairWorkspace(row_ptr, nbr)
+        body.m = kernels.weighted_volume(row_ptr, nbr, body.xi_len, vol, body.delta, body.dx, body._ws)
         if loop == "full_family":
             body._family = build_family(row_ptr, nbr, n)
         elif loop != "pairs":
@@ -170,10 +171,10 @@ class IceBody:
         mat = self.material
         if self.loop == "pairs":
             kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
-                               self.m, self.delta, self.dx, self.theta)
+                               self.m, self.delta, self.dx, self.theta, self._ws)
             return kernels.forces(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
                                   self.m, self.theta, mat.K, mat.mu, self.delta, self.dx, self.s0,
-                                  self.nofail, self.f)
+                                  self.nofail, self.f, self._ws)
         fam_ptr, fam_nbr, fam_bond = self._family
         kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.broken,
                                   self.vol, self.m, self.delta, self.dx, self.theta)
@@ -232,7 +233,7 @@ class IceBody:
 
     def damage(self) -> np.ndarray:
         """(N,) broken fraction of each particle's initial bonds."""
-        return kernels.damage(self.row_ptr, self.nbr, self.broken, self.n)
+        return kernels.damage(self.row_ptr, self.nbr, self.broken, self.n, self._ws)
 
     def kinetic_energy(self) -> float:
         """Kinetic energy, J."""
@@ -243,9 +244,9 @@ class IceBody:
         mat = self.material
         theta = np.empty(self.n)  # of the current bond set (bonds broken this step excluded)
         kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
-                           self.m, self.delta, self.dx, theta)
+                           self.m, self.delta, self.dx, theta, self._ws)
         W = kernels.strain_energy(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
-                                  self.m, theta, mat.K, mat.mu, self.delta, self.dx)
+                                  self.m, theta, mat.K, mat.mu, self.delta, self.dx, self._ws)
         return float(np.dot(W, self.vol))
 
     def gravity_potential(self) -> float:

@@ -1,0 +1,201 @@
+"""Benchmark of one ordinary state-based PD step: the pair loop against the full-family loop.
+
+A cubic lattice of about ``n`` sea-ice particles (dx = 1 cm) with small random displacements;
+a step is the dilatation followed by the forces with the bond-break check, as the time loop
+runs them (:func:`pdfem.pd.kernels.dilatation_and_forces`, which keeps the bond lengths of the
+dilatation pass for the force pass; the two separate calls are timed as well). The figure of
+merit is unique pair-steps per second (pairs P times steps over the seconds), the same numerator
+for both loops, so the full-family loop (which visits every bond twice, the "original PD" of
+Zhang et al. 2023) is charged for the work it actually has to do.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+
+import numba
+import numpy as np
+
+from ..pd import kernels as kn
+from ..pd.family import build_family
+from ..pd.material import SEA_ICE_DEFAULTS, IceMaterial
+
+
+def _lattice(side: int, dx: float) -> np.ndarray:
+    g = np.stack(np.meshgrid(*([np.arange(side)] * 3), indexing="ij"), -1).reshape(-1, 3)
+    return (g + 0.5) * dx
+
+
+def _pairs(x: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
+    """Cell-sorted positions and their CSR pairs (pdfem's cell search, else scipy's cKDTree)."""
+    try:
+        from ..pd.search import cell_pairs
+    except ImportError:
+        cell_pairs = None
+    if cell_pairs is not None:
+        perm, row_ptr, nbr = cell_pairs(x, delta)
+        return np.ascontiguousarray(x[perm]), row_ptr, nbr, "cell_pairs"
+    from scipy.spatial import cKDTree
+
+    n = x.shape[0]
+    p = cKDTree(x).query_pairs(delta, output_type="ndarray")
+    p.sort(axis=1)
+    p = p[np.lexsort((p[:, 1], p[:, 0]))]
+    row_ptr = np.zeros(n + 1, np.int64)
+    np.cumsum(np.bincount(p[:, 0], minlength=n), out=row_ptr[1:])
+    return x, row_ptr, p[:, 1].astype(np.int32), "ckdtree"
+
+
+def _bond_lengths(x, row_ptr, nbr):
+    try:
+        from ..pd.bonds import bond_lengths
+    except ImportError:
+        i = np.repeat(np.arange(x.shape[0]), np.diff(row_ptr))
+        return np.linalg.norm(x[nbr] - x[i], axis=1)
+    return bond_lengths(x, row_ptr, nbr)
+
+
+def _warm_up(horizon_factor: float) -> None:
+    """Compile (or load from cache) every kernel the benchmark times, on a tiny block."""
+    dx = 1.0
+    x = _lattice(6, dx)
+    x, row_ptr, nbr, _ = _pairs(x, horizon_factor * dx)
+    xi = _bond_lengths(x, row_ptr, nbr)
+    n = x.shape[0]
+    vol = np.ones(n)
+    ws = kn.PairWorkspace(row_ptr, nbr, n_chunks=max(2, numba.get_num_threads()))
+    m = kn.weighted_volume(row_ptr, nbr, xi, vol, horizon_factor * dx, dx, ws)
+    th, f = np.empty(n), np.empty((n, 3))
+    br, nf = np.zeros(len(nbr), np.uint8), np.zeros(n, np.uint8)
+    kn.dilatation(x, row_ptr, nbr, xi, br, vol, m, horizon_factor * dx, dx, th, ws)
+    kn.forces(x, row_ptr, nbr, xi, br, vol, m, th, 1.0, 1.0, horizon_factor * dx, dx, 1.0, nf, f,
+              ws)
+    kn.dilatation_and_forces(x, row_ptr, nbr, xi, br, vol, m, 1.0, 1.0, horizon_factor * dx, dx,
+                             1.0, nf, th, f, ws)
+    fam = build_family(row_ptr, nbr, n)
+    kn.dilatation_family(x, *fam, xi, br, vol, m, horizon_factor * dx, dx, th)
+    kn.forces_family(x, *fam, xi, br, vol, m, th, 1.0, 1.0, horizon_factor * dx, dx, 1.0, nf, f)
+
+
+def _timed(step, broken, steps: int) -> tuple[float, float, int]:
+    """Total and fastest seconds of ``steps`` calls of ``step(broken)`` after one untimed call
+    (which touches the scratch memory and breaks the bonds the displacements break), and the
+    bonds broken in all calls."""
+    nbroken = step(broken)
+    total, best = 0.0, math.inf
+    for _ in range(steps):
+        t0 = time.perf_counter()
+        nbroken += step(broken)
+        dt = time.perf_counter() - t0
+        total += dt
+        best = min(best, dt)
+    return total, best, nbroken
+
+
+def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 10,
+               damage: bool = True) -> dict:
+    """Time ``steps`` OSB steps with the pair loop and with the full-family loop.
+
+    Parameters
+    ----------
+    n
+        Approximate number of particles (a cube of ``round(n ** (1/3))`` per side).
+    horizon_factor
+        Horizon over lattice spacing.
+    steps
+        Steps timed per loop (after a compile warm-up on a tiny block and one untimed step
+        on the full block).
+    damage
+        With True the break check is live: sea-ice critical stretch (G0 = 10 J/m^2) and random
+        displacements of s0/3 dx, which break about 0.1 % of the bonds in the first step;
+        with False ``s0 = inf`` and displacements of 1e-6 dx.
+
+    Returns
+    -------
+    dict
+        ``n_particles``, ``n_pairs``, ``threads``, ``step_s`` (seconds per pair-loop step),
+        ``pair_steps_per_s`` (unique pairs x steps / s, pair loop),
+        ``separate_step_s`` and ``separate_pair_steps_per_s`` (pair loop as two calls,
+        :func:`~pdfem.pd.kernels.dilatation` then :func:`~pdfem.pd.kernels.forces`),
+        ``full_family_step_s``, ``full_family_pair_steps_per_s`` (same numerator),
+        ``speedup_pairs_vs_full_family``, ``pair_steps_per_s_best`` and
+        ``full_family_pair_steps_per_s_best`` (from the fastest single step), ``bonds_broken``, ``max_force_difference`` (relative,
+        pair vs full family after the last step), ``search`` (how the pairs were built),
+        ``load_average`` and ``load_average_after`` (1-minute load before and after the
+        timing: other work on the machine skews the figures), plus the inputs.
+    """
+    side = max(2, round(n ** (1.0 / 3.0)))
+    dx = 0.01
+    delta = horizon_factor * dx
+    _warm_up(horizon_factor)
+
+    x, row_ptr, nbr, how = _pairs(_lattice(side, dx), delta)
+    xi = _bond_lengths(x, row_ptr, nbr)
+    npart, npairs = x.shape[0], nbr.shape[0]
+    d = SEA_ICE_DEFAULTS
+    ice = IceMaterial(d["density"], d["youngs_modulus"], d["poisson_ratio"],
+                      fracture_energy=d["fracture_energy"])
+    K, mu = ice.K, ice.mu
+    s0 = ice.s0(delta) if damage else math.inf
+    amp = s0 / 3.0 if damage else 1e-6
+    y = x + amp * dx * np.random.default_rng(0).standard_normal(x.shape)
+    vol = np.full(npart, dx**3)
+    nofail = np.zeros(npart, np.uint8)
+    ws = kn.PairWorkspace(row_ptr, nbr)
+    m = kn.weighted_volume(row_ptr, nbr, xi, vol, delta, dx, ws)
+    theta = np.empty(npart)
+    f_pair = np.empty((npart, 3))
+    f_fam = np.empty((npart, 3))
+    load = os.getloadavg()[0]
+
+    def pair_step(broken):
+        return kn.dilatation_and_forces(y, row_ptr, nbr, xi, broken, vol, m, K, mu, delta, dx,
+                                        s0, nofail, theta, f_pair, ws)
+
+    def separate_step(broken):
+        kn.dilatation(y, row_ptr, nbr, xi, broken, vol, m, delta, dx, theta, ws)
+        return kn.forces(y, row_ptr, nbr, xi, broken, vol, m, theta, K, mu, delta, dx, s0,
+                         nofail, f_fam, ws)
+
+    broken = np.zeros(npairs, np.uint8)
+    t_pair, best_pair, nbroken = _timed(pair_step, broken, steps)
+    t_sep, _, _ = _timed(separate_step, np.zeros(npairs, np.uint8), steps)
+    del ws
+
+    fam_ptr, fam_nbr, fam_bond = build_family(row_ptr, nbr, npart)
+    coef = np.empty((npart, 2))
+
+    def family_step(broken):
+        kn.dilatation_family(y, fam_ptr, fam_nbr, fam_bond, xi, broken, vol, m, delta, dx, theta)
+        return kn.forces_family(y, fam_ptr, fam_nbr, fam_bond, xi, broken, vol, m, theta, K, mu,
+                                delta, dx, s0, nofail, f_fam, coef)
+
+    broken_fam = np.zeros(npairs, np.uint8)
+    t_fam, best_fam, nbroken_fam = _timed(family_step, broken_fam, steps)
+    if nbroken_fam != nbroken or not np.array_equal(broken, broken_fam):
+        raise RuntimeError("pair loop and full-family loop broke different bonds (a bug)")
+    scale = float(np.abs(f_pair).max()) or 1.0
+    return {
+        "n_particles": int(npart),
+        "n_pairs": int(npairs),
+        "threads": int(numba.get_num_threads()),
+        "horizon_factor": float(horizon_factor),
+        "steps": int(steps),
+        "damage": bool(damage),
+        "search": how,
+        "step_s": t_pair / steps,
+        "pair_steps_per_s": npairs * steps / t_pair,
+        "pair_steps_per_s_best": npairs / best_pair,
+        "full_family_pair_steps_per_s_best": npairs / best_fam,
+        "full_family_step_s": t_fam / steps,
+        "full_family_pair_steps_per_s": npairs * steps / t_fam,
+        "speedup_pairs_vs_full_family": t_fam / t_pair,
+        "separate_step_s": t_sep / steps,
+        "separate_pair_steps_per_s": npairs * steps / t_sep,
+        "bonds_broken": int(nbroken),
+        "max_force_difference": float(np.abs(f_pair - f_fam).max() / scale),
+        "load_average": float(load),
+        "load_average_after": float(os.getloadavg()[0]),
+    }

@@ -1,0 +1,59 @@
+"""Structures from validated case entries: mesh the model (or read the .msh), then assemble.
+
+A model named in the case (a model of ``models/`` or a ``.py`` file) is meshed with gmsh into the
+run's output directory, so the mesh used by a run is kept beside its results. Problems with the
+mesh or its groups are user errors, reported with the case-file field.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..config import StructureConfig
+from ..errors import InputError
+from .elasticity import ElasticMaterial
+from .rigid import RigidBody
+from .structure import ElasticStructure
+
+
+def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>") -> Path:
+    """The .msh file of a structure: the case's file, or its model meshed into ``out_dir``."""
+    if cfg.mesh.endswith(".msh"):
+        return Path(cfg.mesh)
+    from ..meshing import mesh_model
+    target = Path(out_dir) / f"{cfg.name}.msh"
+    try:
+        mesh_model(cfg.mesh, {k: v for k, v in cfg.params.items()}, target)
+    except InputError as exc:
+        raise InputError(file, f"{cfg.field}.params" if exc.field not in (None, "model")
+                         else f"{cfg.field}.mesh", exc.message, exc.value) from None
+    return target
+
+
+def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>"):
+    """Build the elastic structure or rigid body that ``cfg`` describes.
+
+    Returns
+    -------
+    ElasticStructure or RigidBody
+    """
+    path = structure_mesh(cfg, out_dir, file)
+    try:
+        if cfg.kind == "rigid":
+            return RigidBody.from_msh(path, cfg.contact_group, velocity=cfg.velocity,
+                                      angular_velocity=cfg.angular_velocity, centre=cfg.center,
+                                      name=cfg.name)
+        material = ElasticMaterial(cfg.density, cfg.youngs_modulus, cfg.poisson_ratio)
+        s = ElasticStructure.from_file(path, material, fixed_groups=cfg.fixed_groups,
+                                       contact_group=cfg.contact_group, name=cfg.name,
+                                       rayleigh_alpha=cfg.damping_alpha, rayleigh_beta=cfg.damping_beta)
+        for load in cfg.loads:
+            try:
+                s.add_surface_load(load.group, load.traction, load.pressure, history=load.pulse)
+            except ValueError as exc:
+                raise InputError(file, f"{load.field}.group", str(exc), load.group) from None
+        return s
+    except InputError:
+        raise
+    except (ValueError, OSError) as exc:
+        raise InputError(file, f"{cfg.field}.mesh", f"{exc} (mesh file {path})") from None

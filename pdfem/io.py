@@ -1,0 +1,662 @@
+"""Results file of a run: HDF5 written frame by frame, with an XDMF file beside it for ParaView.
+
+The time loop creates one :class:`ResultsWriter`, registers the ice bodies, then calls
+:meth:`ResultsWriter.write_frame` at every output time and :meth:`ResultsWriter.append_history`
+at every step. :func:`read_results` loads a whole file into numpy arrays for tests and
+post-processing.
+
+Layout of ``<stem>.h5`` (all quantities SI)::
+
+    /meta                    attrs: version (pdfem version), units = "SI", case (TOML text),
+                             created (ISO 8601 time), plus the writer's ``meta`` items
+    /time                    (F,)      output time of each frame, s
+    /ice/<body>/x0           (N, 3)    reference particle positions, m
+    /ice/<body>/volume       (N,)      particle volumes, m^3 (if given)
+    /ice/<body>/u            (F, N, 3) displacement, m
+    /ice/<body>/v            (F, N, 3) velocity, m/s
+    /ice/<body>/damage       (F, N)    broken fraction of the initial bonds, dimensionless
+    /ice/<body>/<field>      (F, N) or (F, N, 3)  any further per-particle field, e.g. theta
+    /<history>/time          (K,)      e.g. /energy/time, /loads/<name>/time: step times, s
+    /<history>/<key>         (K,) or (K, 3)  e.g. /energy/kinetic in J, /loads/<name>/force in N,
+                             /loads/<name>/moment in N m
+    /xdmf/...                per-frame views for the XDMF file (see below), no data of their own
+
+Frame fields are float64, chunked one frame per chunk and resizable along the frame axis.
+Histories are float64, chunked by ``HISTORY_BLOCK`` rows, and written in blocks: rows are kept
+in memory until a block is full or until the next frame, :meth:`~ResultsWriter.flush` or
+:meth:`~ResultsWriter.close`. Groups carry an attribute ``kind`` ("ice_body" or "history")
+so readers can find them. Room is left for structures (``/structure/<name>/points``,
+``/cells``, ``/u`` (F, Nn, 3), ``/von_mises`` (F, Ne)): a mesh is a :class:`_Mesh` whose
+fields are a :class:`_FrameSeries` with a node and a cell count.
+
+``<stem>.xdmf`` (XDMF 3) has one temporal collection per body; each frame is a uniform grid
+with Polyvertex topology over the body's particles, geometry ``x0`` and one attribute per
+field (Scalar or Vector, centred on the nodes). The HDF5 file is named relative to the XDMF
+file, so the two can be moved together. Each attribute references a per-frame dataset
+``/xdmf/ice/<body>/<field>/<frame>``: an HDF5 virtual dataset that maps frame F of the
+(F, N, ...) dataset (no copy). meshio's ``TimeSeriesReader`` cannot read XDMF hyperslabs;
+it and VTK's ``vtkXdmfReader`` (ParaView's XDMF reader) both read these views. The views are
+made ``VIEW_BATCH`` frames ahead, so the groups that hold them change only once per batch:
+fewer chances for a run killed mid-flush to damage them (read_results never uses them).
+
+Robustness: the file stays open (HDF5's default, oldest file format) and every frame is
+committed in steps, each ended by a flush: its fields and the pending history columns; the
+histories' time rows; its ``/time`` row. Then the XDMF file is rewritten atomically
+(temporary file, ``os.replace``). Time datasets read NaN where unwritten, so a finite time
+row means its data reached the file, and a committed frame means every history row appended
+before it did too.
+A process killed after :meth:`~ResultsWriter.write_frame` returns leaves a pair that h5py,
+meshio and ParaView read, with every frame so far; one killed inside it may lose that frame,
+and :func:`read_results` returns only committed rows that read back. Not used, by
+measurement: ``libver="latest"`` (a killed writer leaves the file marked open for writing and
+HDF5 refuses to open it without ``h5clear``) and SWMR (no new objects may be created once it
+starts, but views and histories are added as the run goes). Neither file is fsync'ed: this
+protects against the death of the process, not of the machine. While it is written the file
+holds HDF5's lock, and a second :class:`ResultsWriter` on it is refused (HDF5 itself would
+truncate it first); to read it during a run, start the reader (e.g. ParaView) with
+``HDF5_USE_FILE_LOCKING=FALSE`` (:func:`read_results` does this itself).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+from xml.sax.saxutils import escape, quoteattr
+
+import h5py
+import numpy as np
+
+import pdfem
+
+HISTORY_BLOCK = 1024
+"""Rows per chunk of a history dataset, and rows buffered in memory before a block write."""
+
+VIEW_BATCH = 64
+"""Per-frame XDMF views are made this many frames ahead, so the groups that hold them change
+(and can be damaged by a kill during the flush) only every VIEW_BATCH frames."""
+
+REQUIRED_ICE_FIELDS = ("u", "v", "damage")
+"""Fields every ice body must give in every frame."""
+
+_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+\-]*\Z")
+_RESERVED = frozenset({"meta", "time", "ice", "structure", "xdmf"})
+_ATTRIBUTE_TYPE = {(): "Scalar", (3,): "Vector"}
+
+
+def _check_name(name: str, what: str) -> str:
+    """Return ``name`` if it is a plain HDF5 link name (letters, digits, ``_ . + -``)."""
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(
+            f"{what} {name!r} is not a valid name: use letters, digits, '_', '.', '+', '-' "
+            "and start with a letter, digit or '_'"
+        )
+    return name
+
+
+def _dims(shape: tuple[int, ...]) -> str:
+    return " ".join(str(int(n)) for n in shape)
+
+
+def _data_item(h5name: str, path: str, shape: tuple[int, ...], number_type: str = "Float",
+               precision: int = 8) -> str:
+    """XDMF DataItem referencing the whole HDF5 dataset ``path`` of file ``h5name``."""
+    return (f'<DataItem Dimensions="{_dims(shape)}" NumberType="{number_type}" '
+            f'Precision="{precision}" Format="HDF">{escape(h5name)}:{escape(path)}</DataItem>')
+
+
+class _FrameSeries:
+    """Fields of one group, one output frame per row: dataset ``<path>/<field>`` is (F, n, ...).
+
+    ``sizes`` maps an XDMF centre ("Node", later also "Cell") to the number of items; a field's
+    centre is the one whose size matches its leading dimension. The field set and each
+    field's shape are fixed by the first frame. Every frame also gets a virtual dataset
+    ``/xdmf<path>/<field>/<frame>`` that maps that frame, for the XDMF file; these are made
+    ``VIEW_BATCH`` frames ahead, and those never used are deleted on close.
+    """
+
+    def __init__(self, file: h5py.File, path: str, sizes: Mapping[str, int],
+                 item_shapes: tuple[tuple[int, ...], ...], required: tuple[str, ...]) -> None:
+        self.file = file
+        self.path = path
+        self.sizes = dict(sizes)
+        self.item_shapes = item_shapes
+        self.required = required
+        # field name -> (centre, item shape), fixed by the first frame
+        self.fields: dict[str, tuple[str, tuple[int, ...]]] | None = None
+        self._datasets: dict[str, h5py.Dataset] = {}
+        self._view_groups: dict[str, h5py.Group] = {}
+        self._views = 0  # frames 0 .. _views - 1 have views
+
+    def _centre(self, name: str, shape: tuple[int, ...]) -> str:
+        for centre, n in self.sizes.items():
+            if shape[:1] == (n,) and shape[1:] in self.item_shapes:
+                return centre
+        allowed = " or ".join(str((n,) + s) for n in self.sizes.values() for s in self.item_shapes)
+        raise ValueError(f"field {name!r} of {self.path} has shape {shape}, expected {allowed}")
+
+    def check(self, values: Mapping[str, Any]) -> dict[str, np.ndarray]:
+        """Validate one frame's fields; return them as C-contiguous float64 arrays."""
+        arrays = {_check_name(k, "field"): np.ascontiguousarray(v, dtype=np.float64)
+                  for k, v in values.items()}
+        if self.fields is None:
+            missing = [k for k in self.required if k not in arrays]
+            if missing:
+                raise ValueError(f"{self.path}: the first frame lacks the required fields "
+                                 f"{missing}")
+            for k, a in arrays.items():
+                self._centre(k, a.shape)
+        else:
+            missing = sorted(set(self.fields) - set(arrays))
+            extra = sorted(set(arrays) - set(self.fields))
+            if missing or extra:
+                raise ValueError(f"{self.path}: the field set is fixed by the first frame "
+                                 f"{sorted(self.fields)}; missing {missing}, unexpected {extra}")
+            for k, a in arrays.items():
+                n = self.sizes[self.fields[k][0]]
+                if a.shape != (n,) + self.fields[k][1]:
+                    raise ValueError(f"field {k!r} of {self.path} has shape {a.shape}, "
+                                     f"expected {(n,) + self.fields[k][1]}")
+        return arrays
+
+    def append(self, index: int, arrays: Mapping[str, np.ndarray]) -> None:
+        """Write frame ``index`` (the arrays were validated by :meth:`check`)."""
+        if self.fields is None:
+            self.fields = {}
+            group = self.file[self.path]
+            for k, a in arrays.items():
+                self.fields[k] = (self._centre(k, a.shape), a.shape[1:])
+                self._datasets[k] = group.create_dataset(
+                    k, shape=(0,) + a.shape, maxshape=(None,) + a.shape, chunks=(1,) + a.shape,
+                    dtype=np.float64)
+                self._view_groups[k] = self.file.create_group(f"/xdmf{self.path}/{k}")
+        for k, a in arrays.items():
+            ds = self._datasets[k]
+            ds.resize(index + 1, axis=0)
+            ds[index] = a
+        if index >= self._views:
+            for k, a in arrays.items():
+                for j in range(index, index + VIEW_BATCH):
+                    self._create_view(k, j, a.shape)
+            self._views = index + VIEW_BATCH
+
+    def drop_unused_views(self, n_frames: int) -> None:
+        """Delete the views made ahead for frames that were never written."""
+        for group in self._view_groups.values():
+            for j in range(n_frames, self._views):
+                del group[f"{j:06d}"]
+        self._views = min(self._views, n_frames)
+
+    def _create_view(self, name: str, index: int, shape: tuple[int, ...]) -> None:
+        """Create the virtual dataset of ``shape`` mapping row ``index`` of field ``name``.
+
+        The source file is ".", the file that holds the view, so the file can be moved. A view
+        of a row not yet written reads the source's fill value (0); the XDMF file names only
+        views of written frames.
+        """
+        dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+        dcpl.set_fill_value(np.array(np.nan))
+        source = h5py.h5s.create_simple((index + 1,) + shape)
+        source.select_hyperslab((index,) + (0,) * len(shape), (1,) + shape)
+        view = h5py.h5s.create_simple(shape)
+        dcpl.set_virtual(view, b".", self._datasets[name].name.encode(), source)
+        h5py.h5d.create(self._view_groups[name].id, f"{index:06d}".encode(), h5py.h5t.IEEE_F64LE,
+                        view, dcpl=dcpl).close()
+
+    def view(self, name: str, index: int) -> str:
+        """HDF5 path of the virtual dataset showing frame ``index`` of field ``name``."""
+        return f"/xdmf{self.path}/{name}/{index:06d}"
+
+
+class _Mesh:
+    """A body shown as one XDMF grid per frame: fixed topology and geometry, per-frame fields."""
+
+    def __init__(self, name: str, topology_xml: str, geometry_xml: str, constant_xml: str,
+                 series: _FrameSeries) -> None:
+        self.name = name
+        self.topology_xml = topology_xml
+        self.geometry_xml = geometry_xml
+        self.constant_xml = constant_xml
+        self.series = series
+        self.frames_xml: list[str] = []
+
+    def add_frame_xml(self, h5name: str, index: int, time: float) -> None:
+        """Build (once) the XDMF grid of frame ``index``."""
+        assert self.series.fields is not None
+        parts = [f'<Grid Name={quoteattr(self.name)} GridType="Uniform">'
+                 f'<Time Value="{float(time)!r}"/>',
+                 self.topology_xml, self.geometry_xml, self.constant_xml]
+        for k, (centre, shape) in self.series.fields.items():
+            full = (self.series.sizes[centre],) + shape
+            parts.append(f'<Attribute Name={quoteattr(k)} '
+                         f'AttributeType="{_ATTRIBUTE_TYPE[shape]}" Center="{centre}">'
+                         f'{_data_item(h5name, self.series.view(k, index), full)}</Attribute>')
+        parts.append("</Grid>")
+        self.frames_xml.append("\n      ".join(parts))
+
+    def xml(self) -> str:
+        """The temporal collection of all frames so far."""
+        head = (f'    <Grid Name={quoteattr(self.name)} GridType="Collection" '
+                'CollectionType="Temporal">')
+        body = "".join("\n      " + g for g in self.frames_xml)
+        return head + body + "\n    </Grid>\n"
+
+
+class _History:
+    """Buffered per-step rows of a history: ``<group>/time`` (K,), ``<group>/<key>`` (K, ...).
+
+    Rows reach the file in two phases: the key columns, then (after an HDF5 flush) the time
+    column, which commits them. ``time`` is filled with NaN where unwritten, so a reader
+    keeps the rows up to the first NaN time.
+    """
+
+    def __init__(self, file: h5py.File, path: str, values: Mapping[str, np.ndarray]) -> None:
+        self.file = file
+        self.path = path
+        self.shapes = {k: v.shape for k, v in values.items()}
+        self.buffers = {k: np.empty((HISTORY_BLOCK,) + s) for k, s in self.shapes.items()}
+        self.times = np.empty(HISTORY_BLOCK)
+        self.count = 0  # rows in the buffers
+        self.written = 0  # rows committed to the file
+        group = file.require_group(path)
+        group.attrs["kind"] = "history"
+        self.datasets = {
+            k: group.create_dataset(k, shape=(0,) + s, maxshape=(None,) + s,
+                                    chunks=(HISTORY_BLOCK,) + s, dtype=np.float64)
+            for k, s in self.shapes.items()}
+        self.time = group.create_dataset("time", shape=(0,), maxshape=(None,),
+                                         chunks=(HISTORY_BLOCK,), dtype=np.float64,
+                                         fillvalue=np.nan)
+
+    def append(self, time: float, values: Mapping[str, Any]) -> None:
+        if values.keys() != self.shapes.keys():
+            raise ValueError(f"history {self.path!r}: keys are fixed by the first row "
+                             f"{sorted(self.shapes)}, got {sorted(values)}")
+        c = self.count
+        for k, v in values.items():
+            if np.shape(v) != self.shapes[k]:
+                raise ValueError(f"history {self.path!r}: {k!r} has shape {np.shape(v)}, "
+                                 f"expected {self.shapes[k]} as in the first row")
+            self.buffers[k][c] = v
+        self.times[c] = time
+        self.count = c + 1
+        if self.count == HISTORY_BLOCK:
+            self.write_columns()
+            self.file.flush()
+            self.commit()
+
+    def write_columns(self) -> None:
+        """Phase 1: write the key columns of the buffered rows."""
+        end = self.written + self.count
+        for k, ds in self.datasets.items():
+            if ds.shape[0] != end:
+                ds.resize(end, axis=0)
+                ds[self.written:end] = self.buffers[k][:self.count]
+
+    def commit(self) -> None:
+        """Phase 2, after a flush that followed :meth:`write_columns`: write the time column."""
+        c = self.count
+        if c:
+            end = self.written + c
+            self.time.resize(end, axis=0)
+            self.time[self.written:end] = self.times[:c]
+            self.written = end
+            self.count = 0
+
+
+def _refuse_if_being_written(path: Path) -> None:
+    """Raise if another process holds ``path`` open for writing (its HDF5 file lock).
+
+    HDF5 truncates a file before it finds the lock, so a second run would wipe a running
+    run's results: look first, with a read-only open that the writer's lock refuses.
+    """
+    if not path.exists():
+        return
+    try:
+        h5py.File(path, "r").close()
+    except BlockingIOError as err:
+        raise FileExistsError(f"results file {str(path)!r} is being written by another "
+                              "process; choose another output path") from err
+    except OSError:
+        return  # not a readable HDF5 file: it is overwritten
+
+
+class ResultsWriter:
+    """Write a run's results (HDF5) frame by frame, keeping an XDMF file beside it up to date.
+
+    Parameters
+    ----------
+    path
+        The HDF5 file to create (overwritten if it exists), e.g. ``results/run.h5``. The XDMF
+        file is the same path with suffix ``.xdmf``.
+    case_text
+        The case file (TOML text), stored as ``/meta`` attribute ``case``.
+    meta
+        Further ``/meta`` attributes (e.g. ranks, threads, title): strings, numbers or arrays.
+
+    Raises
+    ------
+    FileExistsError
+        If another process is writing ``path`` (it holds the HDF5 file lock).
+
+    Notes
+    -----
+    Units are SI throughout (see the module docstring for the layout). Use as a context
+    manager, or call :meth:`close`. Bodies are added before the first frame; a frame is
+    validated whole before anything of it is written, so a rejected frame leaves no trace.
+    """
+
+    def __init__(self, path: str | os.PathLike, case_text: str = "",
+                 meta: dict | None = None) -> None:
+        self.path = Path(path)
+        if self.path.suffix.lower() == ".xdmf":
+            raise ValueError(f"results path {str(self.path)!r} must be the HDF5 file, "
+                             "not the .xdmf")
+        if ":" in self.path.name:
+            raise ValueError(f"results file name {self.path.name!r} must not contain ':' "
+                             "(XDMF separates file and dataset with ':')")
+        self.xdmf_path = self.path.with_suffix(".xdmf")
+        self._h5name = self.path.name
+        self._meshes: dict[str, _Mesh] = {}
+        self._histories: dict[str, _History] = {}
+        self._frames = 0
+        self._xdmf_frames = -1
+        self._last_time = -np.inf
+        _refuse_if_being_written(self.path)
+        self._file: h5py.File | None = h5py.File(self.path, "w")
+        m = self._file.create_group("meta")
+        m.attrs["version"] = pdfem.__version__
+        m.attrs["units"] = "SI"
+        m.attrs["case"] = case_text
+        m.attrs["created"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
+        for k, v in (meta or {}).items():
+            try:
+                m.attrs[k] = v
+            except (TypeError, ValueError) as err:
+                self._file.close()
+                raise TypeError(f"meta item {k!r} = {v!r} cannot be stored as an HDF5 attribute "
+                                "(use a string, a number or an array)") from err
+        self._file.create_dataset("time", shape=(0,), maxshape=(None,), chunks=(HISTORY_BLOCK,),
+                                  dtype=np.float64, fillvalue=np.nan)
+        self._file.create_group("ice")
+        self.flush()
+
+    # -- setup ---------------------------------------------------------------------------
+
+    @property
+    def _h5(self) -> h5py.File:
+        if self._file is None:
+            raise ValueError(f"results file {str(self.path)!r} is closed")
+        return self._file
+
+    def add_ice_body(self, name: str, x0: np.ndarray, volume: np.ndarray | None = None) -> None:
+        """Register an ice body and store its reference configuration.
+
+        Parameters
+        ----------
+        name
+            Body name (letters, digits, ``_ . + -``), the group ``/ice/<name>``.
+        x0
+            (N, 3) reference particle positions, m.
+        volume
+            (N,) particle volumes, m^3, optional; shown in ParaView as the field ``volume``.
+        """
+        f = self._h5
+        _check_name(name, "ice body name")
+        if self._frames:
+            raise ValueError(f"ice body {name!r} added after the first frame; "
+                             "add all bodies first")
+        if f"ice/{name}" in self._meshes:
+            raise ValueError(f"ice body {name!r} is already registered")
+        x0 = np.ascontiguousarray(x0, dtype=np.float64)
+        if x0.ndim != 2 or x0.shape[1] != 3 or x0.shape[0] == 0:
+            raise ValueError(f"x0 of ice body {name!r} has shape {x0.shape}, "
+                             "expected (N, 3) with N > 0")
+        n = x0.shape[0]
+        if volume is not None:
+            volume = np.ascontiguousarray(volume, dtype=np.float64)
+            if volume.shape != (n,):
+                raise ValueError(f"volume of ice body {name!r} has shape {volume.shape}, "
+                                 f"expected ({n},)")
+        path = f"/ice/{name}"
+        g = f.create_group(path)
+        g.attrs["kind"] = "ice_body"
+        g.create_dataset("x0", data=x0)
+        f.create_dataset(f"/xdmf{path}/vertices", data=np.arange(n, dtype=np.int32).reshape(n, 1))
+        constant = ""
+        if volume is not None:
+            g.create_dataset("volume", data=volume)
+            constant = ('<Attribute Name="volume" AttributeType="Scalar" Center="Node">'
+                        f'{_data_item(self._h5name, f"{path}/volume", (n,))}</Attribute>')
+        vertices = _data_item(self._h5name, f"/xdmf{path}/vertices", (n, 1), "Int", 4)
+        topology = (f'<Topology TopologyType="Polyvertex" NumberOfElements="{n}" '
+                    f'NodesPerElement="1">{vertices}</Topology>')
+        geometry = (f'<Geometry GeometryType="XYZ">'
+                    f'{_data_item(self._h5name, f"{path}/x0", (n, 3))}</Geometry>')
+        series = _FrameSeries(f, path, {"Node": n}, ((), (3,)), REQUIRED_ICE_FIELDS)
+        self._meshes[f"ice/{name}"] = _Mesh(f"ice/{name}", topology, geometry, constant, series)
+
+    # -- per output time -----------------------------------------------------------------
+
+    def write_frame(self, time: float, ice: dict[str, dict[str, np.ndarray]]) -> int:
+        """Append one output frame, flush the file and rewrite the XDMF file.
+
+        Parameters
+        ----------
+        time
+            Output time, s; strictly greater than the previous frame's.
+        ice
+            For every registered ice body, its fields: at least ``u`` (N, 3) displacement in m,
+            ``v`` (N, 3) velocity in m/s and ``damage`` (N,); any further (N,) or (N, 3)
+            field. The field set of a body is fixed by the first frame.
+
+        Returns
+        -------
+        int
+            The index of the frame written.
+        """
+        f = self._h5
+        time = float(time)
+        if not np.isfinite(time) or time <= self._last_time:
+            raise ValueError(f"frame time {time!r} must be finite and greater than the "
+                             f"previous frame time {self._last_time!r}")
+        bodies = {f"ice/{k}": v for k, v in ice.items()}
+        if bodies.keys() != {k for k in self._meshes if k.startswith("ice/")}:
+            raise ValueError("write_frame needs every registered ice body "
+                             f"{sorted(self._meshes)}, "
+                             f"got {sorted(bodies)}")
+        checked = {k: self._meshes[k].series.check(v) for k, v in bodies.items()}
+        index = self._frames
+        for k, arrays in checked.items():
+            self._meshes[k].series.append(index, arrays)
+        self._sync(time)
+        for mesh in self._meshes.values():
+            mesh.add_frame_xml(self._h5name, index, time)
+        self._update_xdmf()
+        return index
+
+    def append_history(self, group: str, time: float,
+                       values: dict[str, float | np.ndarray]) -> None:
+        """Append one row to a per-step history (buffered; written in blocks).
+
+        Parameters
+        ----------
+        group
+            History group, e.g. ``"energy"`` or ``"loads/<name>"`` (components are names of
+            letters, digits, ``_ . + -``; the first must not be meta, time, ice, structure, xdmf).
+        time
+            Time of the row, s.
+        values
+            Scalars or arrays (e.g. ``force`` (3,) in N); keys and shapes fixed by the first row.
+        """
+        f = self._h5
+        h = self._histories.get(group)
+        if h is None:
+            parts = group.split("/") if isinstance(group, str) else [group]
+            for p in parts:
+                _check_name(p, "history group component")
+            if parts[0] in _RESERVED:
+                raise ValueError(f"history group {group!r} would collide with /{parts[0]}")
+            first = {_check_name(k, "history key"): np.asarray(v, dtype=np.float64)
+                     for k, v in values.items()}
+            clash = [g for g in self._histories
+                     if g.startswith(group + "/") or group.startswith(g + "/")]
+            if clash:
+                raise ValueError(f"history group {group!r} would nest with history {clash[0]!r}")
+            if "time" in first:
+                raise ValueError(f"history {group!r}: 'time' is not allowed as a key")
+            h = _History(f, "/" + group, first)
+            self._histories[group] = h
+        h.append(time, values)
+
+    # -- file state ----------------------------------------------------------------------
+
+    def flush(self) -> None:
+        """Write buffered history rows, flush the HDF5 file and bring the XDMF file up to date."""
+        self._sync()
+        self._update_xdmf()
+
+    def _sync(self, frame_time: float | None = None) -> None:
+        """Flush in steps, so that what is on disk is always a committed prefix.
+
+        1. history key columns (frame fields are already written), flush;
+        2. history time rows, which commit the history rows, flush;
+        3. for a new frame, its ``/time`` row, which commits the frame, flush.
+        A time row on disk thus implies its data is on disk, and a committed frame implies
+        every history row appended before it is committed. Unwritten time rows read NaN.
+        """
+        f = self._h5
+        for h in self._histories.values():
+            h.write_columns()
+        f.flush()
+        for h in self._histories.values():
+            h.commit()
+        f.flush()
+        if frame_time is not None:
+            ds = f["time"]
+            ds.resize(self._frames + 1, axis=0)
+            ds[self._frames] = frame_time
+            self._frames += 1
+            self._last_time = frame_time
+            f.flush()
+
+    def _update_xdmf(self) -> None:
+        if self._xdmf_frames != self._frames:
+            self._write_xdmf()
+            self._xdmf_frames = self._frames
+
+    def _write_xdmf(self) -> None:
+        text = ('<?xml version="1.0" encoding="utf-8"?>\n'
+                '<Xdmf Version="3.0">\n  <Domain>\n'
+                + "".join(m.xml() for m in self._meshes.values() if m.frames_xml)
+                + "  </Domain>\n</Xdmf>\n")
+        tmp = self.xdmf_path.with_name(self.xdmf_path.name + ".tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, self.xdmf_path)
+
+    def close(self) -> None:
+        """Write what is buffered and close the file (closing twice is allowed)."""
+        if self._file is not None:
+            try:
+                for mesh in self._meshes.values():
+                    mesh.series.drop_unused_views(self._frames)
+                self.flush()
+            finally:
+                self._file.close()
+                self._file = None
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames written."""
+        return self._frames
+
+    def __enter__(self) -> ResultsWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _attr(v: Any) -> Any:
+    if isinstance(v, bytes):
+        return v.decode()
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def _readable_prefix(ds: h5py.Dataset, n: int) -> np.ndarray:
+    """Rows ``[:m]`` of ``ds`` for the largest ``m <= n`` that reads without error.
+
+    A run killed while flushing can leave the last rows' chunks past the file's recorded end;
+    those rows raise ``OSError``. Rows are dropped a chunk at a time from the end.
+    """
+    step = ds.chunks[0] if ds.chunks else n
+    m = n
+    while m > 0:
+        try:
+            return ds[:m]
+        except OSError:
+            m = (m - 1) // step * step
+    return ds[:0]
+
+
+def _committed(time: np.ndarray) -> np.ndarray:
+    """The rows of a time column before its first NaN (unwritten rows read NaN)."""
+    bad = np.flatnonzero(np.isnan(time))
+    return time[:bad[0]] if bad.size else time
+
+
+def read_results(path: str | os.PathLike) -> dict:
+    """Load a results file into numpy arrays.
+
+    Parameters
+    ----------
+    path
+        The HDF5 results file. It may come from a killed run, or still be open in a running
+        writer (a file locked by another process is then read without HDF5 file locking).
+
+    Returns
+    -------
+    dict
+        ``{"meta": {attr: value}, "time": (F,), "ice": {body: {"x0", "volume"?, "u", "v",
+        "damage", ...}}, "histories": {group: {"time": (K,), key: (K, ...)}}}``. Only
+        committed rows are returned: F counts the rows of ``/time`` before the first NaN (a
+        time row is written only after its frame's data was flushed), cut further to the
+        frames that every field dataset can read; each history likewise (a run killed while
+        writing may have extended some datasets and not others).
+    """
+    out: dict[str, Any] = {"meta": {}, "time": None, "ice": {}, "histories": {}}
+    try:
+        f = h5py.File(path, "r")
+    except BlockingIOError:
+        f = h5py.File(path, "r", locking=False)
+    with f:
+        out["meta"] = {k: _attr(v) for k, v in f["meta"].attrs.items()}
+        frames = {"time": _committed(_readable_prefix(f["time"], f["time"].shape[0]))}
+        n = frames["time"].shape[0]
+        for name, g in f["ice"].items():
+            for k, ds in g.items():
+                if k in ("x0", "volume"):
+                    out["ice"].setdefault(name, {})[k] = ds[()]
+                else:
+                    frames[f"{name}/{k}"] = a = _readable_prefix(ds, min(n, ds.shape[0]))
+                    n = min(n, a.shape[0])
+        out["time"] = frames.pop("time")[:n]
+        for key, a in frames.items():
+            name, k = key.split("/")
+            out["ice"].setdefault(name, {})[k] = a[:n]
+        stack = [(k, g) for k, g in f.items() if k not in _RESERVED and isinstance(g, h5py.Group)]
+        while stack:
+            name, g = stack.pop()
+            if _attr(g.attrs.get("kind")) == "history":
+                rows = {k: _readable_prefix(ds, ds.shape[0]) for k, ds in g.items()}
+                rows["time"] = _committed(rows["time"])
+                k_min = min(a.shape[0] for a in rows.values())
+                out["histories"][name] = {k: a[:k_min] for k, a in rows.items()}
+            else:
+                stack.extend((f"{name}/{k}", s) for k, s in g.items() if isinstance(s, h5py.Group))
+    return out

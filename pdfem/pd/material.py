@@ -1,0 +1,172 @@
+"""Material constants of the linear peridynamic solid (LPS) for ice.
+
+The ordinary state-based kernels (:mod:`pdfem.pd.kernels`) need the bulk modulus ``K`` (Pa), the
+shear modulus ``mu`` (Pa) and the critical stretch ``s0`` (dimensionless) of the bond-breaking
+criterion. This module derives them from engineering constants.
+
+Sea-ice defaults (``SEA_ICE_DEFAULTS``) and their sources:
+
+- density 900 kg/m^3 (observed range 840-940 kg/m^3 for first-year sea ice, depending on brine
+  and air content; Timco & Frederking 1996, Cold Reg. Sci. Technol. 24);
+- Young's modulus 4.1e9 Pa: mean of Kujala's beam tests on Baltic sea ice, range 3.2-5.4 GPa
+  (the figures quoted in the pdfem design notes);
+- Poisson's ratio 0.3 (the value used for sea ice throughout the ice-mechanics literature,
+  e.g. Timco & Weeks 2010, Cold Reg. Sci. Technol. 60);
+- fracture energy 10 J/m^2: an order of magnitude; reported values for sea ice scatter over
+  roughly an order of magnitude with specimen size and loading rate (Timco & Weeks 2010);
+- flexural strength 0.4-0.9 MPa (Timco & O'Brien 1994, Cold Reg. Sci. Technol. 22). Not used by
+  the kernels; listed so that a calibrated ``s0`` can be checked against it.
+
+All values are SI.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+SEA_ICE_DEFAULTS: dict[str, float] = {
+    "density": 900.0,  # kg/m^3 (840-940)
+    "youngs_modulus": 4.1e9,  # Pa (Kujala: 3.2-5.4 GPa, mean 4.1)
+    "poisson_ratio": 0.3,  # -
+    "fracture_energy": 10.0,  # J/m^2 (order of magnitude)
+    "flexural_strength_min": 0.4e6,  # Pa
+    "flexural_strength_max": 0.9e6,  # Pa
+}
+
+
+def lps_constants(youngs_modulus: float, poisson_ratio: float) -> tuple[float, float]:
+    """Bulk and shear modulus of the 3-D linear peridynamic solid.
+
+    Parameters
+    ----------
+    youngs_modulus
+        Young's modulus E (Pa), > 0.
+    poisson_ratio
+        Poisson's ratio nu, -1 < nu < 0.5.
+
+    Returns
+    -------
+    K, mu
+        Bulk modulus ``E / (3 (1 - 2 nu))`` and shear modulus ``E / (2 (1 + nu))`` (Pa).
+
+    Raises
+    ------
+    ValueError
+        If E is not positive and finite or nu is outside (-1, 0.5).
+    """
+    E = float(youngs_modulus)
+    nu = float(poisson_ratio)
+    if not (math.isfinite(E) and E > 0.0):
+        raise ValueError(f"Young's modulus must be a positive finite number of pascals, got {E!r}")
+    if not (math.isfinite(nu) and -1.0 < nu < 0.5):
+        raise ValueError(
+            f"Poisson's ratio must lie strictly between -1 and 0.5 for a 3-D solid, got {nu!r}"
+        )
+    return E / (3.0 * (1.0 - 2.0 * nu)), E / (2.0 * (1.0 + nu))
+
+
+def critical_stretch(fracture_energy: float, K: float, mu: float, delta: float) -> float:
+    """Critical bond stretch of 3-D ordinary state-based PD from the fracture energy.
+
+    ``s0 = sqrt(G0 / ((3 mu + (3/4)^4 (K - 5 mu / 3)) delta))``: the energy needed to break every
+    bond crossing a unit area of a crack surface equals G0 (Madenci & Oterkus 2014, *Peridynamic
+    Theory and Its Applications*, Springer, the OSB critical-stretch relation for 3-D; the
+    bond-based analogue is Silling & Askari 2005).
+
+    Parameters
+    ----------
+    fracture_energy
+        Critical energy release rate G0 (J/m^2), > 0.
+    K, mu
+        Bulk and shear modulus (Pa).
+    delta
+        Horizon (m), > 0.
+
+    Returns
+    -------
+    float
+        The critical stretch (dimensionless).
+
+    Raises
+    ------
+    ValueError
+        If an argument is not positive, or the moduli give a non-positive denominator.
+    """
+    G0 = float(fracture_energy)
+    if not (math.isfinite(G0) and G0 > 0.0):
+        raise ValueError(f"fracture energy must be a positive number of J/m^2, got {G0!r}")
+    if not (math.isfinite(delta) and delta > 0.0):
+        raise ValueError(f"the horizon must be a positive length in metres, got {delta!r}")
+    if not (K > 0.0 and mu > 0.0):
+        raise ValueError(f"K and mu must be positive (got K={K!r}, mu={mu!r})")
+    denom = (3.0 * mu + 0.75**4 * (K - 5.0 * mu / 3.0)) * delta
+    if denom <= 0.0:
+        raise ValueError(
+            f"the moduli K={K!r} Pa, mu={mu!r} Pa give a non-positive critical-stretch "
+            "denominator 3 mu + (3/4)^4 (K - 5 mu/3)"
+        )
+    return math.sqrt(G0 / denom)
+
+
+@dataclass(frozen=True)
+class IceMaterial:
+    """Elastic-brittle ice for the LPS kernels.
+
+    Parameters
+    ----------
+    density
+        Mass density (kg/m^3), > 0.
+    youngs_modulus
+        Young's modulus E (Pa).
+    poisson_ratio
+        Poisson's ratio (-1 < nu < 0.5).
+    fracture_energy
+        Critical energy release rate G0 (J/m^2); gives ``s0`` through :func:`critical_stretch`.
+    critical_stretch
+        The critical stretch itself (dimensionless, > 0); wins over ``fracture_energy``.
+        With neither given, bonds never break (``s0 = inf``).
+    """
+
+    density: float
+    youngs_modulus: float
+    poisson_ratio: float
+    fracture_energy: float | None = None
+    critical_stretch: float | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.density) and self.density > 0.0):
+            raise ValueError(f"density must be a positive number of kg/m^3, got {self.density!r}")
+        lps_constants(self.youngs_modulus, self.poisson_ratio)  # validates E and nu
+        if self.fracture_energy is not None and not (
+            math.isfinite(self.fracture_energy) and self.fracture_energy > 0.0
+        ):
+            raise ValueError(
+                f"fracture energy must be a positive number of J/m^2, got {self.fracture_energy!r}"
+            )
+        if self.critical_stretch is not None and not (self.critical_stretch > 0.0):
+            raise ValueError(f"critical stretch must be positive, got {self.critical_stretch!r}")
+
+    @property
+    def K(self) -> float:
+        """Bulk modulus (Pa)."""
+        return lps_constants(self.youngs_modulus, self.poisson_ratio)[0]
+
+    @property
+    def mu(self) -> float:
+        """Shear modulus (Pa)."""
+        return lps_constants(self.youngs_modulus, self.poisson_ratio)[1]
+
+    @property
+    def wave_speed(self) -> float:
+        """Bar wave speed sqrt(E / rho) (m/s)."""
+        return math.sqrt(self.youngs_modulus / self.density)
+
+    def s0(self, delta: float) -> float:
+        """Critical stretch for horizon ``delta`` (m): the given one, else from G0, else inf."""
+        if self.critical_stretch is not None:
+            return float(self.critical_stretch)
+        if self.fracture_energy is None:
+            return math.inf
+        K, mu = lps_constants(self.youngs_modulus, self.poisson_ratio)
+        return critical_stretch(self.fracture_energy, K, mu, delta)

@@ -1,0 +1,383 @@
+"""Tests of the results file (pdfem.io): HDF5 layout, histories, XDMF, and a killed writer.
+
+References: the arrays handed to the writer (an HDF5 round trip must be exact), h5py reading
+the file directly, the XML parser of the standard library, and meshio's XDMF
+``TimeSeriesReader`` as an independent XDMF reader (our stand-in for ParaView).
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+import xml.etree.ElementTree as ET
+
+import h5py
+import meshio
+import numpy as np
+import pytest
+
+import pdfem
+from pdfem.io import HISTORY_BLOCK, VIEW_BATCH, ResultsWriter, read_results
+
+
+def _frame(rng: np.random.Generator, n: int, extra: bool = False) -> dict[str, np.ndarray]:
+    fields = {"u": rng.standard_normal((n, 3)), "v": rng.standard_normal((n, 3)),
+              "damage": rng.random(n)}
+    if extra:
+        fields["theta"] = rng.standard_normal(n)
+    return fields
+
+
+def _write_two_bodies(path, n_frames: int = 4):
+    """Write a file with two ice bodies; return what was written, for comparison."""
+    rng = np.random.default_rng(42)
+    bodies = {"sheet": (rng.random((50, 3)), rng.random(50) * 1e-3),
+              "floe": (rng.random((7, 3)), None)}
+    times = 1e-3 * np.arange(1, n_frames + 1) + 1e-9 * rng.random(n_frames)
+    frames = []
+    case = '[run]\nend_time = 0.05\n'
+    with ResultsWriter(path, case_text=case, meta={"ranks": 2, "title": "t"}) as w:
+        for name, (x0, vol) in bodies.items():
+            w.add_ice_body(name, x0, volume=vol)
+        for t in times:
+            fr = {"sheet": _frame(rng, 50, extra=True), "floe": _frame(rng, 7)}
+            frames.append(fr)
+            assert w.write_frame(t, fr) == len(frames) - 1
+    return bodies, times, frames
+
+
+def test_round_trip_exact_and_meta(tmp_path):
+    """Reference: the arrays written; frames read back (read_results, raw h5py) are identical."""
+    path = tmp_path / "run.h5"
+    bodies, times, frames = _write_two_bodies(path)
+    r = read_results(path)
+    np.testing.assert_array_equal(r["time"], times)
+    for name, (x0, vol) in bodies.items():
+        b = r["ice"][name]
+        np.testing.assert_array_equal(b["x0"], x0)
+        if vol is None:
+            assert "volume" not in b
+        else:
+            np.testing.assert_array_equal(b["volume"], vol)
+        for field in frames[0][name]:
+            np.testing.assert_array_equal(b[field], np.stack([fr[name][field] for fr in frames]))
+    assert set(r["ice"]["floe"]) == {"x0", "u", "v", "damage"}
+    meta = r["meta"]
+    assert meta["units"] == "SI"
+    assert meta["version"] == pdfem.__version__
+    assert meta["case"] == '[run]\nend_time = 0.05\n'
+    assert meta["ranks"] == 2 and meta["title"] == "t"
+    assert datetime.datetime.fromisoformat(meta["created"]).tzinfo is not None
+    with h5py.File(path, "r") as f:  # documented layout: float64, a frame per chunk, resizable
+        u = f["ice/sheet/u"]
+        assert u.dtype == np.float64 and u.shape == (4, 50, 3)
+        assert u.chunks == (1, 50, 3) and u.maxshape == (None, 50, 3)
+        assert f["ice/sheet/damage"].shape == (4, 50) and f["ice/sheet/theta"].chunks == (1, 50)
+        np.testing.assert_array_equal(f["ice/floe/v"][2], frames[2]["floe"]["v"])
+
+
+def test_extra_field_and_field_set_errors(tmp_path):
+    """The field set is fixed by the first frame; rejected frames leave the file unchanged."""
+    rng = np.random.default_rng(0)
+    x0 = rng.random((5, 3))
+    path = tmp_path / "r.h5"
+    with ResultsWriter(path) as w:
+        w.add_ice_body("b", x0)
+        with pytest.raises(ValueError, match="required"):
+            w.write_frame(0.0, {"b": {"u": np.zeros((5, 3)), "v": np.zeros((5, 3))}})
+        first = _frame(rng, 5)
+        first["theta"] = rng.random(5)
+        first["omega"] = rng.random((5, 3))
+        w.write_frame(0.0, {"b": first})
+        missing = {k: v for k, v in _frame(rng, 5).items()}
+        missing["omega"] = rng.random((5, 3))  # theta missing
+        with pytest.raises(ValueError, match="missing \\['theta'\\]"):
+            w.write_frame(1.0, {"b": missing})
+        with pytest.raises(ValueError, match="unexpected \\['psi'\\]"):
+            w.write_frame(1.0, {"b": dict(first, psi=np.zeros(5))})
+        with pytest.raises(ValueError, match="shape"):
+            w.write_frame(1.0, {"b": dict(first, theta=np.zeros(4))})
+        with pytest.raises(ValueError, match="greater than the previous"):
+            w.write_frame(0.0, {"b": first})
+        with pytest.raises(ValueError, match="every registered ice body"):
+            w.write_frame(1.0, {"c": first})
+        with pytest.raises(ValueError, match="after the first frame"):
+            w.add_ice_body("late", x0)
+        assert w.write_frame(1.0, {"b": first}) == 1
+    with pytest.raises(ValueError, match="closed"):
+        w.write_frame(2.0, {"b": first})
+    r = read_results(path)
+    np.testing.assert_array_equal(r["time"], [0.0, 1.0])
+    np.testing.assert_array_equal(r["ice"]["b"]["theta"], np.stack([first["theta"]] * 2))
+    np.testing.assert_array_equal(r["ice"]["b"]["omega"], np.stack([first["omega"]] * 2))
+    assert r["ice"]["b"]["omega"].shape == (2, 5, 3)
+
+
+def test_bad_shapes_and_names(tmp_path):
+    """Input validation: (N, 3) reference positions, (N,) volumes, plain names."""
+    with ResultsWriter(tmp_path / "r.h5") as w:
+        with pytest.raises(ValueError, match="expected \\(N, 3\\)"):
+            w.add_ice_body("a", np.zeros((4, 2)))
+        with pytest.raises(ValueError, match="volume"):
+            w.add_ice_body("a", np.zeros((4, 3)), volume=np.zeros(3))
+        with pytest.raises(ValueError, match="not a valid name"):
+            w.add_ice_body("a/b", np.zeros((4, 3)))
+        with pytest.raises(ValueError, match="collide"):
+            w.append_history("ice", 0.0, {"x": 1.0})
+        w.add_ice_body("a", np.zeros((4, 3)))
+        with pytest.raises(ValueError, match="already registered"):
+            w.add_ice_body("a", np.zeros((4, 3)))
+        w.append_history("loads/panel", 0.0, {"force": np.zeros(3)})
+        with pytest.raises(ValueError, match="nest"):
+            w.append_history("loads/panel/x", 0.0, {"y": 1.0})
+        with pytest.raises(ValueError, match="nest"):
+            w.append_history("loads", 0.0, {"y": 1.0})
+    with pytest.raises(ValueError, match="HDF5 file"):
+        ResultsWriter(tmp_path / "r.xdmf")
+    with pytest.raises(TypeError, match="meta item 'bad'"):
+        ResultsWriter(tmp_path / "m.h5", meta={"bad": {"a": 1}})
+
+
+def test_histories_buffered_blocks(tmp_path):
+    """Reference: the rows appended (exact); rows reach the file in blocks of HISTORY_BLOCK,
+    and all of them after close; (K, 3) force and moment."""
+    path = tmp_path / "h.h5"
+    k_rows = 2 * HISTORY_BLOCK + 300
+    t = np.arange(k_rows) * 1e-6
+    force = np.stack([np.sin(t * 1e4), np.cos(t * 1e4), t], axis=1)
+    with ResultsWriter(path) as w:
+        for i in range(k_rows):
+            w.append_history("energy", t[i], {"kinetic": 0.5 * i, "strain": float(i * i),
+                                              "external_work": -1.0 * i, "dissipated": 1e-3 * i})
+            w.append_history("loads/panel", t[i], {"force": force[i], "moment": 2.0 * force[i]})
+            if i == HISTORY_BLOCK + 9:
+                # same process: h5py sees the writer's state; only full blocks are written yet
+                assert w._file["energy/time"].shape == (HISTORY_BLOCK,)
+                assert w._file["loads/panel/force"].shape == (HISTORY_BLOCK, 3)
+        w.flush()
+        assert w._file["energy/kinetic"].shape == (k_rows,)
+        assert w._file["loads/panel/force"].chunks == (HISTORY_BLOCK, 3)
+        with pytest.raises(ValueError, match="keys are fixed"):
+            w.append_history("energy", 1.0, {"kinetic": 1.0})
+        with pytest.raises(ValueError, match="shape"):
+            w.append_history("loads/panel", 1.0, {"force": 1.0, "moment": force[0]})
+        for i in range(5):  # a tail written by close()
+            w.append_history("monitors/mid", float(i), {"u": [i, 0.0, 0.0]})
+    h = read_results(path)["histories"]
+    assert set(h) == {"energy", "loads/panel", "monitors/mid"}
+    np.testing.assert_array_equal(h["energy"]["time"], t)
+    np.testing.assert_array_equal(h["energy"]["kinetic"], 0.5 * np.arange(k_rows))
+    np.testing.assert_array_equal(h["energy"]["strain"], np.arange(k_rows, dtype=float) ** 2)
+    assert h["loads/panel"]["force"].shape == (k_rows, 3)
+    np.testing.assert_array_equal(h["loads/panel"]["force"], force)
+    np.testing.assert_array_equal(h["loads/panel"]["moment"], 2.0 * force)
+    np.testing.assert_array_equal(h["monitors/mid"]["u"][:, 0], np.arange(5.0))
+
+
+def test_reader_drops_uncommitted_rows(tmp_path):
+    """A run killed inside write_frame can leave datasets extended past the last committed time
+    row (time rows read NaN where unwritten). Simulated here by extending the datasets by hand:
+    read_results must return exactly the committed frames and history rows."""
+    rng = np.random.default_rng(7)
+    path = tmp_path / "cut.h5"
+    written = [_frame(rng, 4) for _ in range(3)]
+    with ResultsWriter(path) as w:
+        w.add_ice_body("b", rng.random((4, 3)))
+        for k, fr in enumerate(written):
+            w.write_frame(float(k), {"b": fr})
+            w.append_history("energy", float(k), {"kinetic": 10.0 * k})
+    with h5py.File(path, "a") as f:
+        for name in ("u", "v", "damage"):
+            f[f"ice/b/{name}"].resize(5, axis=0)  # data of frames 3, 4 "on disk"
+        f["time"].resize(5, axis=0)  # their time rows never written: NaN fill
+        f["energy/kinetic"].resize(6, axis=0)
+        f["energy/time"].resize(6, axis=0)
+    assert np.isnan(h5py.File(path, "r")["time"][4])
+    r = read_results(path)
+    np.testing.assert_array_equal(r["time"], [0.0, 1.0, 2.0])
+    assert r["ice"]["b"]["u"].shape == (3, 4, 3)
+    np.testing.assert_array_equal(r["ice"]["b"]["damage"],
+                                  np.stack([fr["damage"] for fr in written]))
+    np.testing.assert_array_equal(r["histories"]["energy"]["kinetic"], [0.0, 10.0, 20.0])
+    np.testing.assert_array_equal(r["histories"]["energy"]["time"], [0.0, 1.0, 2.0])
+
+
+def _check_data_items(xdmf_path) -> int:
+    """Every HDF DataItem of the XDMF names an existing dataset of the declared shape."""
+    root = ET.parse(xdmf_path).getroot()
+    count = 0
+    with h5py.File(xdmf_path.with_suffix(".h5"), "r") as f:
+        for item in root.iter("DataItem"):
+            assert item.get("Format") == "HDF"
+            fname, h5path = item.text.strip().split(":")
+            assert fname == xdmf_path.with_suffix(".h5").name  # relative to the .xdmf
+            dims = tuple(int(d) for d in item.get("Dimensions").split())
+            assert f[h5path].shape == dims
+            count += 1
+    return count
+
+
+def test_xdmf_read_by_meshio(tmp_path):
+    """Reference: meshio's independent XDMF TimeSeriesReader and the HDF5 data; also after the
+    pair is moved to another directory (the .h5 is named relative to the .xdmf)."""
+    path = tmp_path / "a" / "run.h5"
+    path.parent.mkdir()
+    bodies, times, frames = _write_two_bodies(path, n_frames=3)
+    xdmf = path.with_suffix(".xdmf")
+    root = ET.parse(xdmf).getroot()
+    assert root.tag == "Xdmf" and root.get("Version") == "3.0"
+    collections = root.find("Domain").findall("Grid")
+    assert [c.get("Name") for c in collections] == ["ice/sheet", "ice/floe"]
+    assert all(c.get("CollectionType") == "Temporal" and len(c) == 3 for c in collections)
+    # grid of sheet: topology, geometry, volume, u, v, damage, theta
+    assert _check_data_items(xdmf) == 3 * 7 + 3 * 5
+    moved = tmp_path / "b"
+    moved.mkdir()
+    for p in (path, xdmf):
+        shutil.move(p, moved / p.name)
+    r = read_results(moved / "run.h5")
+    # meshio reads the last temporal collection of the domain: body "floe"
+    with meshio.xdmf.TimeSeriesReader(moved / "run.xdmf") as reader:
+        points, cells = reader.read_points_cells()
+        np.testing.assert_array_equal(points, bodies["floe"][0])
+        assert cells[0].type == "vertex" and len(cells[0].data) == 7
+        assert reader.num_steps == 3
+        for k in range(3):
+            t, point_data, _ = reader.read_data(k)
+            assert t == times[k]
+            assert set(point_data) == {"u", "v", "damage"}
+        np.testing.assert_array_equal(point_data["u"], r["ice"]["floe"]["u"][-1])
+        np.testing.assert_array_equal(point_data["damage"], frames[-1]["floe"]["damage"])
+
+
+def test_xdmf_single_body_values(tmp_path):
+    """Reference: meshio reading every frame of a one-body file equals the arrays written;
+    more frames than one batch of views (VIEW_BATCH), and no unused view left after close."""
+    rng = np.random.default_rng(3)
+    x0 = rng.random((20, 3))
+    path = tmp_path / "one.h5"
+    n_frames = VIEW_BATCH + 6
+    written = []
+    with ResultsWriter(path) as w:
+        w.add_ice_body("sheet", x0, volume=np.full(20, 2e-4))
+        for k in range(n_frames):
+            written.append(_frame(rng, 20, extra=True))
+            w.write_frame(0.01 * k, {"sheet": written[-1]})
+    with meshio.xdmf.TimeSeriesReader(path.with_suffix(".xdmf")) as reader:
+        points, _ = reader.read_points_cells()
+        np.testing.assert_array_equal(points, x0)
+        assert reader.num_steps == n_frames
+        for k in range(n_frames):
+            t, pd, _ = reader.read_data(k)
+            assert t == 0.01 * k
+            for name, a in written[k].items():
+                np.testing.assert_array_equal(pd[name], a)
+            np.testing.assert_array_equal(pd["volume"], np.full(20, 2e-4))
+    with h5py.File(path, "r") as f:
+        for name in ("u", "v", "damage", "theta"):
+            assert len(f[f"xdmf/ice/sheet/{name}"]) == n_frames
+
+
+def test_file_being_written_elsewhere(tmp_path):
+    """Another process may not start a second writer on a file being written (HDF5 would
+    truncate it before noticing the lock), but read_results can read it meanwhile."""
+    path = tmp_path / "busy.h5"
+    rng = np.random.default_rng(5)
+    x0 = rng.random((6, 3))
+    written = [_frame(rng, 6) for _ in range(3)]
+    code = textwrap.dedent(f"""
+        from pdfem.io import ResultsWriter, read_results
+        try:
+            ResultsWriter({str(path)!r})
+        except FileExistsError:
+            print("refused")
+        r = read_results({str(path)!r})
+        print(len(r["time"]), r["ice"]["b"]["u"][1, 2, 0].hex())
+    """)
+    with ResultsWriter(path) as w:
+        w.add_ice_body("b", x0)
+        w.write_frame(0.0, {"b": written[0]})
+        w.write_frame(0.5, {"b": written[1]})
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             timeout=120)
+        assert out.returncode == 0, out.stderr
+        assert out.stdout.split() == ["refused", "2", written[1]["u"][2, 0].hex()]
+        w.write_frame(1.0, {"b": written[2]})
+    r = read_results(path)
+    np.testing.assert_array_equal(r["time"], [0.0, 0.5, 1.0])
+    np.testing.assert_array_equal(r["ice"]["b"]["u"], np.stack([fr["u"] for fr in written]))
+
+
+_KILLED_WRITER = textwrap.dedent("""
+    import sys, time
+    import numpy as np
+    from pdfem.io import ResultsWriter
+    n = 300
+    x0 = np.arange(3.0 * n).reshape(n, 3)
+    w = ResultsWriter(sys.argv[1], case_text="killed", meta={"ranks": 1})
+    w.add_ice_body("sheet", x0)
+    for k in range(100000):
+        for s in range(20):
+            w.append_history("loads/p", k + s / 20, {"force": [20.0 * k + s, 0.0, 1.0]})
+        w.write_frame(1e-3 * (k + 1), {"sheet": {"u": x0 + k, "v": -x0 * k,
+                                                 "damage": np.full(n, k / 1e3)}})
+        print(k, flush=True)
+        time.sleep(0.03)
+""")
+
+
+def test_killed_writer_leaves_readable_file(tmp_path):
+    """A writer killed with SIGKILL mid-run leaves an HDF5 file that h5py opens, holding frames
+    0..k each complete (reference: the closed-form values the child wrote), and an XDMF file
+    that parses and that meshio reads up to a frame present in the HDF5 file."""
+    script = tmp_path / "child.py"
+    script.write_text(_KILLED_WRITER)
+    path = tmp_path / "killed.h5"
+    proc = subprocess.Popen([sys.executable, str(script), str(path)], stdout=subprocess.PIPE,
+                            text=True)
+    try:
+        deadline = time.monotonic() + 60.0
+        last = -1
+        while last < 4 and time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if not line:
+                break
+            last = int(line)
+        assert last >= 4, "the child writer did not produce frames"
+        os.kill(proc.pid, signal.SIGKILL)
+    finally:
+        proc.kill()
+        proc.wait(timeout=30)
+        proc.stdout.close()
+    assert proc.returncode == -signal.SIGKILL
+    with h5py.File(path, "r") as f:
+        n_frames = f["time"].shape[0]
+        assert n_frames >= last + 1
+        assert f["ice/sheet/u"].shape[0] >= n_frames
+    r = read_results(path)
+    n = len(r["time"])
+    assert n >= last + 1
+    x0 = r["ice"]["sheet"]["x0"]
+    for k in range(n):
+        assert r["time"][k] == 1e-3 * (k + 1)
+        np.testing.assert_array_equal(r["ice"]["sheet"]["u"][k], x0 + k)
+        np.testing.assert_array_equal(r["ice"]["sheet"]["v"][k], -x0 * k)
+        np.testing.assert_array_equal(r["ice"]["sheet"]["damage"][k], np.full(len(x0), k / 1e3))
+    force = r["histories"]["loads/p"]["force"]
+    assert len(force) >= 20 * n  # a committed frame implies the rows appended before it
+    np.testing.assert_array_equal(force[:, 0], np.arange(len(force), dtype=float))
+    xdmf = path.with_suffix(".xdmf")
+    ET.parse(xdmf)
+    with meshio.xdmf.TimeSeriesReader(xdmf) as reader:
+        reader.read_points_cells()
+        steps = reader.num_steps
+        assert last + 1 <= steps <= n
+        t, pd, _ = reader.read_data(steps - 1)
+        assert t == 1e-3 * steps
+        np.testing.assert_array_equal(pd["u"], x0 + steps - 1)
