@@ -20,8 +20,10 @@ MODELS = sorted((ROOT / "models").glob("*.toml"))
 
 
 def pdfem(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "pdfem", *args], capture_output=True, text=True,
-                          cwd=cwd, timeout=600)
+    """Run the installed ``pdfem`` console script, as a user would."""
+    script = Path(sys.executable).parent / "pdfem"
+    command = [str(script)] if script.exists() else [sys.executable, "-m", "pdfem"]
+    return subprocess.run([*command, *args], capture_output=True, text=True, cwd=cwd, timeout=600)
 
 
 def test_version_and_info_json():
