@@ -16,6 +16,12 @@ Layout of ``<stem>.h5`` (all quantities SI)::
     /ice/<body>/v            (F, N, 3) velocity, m/s
     /ice/<body>/damage       (F, N)    broken fraction of the initial bonds, dimensionless
     /ice/<body>/<field>      (F, N) or (F, N, 3)  any further per-particle field, e.g. theta
+    /structure/<name>/points (Nn, 3)   reference node positions, m
+    /structure/<name>/cells  (Ne, k)   int32 connectivity (VTK node order); attr cell_type
+                             ("tetra", "hexahedron", "triangle" or "quad")
+    /structure/<name>/u      (F, Nn, 3) nodal displacement, m
+    /structure/<name>/von_mises (F, Ne) element von Mises stress, Pa (elastic structures)
+    /structure/<name>/<field> (F, Nn or Ne) or (F, Nn or Ne, 3)  any further node or cell field
     /<history>/time          (K,)      e.g. /energy/time, /loads/<name>/time: step times, s
     /<history>/<key>         (K,) or (K, 3)  e.g. /energy/kinetic in J, /loads/<name>/force in N,
                              /loads/<name>/moment in N m
@@ -24,14 +30,14 @@ Layout of ``<stem>.h5`` (all quantities SI)::
 Frame fields are float64, chunked one frame per chunk and resizable along the frame axis.
 Histories are float64, chunked by ``HISTORY_BLOCK`` rows, and written in blocks: rows are kept
 in memory until a block is full or until the next frame, :meth:`~ResultsWriter.flush` or
-:meth:`~ResultsWriter.close`. Groups carry an attribute ``kind`` ("ice_body" or "history")
-so readers can find them. Room is left for structures (``/structure/<name>/points``,
-``/cells``, ``/u`` (F, Nn, 3), ``/von_mises`` (F, Ne)): a mesh is a :class:`_Mesh` whose
-fields are a :class:`_FrameSeries` with a node and a cell count.
+:meth:`~ResultsWriter.close`. Groups carry an attribute ``kind`` ("ice_body", "structure" or
+"history") so readers can find them.
 
-``<stem>.xdmf`` (XDMF 3) has one temporal collection per body; each frame is a uniform grid
-with Polyvertex topology over the body's particles, geometry ``x0`` and one attribute per
-field (Scalar or Vector, centred on the nodes). The HDF5 file is named relative to the XDMF
+``<stem>.xdmf`` (XDMF 3) has one temporal collection per body; each frame is a uniform grid:
+for an ice body Polyvertex topology over its particles and geometry ``x0``, for a structure
+its elements (Tetrahedron, Hexahedron, Triangle or Quadrilateral) and geometry ``points``;
+one attribute per field (Scalar or Vector, centred on the nodes or, for fields such as
+``von_mises``, on the cells). The HDF5 file is named relative to the XDMF
 file, so the two can be moved together. Each attribute references a per-frame dataset
 ``/xdmf/ice/<body>/<field>/<frame>``: an HDF5 virtual dataset that maps frame F of the
 (F, N, ...) dataset (no copy). meshio's ``TimeSeriesReader`` cannot read XDMF hyperslabs;
@@ -82,6 +88,16 @@ VIEW_BATCH = 64
 REQUIRED_ICE_FIELDS = ("u", "v", "damage")
 """Fields every ice body must give in every frame."""
 
+REQUIRED_STRUCTURE_FIELDS = ("u",)
+"""Fields every structure must give in every frame."""
+
+CELL_FIELDS = frozenset({"von_mises"})
+"""Structure fields centred on the cells (elements); all others are nodal."""
+
+XDMF_TOPOLOGY = {"tetra": ("Tetrahedron", 4), "hexahedron": ("Hexahedron", 8),
+                 "triangle": ("Triangle", 3), "quad": ("Quadrilateral", 4)}
+"""meshio cell type -> (XDMF topology type, nodes per cell); node order as in VTK."""
+
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+\-]*\Z")
 _RESERVED = frozenset({"meta", "time", "ice", "structure", "xdmf"})
 _ATTRIBUTE_TYPE = {(): "Scalar", (3,): "Vector"}
@@ -111,16 +127,19 @@ def _data_item(h5name: str, path: str, shape: tuple[int, ...], number_type: str 
 class _FrameSeries:
     """Fields of one group, one output frame per row: dataset ``<path>/<field>`` is (F, n, ...).
 
-    ``sizes`` maps an XDMF centre ("Node", later also "Cell") to the number of items; a field's
-    centre is the one whose size matches its leading dimension. The field set and each
+    ``sizes`` maps an XDMF centre ("Node", and "Cell" for a mesh with elements) to the number
+    of items; a field is centred on the cells if its name is in ``cell_fields``, else on the
+    nodes, and its leading dimension must be that centre's size. The field set and each
     field's shape are fixed by the first frame. Every frame also gets a virtual dataset
     ``/xdmf<path>/<field>/<frame>`` that maps that frame, for the XDMF file; these are made
     ``VIEW_BATCH`` frames ahead, and those never used are deleted on close.
     """
 
     def __init__(self, file: h5py.File, path: str, sizes: Mapping[str, int],
-                 item_shapes: tuple[tuple[int, ...], ...], required: tuple[str, ...]) -> None:
+                 item_shapes: tuple[tuple[int, ...], ...], required: tuple[str, ...],
+                 cell_fields: frozenset[str] = frozenset()) -> None:
         self.file = file
+        self.cell_fields = cell_fields
         self.path = path
         self.sizes = dict(sizes)
         self.item_shapes = item_shapes
@@ -132,11 +151,13 @@ class _FrameSeries:
         self._views = 0  # frames 0 .. _views - 1 have views
 
     def _centre(self, name: str, shape: tuple[int, ...]) -> str:
-        for centre, n in self.sizes.items():
-            if shape[:1] == (n,) and shape[1:] in self.item_shapes:
-                return centre
-        allowed = " or ".join(str((n,) + s) for n in self.sizes.values() for s in self.item_shapes)
-        raise ValueError(f"field {name!r} of {self.path} has shape {shape}, expected {allowed}")
+        centre = "Cell" if name in self.cell_fields and "Cell" in self.sizes else "Node"
+        n = self.sizes[centre]
+        if shape[:1] == (n,) and shape[1:] in self.item_shapes:
+            return centre
+        allowed = " or ".join(str((n,) + s) for s in self.item_shapes)
+        raise ValueError(f"field {name!r} of {self.path} has shape {shape}, expected {allowed} "
+                         f"({'one per cell' if centre == 'Cell' else 'one per node'})")
 
     def check(self, values: Mapping[str, Any]) -> dict[str, np.ndarray]:
         """Validate one frame's fields; return them as C-contiguous float64 arrays."""
@@ -392,6 +413,25 @@ class ResultsWriter:
             raise ValueError(f"results file {str(self.path)!r} is closed")
         return self._file
 
+    def _new_body(self, group: str, name: str) -> str:
+        """Check a body name before registration; return its HDF5 path ``/<group>/<name>``."""
+        _check_name(name, f"{group} name")
+        if self._frames:
+            raise ValueError(f"{group} {name!r} added after the first frame; add all bodies first")
+        if f"{group}/{name}" in self._meshes:
+            raise ValueError(f"{group} {name!r} is already registered")
+        return f"/{group}/{name}"
+
+    def _points(self, what: str, x: np.ndarray) -> np.ndarray:
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        if x.ndim != 2 or x.shape[1] != 3 or x.shape[0] == 0:
+            raise ValueError(f"{what} has shape {x.shape}, expected (N, 3) with N > 0")
+        return x
+
+    def _geometry(self, path: str, n: int) -> str:
+        return (f'<Geometry GeometryType="XYZ">'
+                f'{_data_item(self._h5name, path, (n, 3))}</Geometry>')
+
     def add_ice_body(self, name: str, x0: np.ndarray, volume: np.ndarray | None = None) -> None:
         """Register an ice body and store its reference configuration.
 
@@ -405,23 +445,14 @@ class ResultsWriter:
             (N,) particle volumes, m^3, optional; shown in ParaView as the field ``volume``.
         """
         f = self._h5
-        _check_name(name, "ice body name")
-        if self._frames:
-            raise ValueError(f"ice body {name!r} added after the first frame; "
-                             "add all bodies first")
-        if f"ice/{name}" in self._meshes:
-            raise ValueError(f"ice body {name!r} is already registered")
-        x0 = np.ascontiguousarray(x0, dtype=np.float64)
-        if x0.ndim != 2 or x0.shape[1] != 3 or x0.shape[0] == 0:
-            raise ValueError(f"x0 of ice body {name!r} has shape {x0.shape}, "
-                             "expected (N, 3) with N > 0")
+        path = self._new_body("ice", name)
+        x0 = self._points(f"x0 of ice body {name!r}", x0)
         n = x0.shape[0]
         if volume is not None:
             volume = np.ascontiguousarray(volume, dtype=np.float64)
             if volume.shape != (n,):
                 raise ValueError(f"volume of ice body {name!r} has shape {volume.shape}, "
                                  f"expected ({n},)")
-        path = f"/ice/{name}"
         g = f.create_group(path)
         g.attrs["kind"] = "ice_body"
         g.create_dataset("x0", data=x0)
@@ -434,14 +465,54 @@ class ResultsWriter:
         vertices = _data_item(self._h5name, f"/xdmf{path}/vertices", (n, 1), "Int", 4)
         topology = (f'<Topology TopologyType="Polyvertex" NumberOfElements="{n}" '
                     f'NodesPerElement="1">{vertices}</Topology>')
-        geometry = (f'<Geometry GeometryType="XYZ">'
-                    f'{_data_item(self._h5name, f"{path}/x0", (n, 3))}</Geometry>')
         series = _FrameSeries(f, path, {"Node": n}, ((), (3,)), REQUIRED_ICE_FIELDS)
-        self._meshes[f"ice/{name}"] = _Mesh(f"ice/{name}", topology, geometry, constant, series)
+        self._meshes[f"ice/{name}"] = _Mesh(f"ice/{name}", topology,
+                                            self._geometry(f"{path}/x0", n), constant, series)
+
+    def add_structure(self, name: str, points: np.ndarray, cells: np.ndarray,
+                      cell_type: str) -> None:
+        """Register a structure (elastic mesh or rigid surface) and store its mesh.
+
+        Parameters
+        ----------
+        name
+            Structure name (letters, digits, ``_ . + -``), the group ``/structure/<name>``.
+        points
+            (Nn, 3) reference node positions, m.
+        cells
+            (Ne, k) connectivity into ``points`` in VTK / meshio node order.
+        cell_type
+            ``"tetra"``, ``"hexahedron"``, ``"triangle"`` (rigid surfaces) or ``"quad"``.
+        """
+        f = self._h5
+        path = self._new_body("structure", name)
+        points = self._points(f"points of structure {name!r}", points)
+        if cell_type not in XDMF_TOPOLOGY:
+            raise ValueError(f"cell_type {cell_type!r} of structure {name!r} is not one of "
+                             f"{sorted(XDMF_TOPOLOGY)}")
+        topology_type, k = XDMF_TOPOLOGY[cell_type]
+        cells = np.ascontiguousarray(cells, dtype=np.int32)
+        if cells.ndim != 2 or cells.shape[1] != k or cells.shape[0] == 0:
+            raise ValueError(f"cells of structure {name!r} have shape {cells.shape}, expected "
+                             f"(Ne, {k}) with Ne > 0 for {cell_type!r}")
+        nn, ne = points.shape[0], cells.shape[0]
+        if cells.min() < 0 or cells.max() >= nn:
+            raise ValueError(f"cells of structure {name!r} index nodes outside 0..{nn - 1}")
+        g = f.require_group("structure").create_group(name)
+        g.attrs["kind"] = "structure"
+        g.create_dataset("points", data=points)
+        g.create_dataset("cells", data=cells).attrs["cell_type"] = cell_type
+        topology = (f'<Topology TopologyType="{topology_type}" NumberOfElements="{ne}">'
+                    f'{_data_item(self._h5name, f"{path}/cells", (ne, k), "Int", 4)}</Topology>')
+        series = _FrameSeries(f, path, {"Node": nn, "Cell": ne}, ((), (3,)),
+                              REQUIRED_STRUCTURE_FIELDS, CELL_FIELDS)
+        self._meshes[f"structure/{name}"] = _Mesh(f"structure/{name}", topology,
+                                                  self._geometry(f"{path}/points", nn), "", series)
 
     # -- per output time -----------------------------------------------------------------
 
-    def write_frame(self, time: float, ice: dict[str, dict[str, np.ndarray]]) -> int:
+    def write_frame(self, time: float, ice: Mapping[str, Mapping[str, np.ndarray]],
+                    structures: Mapping[str, Mapping[str, np.ndarray]] | None = None) -> int:
         """Append one output frame, flush the file and rewrite the XDMF file.
 
         Parameters
@@ -452,22 +523,26 @@ class ResultsWriter:
             For every registered ice body, its fields: at least ``u`` (N, 3) displacement in m,
             ``v`` (N, 3) velocity in m/s and ``damage`` (N,); any further (N,) or (N, 3)
             field. The field set of a body is fixed by the first frame.
+        structures
+            For every registered structure, its fields: at least ``u`` (Nn, 3) nodal
+            displacement in m; ``von_mises`` (Ne,) in Pa and other names in
+            :data:`CELL_FIELDS` are per element, any other (Nn,) or (Nn, 3) field per node.
 
         Returns
         -------
         int
             The index of the frame written.
         """
-        f = self._h5
+        self._h5  # raises if the file is closed
         time = float(time)
         if not np.isfinite(time) or time <= self._last_time:
             raise ValueError(f"frame time {time!r} must be finite and greater than the "
                              f"previous frame time {self._last_time!r}")
         bodies = {f"ice/{k}": v for k, v in ice.items()}
-        if bodies.keys() != {k for k in self._meshes if k.startswith("ice/")}:
-            raise ValueError("write_frame needs every registered ice body "
-                             f"{sorted(self._meshes)}, "
-                             f"got {sorted(bodies)}")
+        bodies.update({f"structure/{k}": v for k, v in (structures or {}).items()})
+        if bodies.keys() != self._meshes.keys():
+            raise ValueError("write_frame needs every registered body "
+                             f"{sorted(self._meshes)}, got {sorted(bodies)}")
         checked = {k: self._meshes[k].series.check(v) for k, v in bodies.items()}
         index = self._frames
         for k, arrays in checked.items():
@@ -623,13 +698,16 @@ def read_results(path: str | os.PathLike) -> dict:
     -------
     dict
         ``{"meta": {attr: value}, "time": (F,), "ice": {body: {"x0", "volume"?, "u", "v",
-        "damage", ...}}, "histories": {group: {"time": (K,), key: (K, ...)}}}``. Only
+        "damage", ...}}, "structure": {name: {"points", "cells", "cell_type", "u",
+        "von_mises"?, ...}}, "histories": {group: {"time": (K,), key: (K, ...)}}}``. Only
         committed rows are returned: F counts the rows of ``/time`` before the first NaN (a
         time row is written only after its frame's data was flushed), cut further to the
         frames that every field dataset can read; each history likewise (a run killed while
         writing may have extended some datasets and not others).
     """
-    out: dict[str, Any] = {"meta": {}, "time": None, "ice": {}, "histories": {}}
+    out: dict[str, Any] = {"meta": {}, "time": None, "ice": {}, "structure": {},
+                           "histories": {}}
+    constant = {"x0", "volume", "points", "cells"}
     try:
         f = h5py.File(path, "r")
     except BlockingIOError:
@@ -638,17 +716,21 @@ def read_results(path: str | os.PathLike) -> dict:
         out["meta"] = {k: _attr(v) for k, v in f["meta"].attrs.items()}
         frames = {"time": _committed(_readable_prefix(f["time"], f["time"].shape[0]))}
         n = frames["time"].shape[0]
-        for name, g in f["ice"].items():
-            for k, ds in g.items():
-                if k in ("x0", "volume"):
-                    out["ice"].setdefault(name, {})[k] = ds[()]
-                else:
-                    frames[f"{name}/{k}"] = a = _readable_prefix(ds, min(n, ds.shape[0]))
-                    n = min(n, a.shape[0])
+        for group in ("ice", "structure"):
+            for name, g in f.get(group, {}).items():
+                body = out[group].setdefault(name, {})
+                for k, ds in g.items():
+                    if k in constant:
+                        body[k] = ds[()]
+                        if k == "cells":
+                            body["cell_type"] = _attr(ds.attrs["cell_type"])
+                    else:
+                        frames[f"{group}/{name}/{k}"] = a = _readable_prefix(ds, min(n, ds.shape[0]))
+                        n = min(n, a.shape[0])
         out["time"] = frames.pop("time")[:n]
         for key, a in frames.items():
-            name, k = key.split("/")
-            out["ice"].setdefault(name, {})[k] = a[:n]
+            group, name, k = key.split("/")
+            out[group][name][k] = a[:n]
         stack = [(k, g) for k, g in f.items() if k not in _RESERVED and isinstance(g, h5py.Group)]
         while stack:
             name, g = stack.pop()

@@ -72,8 +72,10 @@ def test_every_model_case_runs_small(path, tmp_path):
         assert f["meta"].attrs["units"] == "SI"
         assert f["time"].shape[0] == summary.frames == 3
         for body in case.ice:
-            u = f[f"ice/{body.name}/u"][...]
-            assert np.isfinite(u).all()
+            assert np.isfinite(f[f"ice/{body.name}/u"][...]).all()
+        for st in case.structures:
+            assert f[f"structure/{st.name}/u"].shape[0] == 3
+            assert np.isfinite(f[f"structure/{st.name}/u"][...]).all()
     assert summary.results.with_suffix(".xdmf").is_file()
 
 

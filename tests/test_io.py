@@ -105,7 +105,7 @@ def test_extra_field_and_field_set_errors(tmp_path):
             w.write_frame(1.0, {"b": dict(first, theta=np.zeros(4))})
         with pytest.raises(ValueError, match="greater than the previous"):
             w.write_frame(0.0, {"b": first})
-        with pytest.raises(ValueError, match="every registered ice body"):
+        with pytest.raises(ValueError, match="every registered body"):
             w.write_frame(1.0, {"c": first})
         with pytest.raises(ValueError, match="after the first frame"):
             w.add_ice_body("late", x0)
@@ -381,3 +381,70 @@ def test_killed_writer_leaves_readable_file(tmp_path):
         t, pd, _ = reader.read_data(steps - 1)
         assert t == 1e-3 * steps
         np.testing.assert_array_equal(pd["u"], x0 + steps - 1)
+
+
+@pytest.mark.parametrize("cell_type, cells", [
+    ("tetra", [[0, 1, 2, 3], [1, 2, 3, 4]]),
+    ("hexahedron", [[0, 1, 2, 3, 4, 5, 6, 7]]),
+    ("triangle", [[0, 1, 2], [1, 2, 3], [2, 3, 4]]),
+])
+def test_structure_frames_round_trip_and_xdmf(tmp_path, cell_type, cells):
+    """A structure's mesh, nodal displacement and element von Mises stress: read_results
+    returns exactly what was written, and meshio's independent XDMF reader sees the same mesh
+    (cell type, connectivity), the nodal ``u`` as point data and ``von_mises`` as cell data."""
+    rng = np.random.default_rng(11)
+    cells = np.array(cells)
+    nn, ne = int(cells.max()) + 1, len(cells)
+    points = rng.random((nn, 3))
+    path = tmp_path / "s.h5"
+    written = []
+    with ResultsWriter(path) as w:
+        w.add_ice_body("floe", rng.random((6, 3)))
+        w.add_structure("panel", points, cells, cell_type)
+        for k in range(3):
+            st = {"u": rng.standard_normal((nn, 3)), "von_mises": rng.random(ne) * 1e8}
+            written.append(st)
+            w.write_frame(1e-3 * k, {"floe": _frame(rng, 6)}, structures={"panel": st})
+    r = read_results(path)
+    s = r["structure"]["panel"]
+    np.testing.assert_array_equal(s["points"], points)
+    np.testing.assert_array_equal(s["cells"], cells)
+    assert s["cell_type"] == cell_type
+    np.testing.assert_array_equal(s["u"], np.stack([f["u"] for f in written]))
+    np.testing.assert_array_equal(s["von_mises"], np.stack([f["von_mises"] for f in written]))
+    root = ET.parse(path.with_suffix(".xdmf")).getroot()
+    names = [c.get("Name") for c in root.find("Domain").findall("Grid")]
+    assert names == ["ice/floe", "structure/panel"]
+    with meshio.xdmf.TimeSeriesReader(path.with_suffix(".xdmf")) as reader:  # the last: panel
+        p, c = reader.read_points_cells()
+        np.testing.assert_array_equal(p, points)
+        assert c[0].type == cell_type
+        np.testing.assert_array_equal(c[0].data, cells)
+        for k in range(3):
+            t, point_data, cell_data = reader.read_data(k)
+            assert t == 1e-3 * k
+            np.testing.assert_array_equal(point_data["u"], written[k]["u"])
+            np.testing.assert_array_equal(cell_data["von_mises"][0], written[k]["von_mises"])
+
+
+def test_structure_input_errors(tmp_path):
+    """Bad meshes and frames are refused with the structure and the expected shape named."""
+    with ResultsWriter(tmp_path / "e.h5") as w:
+        with pytest.raises(ValueError, match="cell_type 'prism'"):
+            w.add_structure("a", np.zeros((6, 3)), [[0, 1, 2, 3, 4, 5]], "prism")
+        with pytest.raises(ValueError, match=r"expected \(Ne, 4\)"):
+            w.add_structure("a", np.zeros((4, 3)), [[0, 1, 2]], "tetra")
+        with pytest.raises(ValueError, match="outside 0..3"):
+            w.add_structure("a", np.zeros((4, 3)), [[0, 1, 2, 4]], "tetra")
+        w.add_structure("a", np.zeros((4, 3)), [[0, 1, 2, 3]], "tetra")
+        with pytest.raises(ValueError, match="already registered"):
+            w.add_structure("a", np.zeros((4, 3)), [[0, 1, 2, 3]], "tetra")
+        with pytest.raises(ValueError, match="every registered body"):
+            w.write_frame(0.0, {})
+        with pytest.raises(ValueError, match="one per cell"):
+            w.write_frame(0.0, {}, structures={"a": {"u": np.zeros((4, 3)),
+                                                     "von_mises": np.zeros(4)}})
+        with pytest.raises(ValueError, match="required fields"):
+            w.write_frame(0.0, {}, structures={"a": {"von_mises": np.zeros(1)}})
+        w.write_frame(0.0, {}, structures={"a": {"u": np.ones((4, 3))}})
+    assert read_results(tmp_path / "e.h5")["structure"]["a"]["u"].shape == (1, 4, 3)
