@@ -1,0 +1,274 @@
+"""Surface-element contact between ice particles and a structure (seed paper, Eqs. 5-8).
+
+After each position update of the ice, :meth:`SurfaceContact.resolve` finds the particles that
+have crossed the structure's contact surface, moves each back onto the surface (its "newly
+allocated" position, the closest point of the surface), and sets its velocity by Eq. (5),
+
+    v_bar = (y_bar - y_old) / dt,
+
+so the particle takes the impulse m (v_bar - v) (Eq. 6 times dt, with m = rho V). The opposite
+impulse goes to the facet it hit (Eqs. 7-8), shared among the facet's three nodes by the
+barycentric weights of the contact point, so the impulse that leaves the ice equals the
+impulse that reaches the structure, exactly. Optional Coulomb friction limits the tangential
+velocity change to ``friction`` times the normal one. A particle counts as inside when the
+closest surface point lies within the search radius and the particle is behind it according
+to the angle-weighted pseudo-normal of the feature (face, edge or vertex) the point lies on
+(:mod:`pdfem.coupling.facets`), which decides the side correctly at edges and vertices. On an
+open surface (e.g. the outer face of a hull panel) particles whose closest point is on the
+surface's rim are not in contact: they are beside the surface, not behind it.
+
+Units: m, s, kg, N s (impulses), J.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numba import prange
+
+from .facet_grid import FacetGrid
+from .facets import FACE, FacetTopology, closest_point_on_triangle, pseudo_normals
+
+
+@numba.njit(parallel=True, cache=True)
+def _detect(y, active, cell_start, cell_facets, origin, inv_h, dims, pts, tri, tri_edges,
+            face_n, edge_n, vert_n, boundary_edge, boundary_node, reach, facet, weight, normal):
+    """For each active particle: the facet it is behind (or -1), weights, contact normal."""
+    n = y.shape[0]
+    nyz = dims[1] * dims[2]
+    r2 = reach * reach
+    for i in prange(n):
+        facet[i] = -1
+        if not active[i]:
+            continue
+        p = y[i]
+        ci = int(np.floor((p[0] - origin[0]) * inv_h))
+        cj = int(np.floor((p[1] - origin[1]) * inv_h))
+        ck = int(np.floor((p[2] - origin[2]) * inv_h))
+        if ci < 0 or cj < 0 or ck < 0 or ci >= dims[0] or cj >= dims[1] or ck >= dims[2]:
+            continue
+        c = ci * nyz + cj * dims[2] + ck
+        best = -1
+        best_d2 = r2
+        bu = bv = bw = 0.0
+        bfeat = 0
+        for s in range(cell_start[c], cell_start[c + 1]):
+            f = cell_facets[s]
+            a = pts[tri[f, 0]]
+            b = pts[tri[f, 1]]
+            cc = pts[tri[f, 2]]
+            u, v, w, feat = closest_point_on_triangle(p, a, b, cc)
+            d0 = p[0] - (u * a[0] + v * b[0] + w * cc[0])
+            d1 = p[1] - (u * a[1] + v * b[1] + w * cc[1])
+            d2 = p[2] - (u * a[2] + v * b[2] + w * cc[2])
+            dd = d0 * d0 + d1 * d1 + d2 * d2
+            if dd < best_d2 or (dd == best_d2 and best >= 0 and f < best):
+                best, best_d2, bu, bv, bw, bfeat = f, dd, u, v, w, feat
+        if best < 0:
+            continue
+        # pseudo-normal of the feature; rim features of an open surface are not contacts
+        if bfeat == FACE:
+            nx, ny, nz = face_n[best, 0], face_n[best, 1], face_n[best, 2]
+        elif bfeat <= 3:
+            node = tri[best, bfeat - 1]
+            if boundary_node[node]:
+                continue
+            nx, ny, nz = vert_n[node, 0], vert_n[node, 1], vert_n[node, 2]
+        else:
+            e = tri_edges[best, bfeat - 4]
+            if boundary_edge[e]:
+                continue
+            nx, ny, nz = edge_n[e, 0], edge_n[e, 1], edge_n[e, 2]
+        a = pts[tri[best, 0]]
+        b = pts[tri[best, 1]]
+        cc = pts[tri[best, 2]]
+        side = ((p[0] - (bu * a[0] + bv * b[0] + bw * cc[0])) * nx
+                + (p[1] - (bu * a[1] + bv * b[1] + bw * cc[1])) * ny
+                + (p[2] - (bu * a[2] + bv * b[2] + bw * cc[2])) * nz)
+        if side < -1e-9 * reach:  # on the surface (to round-off) is not inside
+            facet[i] = best
+            weight[i, 0] = bu
+            weight[i, 1] = bv
+            weight[i, 2] = bw
+            normal[i, 0] = nx
+            normal[i, 1] = ny
+            normal[i, 2] = nz
+
+
+@numba.njit(cache=True)
+def _respond(facet, weight, normal, y, y_old, v, mass, dt, pts, vel, tri, friction,
+             node_impulse, totals):
+    """Move contacting particles onto the surface, set Eq. (5) velocities, book impulses.
+
+    Serial over particles in index order, so the nodal sums are deterministic. ``totals``
+    accumulates: [0:3] impulse to the structure (N s), [3] contacts, [4] energy dissipated (J).
+    """
+    inv_dt = 1.0 / dt
+    for i in range(facet.shape[0]):
+        f = facet[i]
+        if f < 0:
+            continue
+        m = mass[i]
+        na, nb, nc = tri[f, 0], tri[f, 1], tri[f, 2]
+        u, w1, w2 = weight[i, 0], weight[i, 1], weight[i, 2]
+        cp = np.empty(3)
+        vw = np.empty(3)
+        vbar = np.empty(3)
+        for d in range(3):
+            cp[d] = u * pts[na, d] + w1 * pts[nb, d] + w2 * pts[nc, d]
+            vw[d] = u * vel[na, d] + w1 * vel[nb, d] + w2 * vel[nc, d]
+            vbar[d] = (cp[d] - y_old[i, d]) * inv_dt                       # Eq. (5)
+        if friction > 0.0:
+            dvn = 0.0
+            for d in range(3):
+                dvn += (vbar[d] - v[i, d]) * normal[i, d]
+            rel = vbar - vw
+            rn = rel[0] * normal[i, 0] + rel[1] * normal[i, 1] + rel[2] * normal[i, 2]
+            vt = np.empty(3)
+            for d in range(3):
+                vt[d] = rel[d] - rn * normal[i, d]
+            vtn = np.sqrt(vt[0] * vt[0] + vt[1] * vt[1] + vt[2] * vt[2])
+            if vtn > 0.0 and dvn > 0.0:
+                cut = min(vtn, friction * dvn) / vtn
+                for d in range(3):
+                    vbar[d] -= cut * vt[d]
+                    cp[d] -= cut * vt[d] * dt
+        e_loss = 0.0
+        for d in range(3):
+            j = m * (v[i, d] - vbar[d])          # impulse to the structure, Eq. (6) x dt
+            node_impulse[na, d] += u * j         # Eqs. (7)-(8), barycentric shares
+            node_impulse[nb, d] += w1 * j
+            node_impulse[nc, d] += w2 * j
+            totals[d] += j
+            e_loss += 0.5 * m * ((v[i, d] - vw[d]) ** 2 - (vbar[d] - vw[d]) ** 2)
+            y[i, d] = cp[d]
+            v[i, d] = vbar[d]
+        totals[3] += 1.0
+        totals[4] += e_loss
+
+
+@dataclass
+class ContactStep:
+    """What one :meth:`SurfaceContact.resolve` call did (SI)."""
+
+    contacts: int
+    impulse: np.ndarray        # (3,) impulse given to the structure, N s
+    dissipated: float          # kinetic energy lost in the contact, relative to the wall, J
+
+
+class SurfaceContact:
+    """Contact of one ice body with one structure's contact surface.
+
+    Parameters
+    ----------
+    surface
+        A :class:`pdfem.fem.surface.ContactSurface` (elastic structure or rigid body).
+    search_radius
+        How far behind the surface (m) a particle is still caught; it must exceed the largest
+        penetration in one step (relative speed x step) and stay below half the thinnest wall.
+        Half the ice lattice spacing is a good choice.
+    friction
+        Coulomb friction coefficient between ice and structure (0 = frictionless).
+    name
+        Name of the contact pair (for messages and results).
+
+    Notes
+    -----
+    Nodal impulses accumulate in :attr:`node_impulse` ((Ns, 3), N s) until
+    :meth:`take_impulse` hands them over, so several ice substeps can be summed into one load
+    on the structure.
+    """
+
+    def __init__(self, surface, search_radius: float, friction: float = 0.0,
+                 name: str = "contact") -> None:
+        if not search_radius > 0.0:
+            raise ValueError(f"search_radius must be > 0, got {search_radius}")
+        if friction < 0.0:
+            raise ValueError(f"friction must be >= 0, got {friction}")
+        self.surface = surface
+        self.name = name
+        self.search_radius = float(search_radius)
+        self.friction = float(friction)
+        points = surface.surface_points()
+        self.topology = FacetTopology.from_triangles(surface.surface_triangles, len(points))
+        self.grid = FacetGrid(self.topology.triangles, self.search_radius)
+        self.node_impulse = np.zeros((len(points), 3))
+        self.total_impulse = np.zeros(3)
+        self.dissipated = 0.0
+        self._points = self._velocities = None
+        self._normals = None
+        self._facet = self._weight = self._normal = None
+        self.set_surface(points, surface.surface_velocities())
+
+    def set_surface(self, points: np.ndarray, velocities: np.ndarray) -> None:
+        """Use these node positions (m) and velocities (m/s) for the next contacts (e.g. the
+        structure's state interpolated to the ice substep's time)."""
+        self._points = np.ascontiguousarray(points, dtype=np.float64)
+        self._velocities = np.ascontiguousarray(velocities, dtype=np.float64)
+        self._normals = pseudo_normals(self._points, self.topology)
+        self.grid.update(self._points)
+
+    def _buffers(self, n: int) -> None:
+        if self._facet is None or len(self._facet) != n:
+            self._facet = np.empty(n, dtype=np.int32)
+            self._weight = np.empty((n, 3))
+            self._normal = np.empty((n, 3))
+
+    def resolve(self, y: np.ndarray, y_old: np.ndarray, v: np.ndarray, mass: np.ndarray,
+                dt: float, active: np.ndarray | None = None) -> ContactStep:
+        """Push particles that crossed the surface back onto it (in place on ``y`` and ``v``).
+
+        Parameters
+        ----------
+        y
+            (N, 3) particle positions after the position update (m); corrected in place.
+        y_old
+            (N, 3) positions before the update (m).
+        v
+            (N, 3) velocities used for the update (m/s); set to Eq. (5) for particles in contact.
+        mass
+            (N,) particle masses rho V (kg).
+        dt
+            The step (s) from ``y_old`` to ``y``.
+        active
+            (N,) bool, particles that may touch this surface (default all).
+
+        Returns
+        -------
+        ContactStep
+        """
+        n = len(y)
+        self._buffers(n)
+        if active is None:
+            active = np.ones(n, dtype=np.bool_)
+        g, t, nr = self.grid, self.topology, self._normals
+        _detect(y, active, g.cell_start, g.cell_facets, g.origin, g.inv_h, g.dims, self._points,
+                t.triangles, t.tri_edges, nr[0], nr[1], nr[2], t.boundary_edge, t.boundary_node,
+                self.search_radius, self._facet, self._weight, self._normal)
+        totals = np.zeros(5)
+        _respond(self._facet, self._weight, self._normal, y, y_old, v, mass, float(dt),
+                 self._points, self._velocities, t.triangles, self.friction, self.node_impulse,
+                 totals)
+        impulse = totals[:3].copy()
+        self.total_impulse += impulse
+        self.dissipated += totals[4]
+        return ContactStep(int(totals[3]), impulse, float(totals[4]))
+
+    def take_impulse(self) -> np.ndarray:
+        """The nodal impulses (Ns, 3) (N s) accumulated since the last call, and reset them."""
+        out = self.node_impulse.copy()
+        self.node_impulse[:] = 0.0
+        return out
+
+    def inside(self, y: np.ndarray) -> np.ndarray:
+        """(N,) bool: particles behind the surface within the search radius (no changes made)."""
+        n = len(y)
+        self._buffers(n)
+        g, t, nr = self.grid, self.topology, self._normals
+        _detect(np.ascontiguousarray(y, dtype=np.float64), np.ones(n, dtype=np.bool_),
+                g.cell_start, g.cell_facets, g.origin, g.inv_h, g.dims, self._points, t.triangles,
+                t.tri_edges, nr[0], nr[1], nr[2], t.boundary_edge, t.boundary_node,
+                self.search_radius, self._facet, self._weight, self._normal)
+        return self._facet >= 0

@@ -1,0 +1,117 @@
+"""Broad phase of contact: a uniform cell hash of surface facets.
+
+Every facet is entered in each cell that its bounding box, grown by a reach, overlaps. A point
+then needs to look at the facets of its own cell only: any facet within ``reach`` of the point
+is listed there. The hash is rebuilt when the surface has moved by more than the margin that
+was added to the reach (:meth:`FacetGrid.needs_rebuild`), so a moving or deforming structure
+is rebuilt every few steps, not every step. Lengths in m.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def _cell_ranges(points, triangles, reach, origin, inv_h, dims, lo, hi):
+    for f in range(triangles.shape[0]):
+        for d in range(3):
+            a = points[triangles[f, 0], d]
+            b = points[triangles[f, 1], d]
+            c = points[triangles[f, 2], d]
+            mn = min(a, min(b, c)) - reach
+            mx = max(a, max(b, c)) + reach
+            lo[f, d] = max(0, int(np.floor((mn - origin[d]) * inv_h)))
+            hi[f, d] = min(dims[d] - 1, int(np.floor((mx - origin[d]) * inv_h)))
+
+
+@numba.njit(cache=True)
+def _fill(lo, hi, dims, start, facets):
+    """CSR of cell -> facets, facets in increasing index within each cell (deterministic)."""
+    nyz = dims[1] * dims[2]
+    for f in range(lo.shape[0]):
+        for i in range(lo[f, 0], hi[f, 0] + 1):
+            for j in range(lo[f, 1], hi[f, 1] + 1):
+                for k in range(lo[f, 2], hi[f, 2] + 1):
+                    start[i * nyz + j * dims[2] + k + 1] += 1
+    for c in range(start.shape[0] - 1):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    for f in range(lo.shape[0]):
+        for i in range(lo[f, 0], hi[f, 0] + 1):
+            for j in range(lo[f, 1], hi[f, 1] + 1):
+                for k in range(lo[f, 2], hi[f, 2] + 1):
+                    c = i * nyz + j * dims[2] + k
+                    facets[fill[c]] = f
+                    fill[c] += 1
+
+
+class FacetGrid:
+    """Cell hash of the facets of one surface.
+
+    Parameters
+    ----------
+    triangles
+        (T, 3) int32 node indices.
+    reach
+        Distance (m) within which a point must find every nearby facet (the contact search
+        radius).
+    margin
+        Extra reach (m); the grid stays valid until some node has moved this far since the
+        last build. Default: ``reach``.
+    cell_size
+        Cell edge (m). Default: the larger of 2 (reach + margin) and the median facet edge.
+    """
+
+    def __init__(self, triangles: np.ndarray, reach: float, margin: float | None = None,
+                 cell_size: float | None = None) -> None:
+        if not reach > 0.0:
+            raise ValueError(f"reach must be > 0, got {reach}")
+        self.triangles = np.ascontiguousarray(triangles, dtype=np.int32)
+        self.reach = float(reach)
+        self.margin = float(reach if margin is None else margin)
+        self._cell_size = cell_size
+        self.built_points: np.ndarray | None = None
+        self.builds = 0
+
+    def needs_rebuild(self, points: np.ndarray) -> bool:
+        """True if a node has moved more than ``margin`` since the last build."""
+        if self.built_points is None:
+            return True
+        moved = np.einsum("ij,ij->i", points - self.built_points, points - self.built_points)
+        return bool(moved.max() > self.margin * self.margin)
+
+    def build(self, points: np.ndarray) -> None:
+        """(Re)build the hash for node positions ``points`` ((Ns, 3), m)."""
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        grow = self.reach + self.margin
+        h = self._cell_size
+        if h is None:
+            x = points[self.triangles]
+            edges = np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2)
+            h = max(2.0 * grow, float(np.median(edges)))
+        lo_box = points.min(axis=0) - grow
+        hi_box = points.max(axis=0) + grow
+        dims = np.maximum(1, np.ceil((hi_box - lo_box) / h).astype(np.int64))
+        while np.prod(dims) > 8 * len(self.triangles) + 1000:  # keep the table small
+            h *= 1.5
+            dims = np.maximum(1, np.ceil((hi_box - lo_box) / h).astype(np.int64))
+        self.origin = lo_box
+        self.inv_h = 1.0 / h
+        self.dims = dims
+        nt = len(self.triangles)
+        lo = np.empty((nt, 3), dtype=np.int64)
+        hi = np.empty((nt, 3), dtype=np.int64)
+        _cell_ranges(points, self.triangles, grow, self.origin, self.inv_h, self.dims, lo, hi)
+        count = int(np.prod(hi - lo + 1, axis=1).sum())
+        self.cell_start = np.zeros(int(np.prod(dims)) + 1, dtype=np.int64)
+        self.cell_facets = np.empty(count, dtype=np.int32)
+        _fill(lo, hi, self.dims, self.cell_start, self.cell_facets)
+        self.built_points = points.copy()
+        self.builds += 1
+
+    def update(self, points: np.ndarray) -> None:
+        """Rebuild if the surface has moved past the margin."""
+        if self.needs_rebuild(points):
+            self.build(points)

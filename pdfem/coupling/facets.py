@@ -1,0 +1,147 @@
+"""Triangulated contact surfaces for the narrow phase: closest points and pseudo-normals.
+
+Which side of a surface a point is on is decided by the sign of ``(p - c) . n`` where ``c`` is
+the closest point of the surface and ``n`` the angle-weighted pseudo-normal of the feature
+(face, edge or vertex) that ``c`` lies on (Baerentzen & Aanaes, "Signed distance computation
+using the angle weighted pseudonormal", IEEE TVCG 11, 2005). Face normals alone give the wrong
+side for points closest to an edge or a vertex of a convex corner; the pseudo-normals do not,
+for any closed, consistently oriented surface.
+
+Features are numbered per triangle (a, b, c): 0 the face, 1..3 the vertices a, b, c, 4..6 the
+edges ab, bc, ca. :class:`FacetTopology` is the fixed part (edges, which features lie on the
+boundary of an open surface); :func:`pseudo_normals` the part that changes as the surface
+moves. All lengths in m.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+FACE = 0
+"""Feature code of a triangle's interior."""
+
+
+@dataclass(frozen=True)
+class FacetTopology:
+    """Edges of a triangulated surface and its open boundary.
+
+    Attributes
+    ----------
+    triangles
+        (T, 3) int32 node indices, outward oriented.
+    tri_edges
+        (T, 3) int32 edge index of edges ab, bc, ca of each triangle.
+    n_edges
+        Number of distinct edges.
+    boundary_edge
+        (E,) bool, edges with one triangle (the rim of an open surface).
+    boundary_node
+        (Ns,) bool, nodes on such an edge.
+    """
+
+    triangles: np.ndarray
+    tri_edges: np.ndarray
+    n_edges: int
+    boundary_edge: np.ndarray
+    boundary_node: np.ndarray
+
+    @classmethod
+    def from_triangles(cls, triangles: np.ndarray, n_nodes: int) -> "FacetTopology":
+        """Find the edges of ``triangles`` ((T, 3) indices into ``n_nodes`` nodes)."""
+        tri = np.ascontiguousarray(triangles, dtype=np.int32)
+        if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0:
+            raise ValueError(f"a contact surface needs (T, 3) triangles with T > 0, got {tri.shape}")
+        e = np.stack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]], axis=1).reshape(-1, 2)
+        key = np.sort(e, axis=1)
+        uniq, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+        boundary_edge = count == 1
+        boundary_node = np.zeros(n_nodes, dtype=bool)
+        boundary_node[uniq[boundary_edge].ravel()] = True
+        return cls(tri, inv.reshape(-1, 3).astype(np.int32), len(uniq), boundary_edge,
+                   boundary_node)
+
+
+def pseudo_normals(points: np.ndarray, topo: FacetTopology):
+    """Unit normals of faces, edges and vertices in the current configuration.
+
+    Parameters
+    ----------
+    points
+        (Ns, 3) current node positions (m).
+    topo
+        The surface's :class:`FacetTopology`.
+
+    Returns
+    -------
+    face, edge, vertex : numpy.ndarray
+        (T, 3) face normals (right-hand rule = outward), (E, 3) edge pseudo-normals (the mean
+        of the two faces' normals; the face's own on a boundary edge) and (Ns, 3) vertex
+        pseudo-normals (incident face normals weighted by the face's angle at the vertex).
+    """
+    tri = topo.triangles
+    x = points[tri]                                   # (T, 3 nodes, 3)
+    n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    area2 = np.linalg.norm(n, axis=1)
+    if np.any(area2 <= 0.0):
+        raise ValueError(f"{int((area2 <= 0).sum())} contact facets have zero area")
+    face = n / area2[:, None]
+    edge = np.zeros((topo.n_edges, 3))
+    np.add.at(edge, topo.tri_edges.ravel(), np.repeat(face, 3, axis=0))
+    edge /= np.linalg.norm(edge, axis=1)[:, None]
+    vertex = np.zeros((len(points), 3))
+    for k in range(3):
+        a = x[:, (k + 1) % 3] - x[:, k]
+        b = x[:, (k + 2) % 3] - x[:, k]
+        cos = np.einsum("ij,ij->i", a, b) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+        angle = np.arccos(np.clip(cos, -1.0, 1.0))
+        np.add.at(vertex, tri[:, k], angle[:, None] * face)
+    norm = np.linalg.norm(vertex, axis=1)
+    used = norm > 0.0
+    vertex[used] /= norm[used, None]
+    return face, edge, vertex
+
+
+@numba.njit(cache=True, inline="always")
+def closest_point_on_triangle(p, a, b, c):
+    """Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5).
+
+    Returns ``(u, v, w, feature)``: the barycentric weights of the closest point
+    (u a + v b + w c) and the feature it lies on (0 face, 1..3 vertex a, b, c, 4..6 edge ab, bc,
+    ca).
+    """
+    ab0, ab1, ab2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    ac0, ac1, ac2 = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+    ap0, ap1, ap2 = p[0] - a[0], p[1] - a[1], p[2] - a[2]
+    d1 = ab0 * ap0 + ab1 * ap1 + ab2 * ap2
+    d2 = ac0 * ap0 + ac1 * ap1 + ac2 * ap2
+    if d1 <= 0.0 and d2 <= 0.0:
+        return 1.0, 0.0, 0.0, 1
+    bp0, bp1, bp2 = p[0] - b[0], p[1] - b[1], p[2] - b[2]
+    d3 = ab0 * bp0 + ab1 * bp1 + ab2 * bp2
+    d4 = ac0 * bp0 + ac1 * bp1 + ac2 * bp2
+    if d3 >= 0.0 and d4 <= d3:
+        return 0.0, 1.0, 0.0, 2
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        t = d1 / (d1 - d3)
+        return 1.0 - t, t, 0.0, 4
+    cp0, cp1, cp2 = p[0] - c[0], p[1] - c[1], p[2] - c[2]
+    d5 = ab0 * cp0 + ab1 * cp1 + ab2 * cp2
+    d6 = ac0 * cp0 + ac1 * cp1 + ac2 * cp2
+    if d6 >= 0.0 and d5 <= d6:
+        return 0.0, 0.0, 1.0, 3
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        t = d2 / (d2 - d6)
+        return 1.0 - t, 0.0, t, 6
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return 0.0, 1.0 - t, t, 5
+    denom = 1.0 / (va + vb + vc)
+    v = vb * denom
+    w = vc * denom
+    return 1.0 - v - w, v, w, FACE
