@@ -41,7 +41,7 @@ import math
 from pathlib import Path
 
 from pdfem.meshing import (MeshReport, check_parameters, finish_mesh, generate_mesh, gmsh_session, require,
-                           require_positive)
+                           require_element_budget, require_positive, set_mesh_size)
 
 #: name -> (default, unit, description)
 PARAMETERS: dict[str, tuple] = {
@@ -58,10 +58,6 @@ PARAMETERS: dict[str, tuple] = {
     "frame_flange_thickness": (0.015, "m", "thickness of the frame flanges (used for T frames)"),
     "element_size": (0.05, "m", "target edge length of the tetrahedra"),
 }
-
-# Guard against a mistyped element size that would take gmsh hours and all the memory.
-_MAX_SURFACE_TRIANGLES = 4_000_000
-
 
 def _positions(extent: float, spacing: float) -> list[float]:
     """Evenly spaced positions strictly inside (0, extent), centred, ``spacing`` apart."""
@@ -99,9 +95,7 @@ def _check(p: dict) -> tuple[list[float], list[float]]:
             "must be at most half the smaller of length and breadth")
     area = 2 * p["length"] * p["breadth"] + 2 * len(ys) * p["length"] * p["stiffener_height"] \
         + 2 * len(xs) * p["breadth"] * (p["frame_height"] + p["frame_flange_width"])
-    tris = area / (0.433 * h * h)
-    require(tris < _MAX_SURFACE_TRIANGLES, "element_size", h,
-            f"too small for this panel (about {tris:.2g} surface triangles; at most {_MAX_SURFACE_TRIANGLES:.0e})")
+    require_element_budget(area, h, "this panel")
     return xs, ys
 
 
@@ -200,12 +194,7 @@ def build(path: str | Path, **params) -> MeshReport:
         gmsh.model.addPhysicalGroup(2, contact, name="contact")
         gmsh.model.addPhysicalGroup(2, fixed, name="fixed")
 
-        h = p["element_size"]
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+        set_mesh_size(p["element_size"])
         # Delaunay, then gmsh's and Netgen's optimisers: the thin plating gives slivers otherwise.
         # (HXT is faster at fine sizes but its optimiser can take minutes on coarse meshes of
         # thin plates.)

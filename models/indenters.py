@@ -29,7 +29,8 @@ import math
 from pathlib import Path
 
 from pdfem.meshing import (MeshReport, ModelParameterError, check_parameters, finish_mesh, generate_mesh,
-                           gmsh_session, require, require_choice, require_positive, require_range)
+                           gmsh_session, require, require_choice, require_element_budget, require_positive,
+                           require_range, set_mesh_size)
 
 SHAPES = ("cylinder", "sphere", "wedge")
 
@@ -57,7 +58,6 @@ _SHAPE_PARAMETERS = {
     "sphere": ("radius",),
     "wedge": ("stem_angle", "flare_angle", "waterline_half_breadth", "depth", "freeboard", "bow_length"),
 }
-_MAX_TRIANGLES = 4_000_000
 
 
 def surface_area(**params) -> float:
@@ -130,9 +130,7 @@ def _checked(params: dict) -> dict:
         b = p["waterline_half_breadth"] + p["freeboard"] * math.tan(p["flare_angle"])
         height = p["depth"] + p["freeboard"]
         area = 2 * b * p["bow_length"] + 2 * height * (b + p["bow_length"] + height / math.tan(p["stem_angle"]))
-    tris = area / (0.433 * h * h)
-    require(tris < _MAX_TRIANGLES, "element_size", h,
-            f"too small for this indenter (about {tris:.2g} triangles; at most {_MAX_TRIANGLES:.0e})")
+    require_element_budget(area, h, "this indenter")
     return p
 
 
@@ -212,12 +210,7 @@ def build(path: str | Path, **params) -> MeshReport:
         occ.synchronize()
         surfaces = [t for _, t in gmsh.model.getBoundary([(3, vol)], oriented=False)]
         gmsh.model.addPhysicalGroup(2, surfaces, name="contact")
-        h = p["element_size"]
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+        set_mesh_size(p["element_size"])
         generate_mesh(2)
         report = finish_mesh(path, f"indenters ({shape})", p, dim=2, closed_surface=True)
     if shape in ("cylinder", "sphere"):

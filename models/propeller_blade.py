@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from pdfem.meshing import (MeshReport, check_parameters, finish_mesh, generate_mesh, gmsh_session, require,
-                           require_positive, require_range)
+                           require_element_budget, require_positive, require_range, set_mesh_size)
 
 #: name -> (default, unit, description)
 PARAMETERS: dict[str, tuple] = {
@@ -59,7 +59,6 @@ _CLOSED_TE = (0.2969, -0.1260, -0.3516, 0.2843, -0.1036)
 #: area of a NACA 00xx section with the closed trailing edge, in units of chord * thickness
 NACA_AREA_FACTOR = 10.0 * (_CLOSED_TE[0] * 2 / 3 + _CLOSED_TE[1] / 2 + _CLOSED_TE[2] / 3
                            + _CLOSED_TE[3] / 4 + _CLOSED_TE[4] / 5)
-_MAX_SURFACE_TRIANGLES = 4_000_000
 
 
 def chord_at(r: float | np.ndarray, **params) -> float | np.ndarray:
@@ -113,9 +112,7 @@ def _check(p: dict) -> np.ndarray:
             "the sections wrap more than a quarter turn around the shaft; shorten the chords")
     h = p["element_size"]
     require(h <= 0.5 * (R - rh), "element_size", h, f"must be at most half the span ({0.5 * (R - rh):g} m)")
-    tris = 2 * np.sum(0.5 * (c[1:] + c[:-1]) * np.diff(radii)) / (0.433 * h * h)
-    require(tris < _MAX_SURFACE_TRIANGLES, "element_size", h,
-            f"too small for this blade (about {tris:.2g} surface triangles; at most {_MAX_SURFACE_TRIANGLES:.0e})")
+    require_element_budget(2 * np.sum(0.5 * (c[1:] + c[:-1]) * np.diff(radii)), h, "this blade")
     return radii
 
 
@@ -228,11 +225,7 @@ def build(path: str | Path, **params) -> MeshReport:
         # refine toward the leading edge by curvature, but not below h / 2: the explicit
         # solver's stable step scales with the smallest element (h / 4 halves the smallest
         # inscribed radius for a 0.1 % better volume)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.5 * h)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
+        set_mesh_size(h, min_size=0.5 * h, curvature=12)
         gmsh.option.setNumber("Mesh.Algorithm3D", 10)
         gmsh.option.setNumber("Mesh.Optimize", 1)
         generate_mesh(3)

@@ -10,12 +10,18 @@ and uses the helpers here to do the common parts the same way:
 * :class:`ModelParameterError` -- a bad parameter, named (a :class:`ValueError`, and an
   :class:`~pdfem.errors.InputError` so the command line exits with status 2);
 * :func:`check_parameters` and the ``require_*`` checks -- defaults, types, ranges;
-* :func:`gmsh_session` -- a headless gmsh session that is always finalised, and
+* :func:`require_element_budget` -- refuse an element size that would make gmsh run for hours;
+* :func:`gmsh_session` -- a headless gmsh session that is always finalised,
+  :func:`set_mesh_size` -- one element size everywhere (optionally refined by curvature), and
   :func:`generate_mesh` -- meshing with gmsh's failures turned into clear errors;
 * :func:`finish_mesh` -- refuse inverted or zero-volume elements, orient the named surfaces
   outward, write MSH 4.1, and return a :class:`MeshReport` (sizes, groups, quality);
 * :func:`resolve_model`, :func:`parse_set` and :func:`mesh_model` -- what ``pdfem mesh MODEL
   [--set key=value ...] [-o FILE.msh]`` does.
+
+The quality measures themselves (volumes, angles, inscribed radii, the inverted-element check)
+and :class:`MeshQualityError` live in :mod:`pdfem.mesh_quality`; they are importable from here
+too.
 
 Lengths are in m, areas in m^2, volumes in m^3, angles in the reports in degrees (parameters
 that are angles are in rad, SI).
@@ -37,17 +43,23 @@ from typing import Any, Iterator
 import numpy as np
 
 from .errors import InputError
+from . import mesh_quality
+from .mesh_quality import (DEGENERATE, CellQuality, MeshQualityError, check_cells, longest_edges,  # noqa: F401
+                           tet_inradii, tet_min_dihedral, tet_volumes, triangle_areas, triangle_inradii,
+                           triangle_min_angle)
 
 __all__ = [
     "ModelParameterError",
-    "MeshQualityError",
     "MeshReport",
     "check_parameters",
     "require_positive",
     "require_range",
     "require_choice",
     "require",
+    "require_element_budget",
+    "MAX_SURFACE_TRIANGLES",
     "gmsh_session",
+    "set_mesh_size",
     "generate_mesh",
     "finish_mesh",
     "available_models",
@@ -55,18 +67,10 @@ __all__ = [
     "parse_set",
     "coerce_parameters",
     "mesh_model",
-    "tet_volumes",
-    "tet_min_dihedral",
-    "tet_inradii",
-    "triangle_areas",
-    "triangle_min_angle",
-    "triangle_inradii",
-]
+] + mesh_quality.__all__          # re-exported: the quality measures and MeshQualityError
 
-# Elements with a normalised size (volume / longest edge^3, area / longest edge^2) below this
-# are treated as zero-volume (degenerate).  A regular tetrahedron has 0.118, a regular triangle
-# 0.433; gmsh's worst acceptable slivers are many orders of magnitude above 1e-8.
-_DEGENERATE = 1e-8
+#: Most surface triangles a model may ask gmsh for (see :func:`require_element_budget`).
+MAX_SURFACE_TRIANGLES = 4_000_000
 
 # gmsh element type -> meshio cell type name (first-order types only: the models write those).
 _GMSH_TYPES = {15: "vertex", 1: "line", 2: "triangle", 3: "quad", 4: "tetra", 5: "hexahedron",
@@ -90,22 +94,6 @@ class ModelParameterError(InputError, ValueError):
     def __init__(self, param: str, value: Any, message: str):
         self.param = param
         super().__init__(None, param, message, value)
-
-
-class MeshQualityError(InputError, ValueError):
-    """A generated mesh that must not be used: inverted or zero-volume elements, or a surface
-    that should be closed and consistently oriented but is not.
-
-    Parameters
-    ----------
-    message
-        What is wrong with the mesh, as a sentence.
-    file
-        The mesh file concerned, if known.
-    """
-
-    def __init__(self, message: str, file: str | None = None):
-        super().__init__(file, None, message)
 
 
 # --------------------------------------------------------------------------------------------
@@ -192,6 +180,31 @@ def require_range(params: dict[str, Any], name: str, low: float | None = None, h
 def require_choice(params: dict[str, Any], name: str, choices: tuple[str, ...]) -> None:
     """Check that a string parameter is one of ``choices``."""
     require(params[name] in choices, name, params[name], "must be one of: " + ", ".join(choices))
+
+
+def require_element_budget(area: float, element_size: float, what: str) -> None:
+    """Refuse an ``element_size`` that would cover ``area`` with too many surface triangles.
+
+    Guards against a mistyped element size that would take gmsh hours and all the memory.
+
+    Parameters
+    ----------
+    area
+        Surface area to be meshed, m^2 (an estimate is enough).
+    element_size
+        Target element edge length, m.
+    what
+        The object, for the message (e.g. ``"this panel"``).
+
+    Raises
+    ------
+    ModelParameterError
+        (``param == "element_size"``) more than :data:`MAX_SURFACE_TRIANGLES` triangles of
+        that size (area 0.433 h^2 each) would be needed.
+    """
+    tris = area / (0.433 * element_size * element_size)
+    require(tris < MAX_SURFACE_TRIANGLES, "element_size", element_size,
+            f"too small for {what} (about {tris:.2g} surface triangles; at most {MAX_SURFACE_TRIANGLES:.0e})")
 
 
 def _parse_bool(text: str) -> bool:
@@ -294,6 +307,30 @@ def gmsh_session(name: str = "model") -> Iterator[Any]:
         yield gmsh
     finally:
         gmsh.finalize()
+
+
+def set_mesh_size(max_size: float, min_size: float = 0.0, curvature: int = 0) -> None:
+    """Mesh the open session's model with one target element size, set by options only.
+
+    Sizes from the geometry's points and extended from the boundary are switched off, so the
+    elements are ``max_size`` everywhere except where ``curvature`` refines them.
+
+    Parameters
+    ----------
+    max_size
+        Largest (target) element edge length, m.
+    min_size
+        Smallest element edge length, m (a floor for the curvature refinement).
+    curvature
+        Elements per 2 pi of curvature (gmsh's ``Mesh.MeshSizeFromCurvature``); 0: off.
+    """
+    import gmsh
+
+    gmsh.option.setNumber("Mesh.MeshSizeMin", min_size)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", max_size)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature)
 
 
 def generate_mesh(dim: int) -> None:
@@ -403,72 +440,6 @@ def _entity_elements(gmsh, dim: int, tag: int, etype: int, nper: int, index: np.
     etags, enodes = gmsh.model.mesh.getElementsByType(etype, tag)
     conn = index[np.asarray(enodes, dtype=np.int64)].reshape(-1, nper)
     return np.asarray(etags, dtype=np.int64), conn
-
-
-def tet_volumes(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Signed volumes (m^3) of tetrahedra, positive for gmsh's (right-handed) node order."""
-    a, b, c, d = (points[tets[:, k]] for k in range(4))
-    return np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a)) / 6.0
-
-
-def tet_min_dihedral(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Smallest dihedral angle (deg) of each tetrahedron."""
-    p = points[tets]                                     # (M,4,3)
-    # outward normal of the face opposite vertex k
-    normals = []
-    for k in range(4):
-        i, j, l = [m for m in range(4) if m != k]
-        n = np.cross(p[:, j] - p[:, i], p[:, l] - p[:, i])
-        s = np.sign(np.einsum("ij,ij->i", n, p[:, i] - p[:, k]))[:, None]
-        n = n * s
-        normals.append(n / np.linalg.norm(n, axis=1)[:, None])
-    worst = np.full(len(tets), np.pi)
-    for k in range(4):
-        for m in range(k + 1, 4):
-            cosang = np.clip(np.einsum("ij,ij->i", normals[k], normals[m]), -1.0, 1.0)
-            worst = np.minimum(worst, np.pi - np.arccos(cosang))
-    return np.degrees(worst)
-
-
-def triangle_areas(points: np.ndarray, tris: np.ndarray) -> np.ndarray:
-    """Areas (m^2) of triangles."""
-    a, b, c = (points[tris[:, k]] for k in range(3))
-    return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-
-
-def triangle_min_angle(points: np.ndarray, tris: np.ndarray) -> np.ndarray:
-    """Smallest interior angle (deg) of each triangle."""
-    p = points[tris]
-    worst = np.full(len(tris), np.pi)
-    for k in range(3):
-        u = p[:, (k + 1) % 3] - p[:, k]
-        v = p[:, (k + 2) % 3] - p[:, k]
-        cosang = np.einsum("ij,ij->i", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
-        worst = np.minimum(worst, np.arccos(np.clip(cosang, -1.0, 1.0)))
-    return np.degrees(worst)
-
-
-def tet_inradii(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Radii (m) of the inscribed spheres of tetrahedra: 3 |V| / (sum of the face areas)."""
-    faces = np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]], tets[:, [0, 1, 2]]])
-    area = triangle_areas(points, faces).reshape(4, -1).sum(axis=0)
-    return 3.0 * np.abs(tet_volumes(points, tets)) / area
-
-
-def triangle_inradii(points: np.ndarray, tris: np.ndarray) -> np.ndarray:
-    """Radii (m) of the inscribed circles of triangles: 2 A / perimeter."""
-    p = points[tris]
-    perimeter = sum(np.linalg.norm(p[:, (k + 1) % 3] - p[:, k], axis=1) for k in range(3))
-    return 2.0 * triangle_areas(points, tris) / perimeter
-
-
-def _longest_edge(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
-    n = cells.shape[1]
-    best = np.zeros(len(cells))
-    for i in range(n):
-        for j in range(i + 1, n):
-            best = np.maximum(best, np.linalg.norm(points[cells[:, j]] - points[cells[:, i]], axis=1))
-    return best
 
 
 def _groups(gmsh) -> dict[tuple[int, int], tuple[str, list[int]]]:
@@ -636,26 +607,7 @@ def _finish_mesh(path: Path, model: str, parameters: dict[str, Any], dim: int, c
         cells.append(_entity_elements(gmsh, dim, t, etype, nper, index))
     etags = np.concatenate([c[0] for c in cells])
     conn = np.concatenate([c[1] for c in cells])
-    if len(conn) == 0:
-        raise MeshQualityError("the mesh has no elements")
-    longest = _longest_edge(xyz, conn)
-    if dim == 3:
-        size = tet_volumes(xyz, conn)
-        bad = size <= 0
-        if bad.any():
-            raise MeshQualityError(f"{int(bad.sum())} inverted or zero-volume tetrahedra "
-                                   f"(smallest signed volume {size.min():.3g} m^3)")
-        angle = tet_min_dihedral(xyz, conn)
-        inradius = tet_inradii(xyz, conn)
-    else:
-        size = triangle_areas(xyz, conn)
-        angle = triangle_min_angle(xyz, conn)
-        inradius = triangle_inradii(xyz, conn)
-    degenerate = size / longest**dim < _DEGENERATE
-    if degenerate.any():
-        raise MeshQualityError(f"{int(degenerate.sum())} (near) zero-volume elements: the smallest has "
-                               f"{'volume' if dim == 3 else 'area'} {size.min():.3g} with longest edge "
-                               f"{longest[np.argmin(size)]:.3g} m")
+    size, angle, inradius = check_cells(xyz, conn, dim)
 
     named_surfaces = sorted({t for (gd, _), (_, ents) in groups.items() if gd == 2 for t in ents})
     if dim == 3 and named_surfaces:

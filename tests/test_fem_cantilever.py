@@ -6,7 +6,8 @@ the first bending frequency, energy conservation of the undamped central differe
 stability limit dt = 2/omega_max, the free decay of a damped oscillator, and a static FE solution
 for prescribed displacements.
 
-Meshes: first-order hexahedra from gmsh (transfinite + recombine), 2:1 elements along the beam.
+Meshes: first-order hexahedra from gmsh (transfinite + recombine; the ``gmsh_box`` fixture of
+conftest.py), 2:1 elements along the beam.
 Fully integrated trilinear hexahedra lock in bending, so the static error falls from 21 % to
 6.9 % to 2.4 % over three meshes; first-order tetrahedra are much stiffer still (about -17 % at
 h = 0.025 m), which is why the hexahedral path is used here.
@@ -16,7 +17,6 @@ from __future__ import annotations
 
 import math
 
-import gmsh
 import numpy as np
 import pytest
 import scipy.sparse.linalg as sla
@@ -38,41 +38,22 @@ DELTA_TIMOSHENKO = P * L**3 / (3 * E * I) + P * L / (KAPPA * G * A)
 F1_EULER_BERNOULLI = 1.875104**2 / (2 * math.pi) * math.sqrt(E * I / (RHO * A * L**4))
 
 
-def write_beam(path, n):
-    """Hexahedral mesh of [0,L]x[0,H]x[0,H] with n = (nx, ny, nz) elements; groups beam, root
-    (x = 0), tip (x = L)."""
-    gmsh.initialize(interruptible=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("beam")
-        vol = gmsh.model.occ.addBox(0, 0, 0, L, H, H)
-        gmsh.model.occ.synchronize()
-        for _, c in gmsh.model.getEntities(1):
-            a, b = gmsh.model.getBoundary([(1, c)], oriented=False)
-            pa, pb = gmsh.model.getValue(0, a[1], []), gmsh.model.getValue(0, b[1], [])
-            k = int(np.argmax(np.abs(np.subtract(pa, pb))))
-            gmsh.model.mesh.setTransfiniteCurve(c, n[k] + 1)
-        for _, s in gmsh.model.getEntities(2):
-            gmsh.model.mesh.setTransfiniteSurface(s)
-            gmsh.model.mesh.setRecombine(2, s)
-        gmsh.model.mesh.setTransfiniteVolume(vol)
-        com = {s: gmsh.model.occ.getCenterOfMass(2, s) for _, s in gmsh.model.getEntities(2)}
-        gmsh.model.addPhysicalGroup(3, [vol], name="beam")
-        gmsh.model.addPhysicalGroup(
-            2, [s for s, c in com.items() if abs(c[0]) < 1e-9], name="root")
-        gmsh.model.addPhysicalGroup(
-            2, [s for s, c in com.items() if abs(c[0] - L) < 1e-9], name="tip")
-        gmsh.model.mesh.generate(3)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return path
+@pytest.fixture(scope="module")
+def cantilever(tmp_path_factory, gmsh_box):
+    """Factory: the clamped cantilever on a hexahedral mesh of [0,L]x[0,H]x[0,H] with
+    n = (nx, ny, nz) elements; groups beam, root (x = 0, clamped), tip (x = L). Each mesh is
+    generated once per module; every call gives a new structure."""
+    meshes = {}
+    folder = tmp_path_factory.mktemp("beam")
 
-
-def cantilever(tmp_path, n, **kwargs) -> ElasticStructure:
-    mesh = load_mesh(write_beam(tmp_path / f"beam_{n[0]}_{n[1]}_{n[2]}.msh", n))
-    return ElasticStructure(mesh, STEEL, fixed_groups=["root"], name="beam", **kwargs)
+    def make(n, **kwargs) -> ElasticStructure:
+        n = tuple(n)
+        if n not in meshes:
+            path = gmsh_box(folder / f"beam_{n[0]}_{n[1]}_{n[2]}.msh", (L, H, H), volume_groups=["beam"],
+                            face_groups={"root": ["x0"], "tip": ["x1"]}, divisions=n)
+            meshes[n] = load_mesh(path)
+        return ElasticStructure(meshes[n], STEEL, fixed_groups=["root"], name="beam", **kwargs)
+    return make
 
 
 def static_tip_load(s: ElasticStructure) -> np.ndarray:
@@ -105,14 +86,14 @@ def lowest_and_highest_eigenvalues(s: ElasticStructure) -> tuple[float, float, n
     return float(lo[0]), float(hi), s.dofmap.to_nodal(mode)
 
 
-def test_static_tip_deflection_converges_to_timoshenko(tmp_path):
+def test_static_tip_deflection_converges_to_timoshenko(cantilever):
     """Tip deflection vs Timoshenko beam theory delta = P L^3/(3EI) + P L/(kappa G A) (Cowper's
     kappa): the error decreases with refinement and is within 3 % on the finest mesh; the root
     reaction balances the tip load exactly (reference: static equilibrium); the bending stress
     of the top element layer is within 3 % of Navier's M z / I."""
     errors = []
     for n in [(20, 1, 1), (40, 2, 2), (80, 4, 4)]:
-        s = cantilever(tmp_path, n)
+        s = cantilever(n)
         u = static_tip_load(s)
         errors.append(tip_deflection(s, u) / DELTA_TIMOSHENKO - 1.0)
     print("static tip deflection errors (20x1x1, 40x2x2, 80x4x4):", errors)
@@ -131,12 +112,12 @@ def test_static_tip_deflection_converges_to_timoshenko(tmp_path):
         assert sig[sel, 0, 0] == pytest.approx(navier, rel=0.03)
 
 
-def test_first_bending_frequency_from_free_vibration(tmp_path):
+def test_first_bending_frequency_from_free_vibration(cantilever):
     """Released from the static deflected shape, the tip oscillates at the first bending
     frequency: zero crossings of the tip displacement give f1 within 3 % of Euler-Bernoulli
     1.875^2/(2 pi) sqrt(EI/(rho A L^4)) and within 0.5 % of the FE model's own lowest eigenvalue
     (scipy eigsh)."""
-    s = cantilever(tmp_path, (40, 3, 3))
+    s = cantilever((40, 3, 3))
     lam1, _, _ = lowest_and_highest_eigenvalues(s)
     f_fe = math.sqrt(lam1) / (2 * math.pi)
     u0 = static_tip_load(s)
@@ -163,12 +144,12 @@ def test_first_bending_frequency_from_free_vibration(tmp_path):
     assert f == pytest.approx(F1_EULER_BERNOULLI, rel=0.03)
 
 
-def test_undamped_free_vibration_conserves_energy(tmp_path):
+def test_undamped_free_vibration_conserves_energy(cantilever):
     """Central difference without damping: kinetic + strain energy stays within 0.5 % of its
     initial value over 20 periods of the first mode, and the discrete invariant
     1/2 v(n-1/2).M v(n+1/2) + 1/2 u.K u is conserved to round-off (reference: energy
     conservation of the undamped system and of the leapfrog scheme)."""
-    s = cantilever(tmp_path, (20, 1, 1))
+    s = cantilever((20, 1, 1))
     u = static_tip_load(s)
     s.clear_loads()
     s.set_state(displacement=u)
@@ -195,12 +176,12 @@ def test_undamped_free_vibration_conserves_energy(tmp_path):
     assert inv_drift < 1e-9
 
 
-def test_stable_step_is_sharp(tmp_path):
+def test_stable_step_is_sharp(cantilever):
     """Power iteration gives omega_max^2 within 1 % below scipy eigsh's largest eigenvalue; a run
     from a random displacement stays bounded at the stable step (0.9 x critical) and at
     0.99 x critical, and blows up at 1.1 x critical (reference: the central-difference limit
     dt = 2/omega_max)."""
-    s = cantilever(tmp_path, (20, 2, 2))
+    s = cantilever((20, 2, 2))
     lam = s.max_eigenvalue()
     _, lam_max, _ = lowest_and_highest_eigenvalues(s)
     print(f"omega_max^2: power iteration {lam:.6e} ({s.solver.power_iterations} iterations), "
@@ -228,12 +209,12 @@ def test_stable_step_is_sharp(tmp_path):
     assert peak(1.1 * dt_c) > 1e6 * np.abs(u0).max()
 
 
-def test_rayleigh_mass_damping_decay(tmp_path):
+def test_rayleigh_mass_damping_decay(cantilever):
     """With C = alpha M the first mode (released from its eigenvector) decays with damping ratio
     xi = alpha/(2 omega1): the ratio of successive tip-displacement peaks is
     exp(-2 pi xi / sqrt(1 - xi^2)) (reference: damped single-degree-of-freedom oscillator); the
     damped critical step is (2/w)(sqrt(1+xi^2)-xi) (reference: Belytschko et al., Sec. 6.3)."""
-    s0 = cantilever(tmp_path, (20, 1, 1))
+    s0 = cantilever((20, 1, 1))
     lam1, _, mode = lowest_and_highest_eigenvalues(s0)
     w1 = math.sqrt(lam1)
     xi = 0.02
@@ -260,11 +241,11 @@ def test_rayleigh_mass_damping_decay(tmp_path):
     assert ratio == pytest.approx(expected, abs=0.002)
 
 
-def test_prescribed_displacement_reaches_static_solution(tmp_path):
+def test_prescribed_displacement_reaches_static_solution(cantilever):
     """The tip face pulled by a prescribed axial displacement (ramped, with mass damping) settles
     to the static FE solution with the same Dirichlet data; the root reaction then balances the
     tip reaction and is within 2 % of E A delta / L (references: static FE solve, bar theory)."""
-    s0 = cantilever(tmp_path, (20, 1, 1))
+    s0 = cantilever((20, 1, 1))
     delta, ramp = 1e-5, 2e-3
     s = ElasticStructure(s0.mesh, STEEL, fixed_groups=["root"], rayleigh_alpha=2.0e3,
                          prescribed={"tip": lambda t: (delta * min(t / ramp, 1.0), 0.0, 0.0)})

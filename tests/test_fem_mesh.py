@@ -1,14 +1,14 @@
 """FE mesh loading and assembly: groups from gmsh files, orientation checks, K and lumped M.
 
-Meshes are generated with the gmsh Python API into tmp_path (a small slender box); tiny
-hand-written MSH 2.2 files (meshio) cover the error paths. References: exact geometry (volumes,
+Meshes are generated with the gmsh Python API into tmp_path (a small slender box, the
+``gmsh_box`` fixture of conftest.py); tiny hand-written MSH 2.2 files (meshio) cover the error
+paths. References: exact geometry (volumes,
 areas, outward normals of a box), rigid-body invariance of linear elasticity, the constant-strain
 patch test, Newton's third law for surface loads.
 """
 
 from __future__ import annotations
 
-import gmsh
 import meshio
 import numpy as np
 import pytest
@@ -23,47 +23,14 @@ L, H, W = 1.0, 0.1, 0.08
 STEEL = ElasticMaterial(density=7850.0, youngs_modulus=210e9, poisson_ratio=0.3)
 
 
-def write_box(path, n=(10, 2, 2), hexa=False, size=0.04, version=4.1, order=1, extra=False):
-    """Box [0,L]x[0,H]x[0,W] with groups beam (3), root (x=0), tip (x=L), top (z=W), outer
-    (all six faces); hexahedra by transfinite meshing + recombination when ``hexa``."""
-    gmsh.initialize(interruptible=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("box")
-        vol = gmsh.model.occ.addBox(0, 0, 0, L, H, W)
-        gmsh.model.occ.synchronize()
-        if hexa:
-            for _, c in gmsh.model.getEntities(1):
-                a, b = gmsh.model.getBoundary([(1, c)], oriented=False)
-                pa, pb = gmsh.model.getValue(0, a[1], []), gmsh.model.getValue(0, b[1], [])
-                k = int(np.argmax(np.abs(np.subtract(pa, pb))))
-                gmsh.model.mesh.setTransfiniteCurve(c, n[k] + 1)
-            for _, s in gmsh.model.getEntities(2):
-                gmsh.model.mesh.setTransfiniteSurface(s)
-                gmsh.model.mesh.setRecombine(2, s)
-            gmsh.model.mesh.setTransfiniteVolume(vol)
-        else:
-            gmsh.option.setNumber("Mesh.MeshSizeMin", size)
-            gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-        com = {s: gmsh.model.occ.getCenterOfMass(2, s) for _, s in gmsh.model.getEntities(2)}
-        gmsh.model.addPhysicalGroup(3, [vol], name="beam")
-        if extra:
-            gmsh.model.addPhysicalGroup(3, [vol], name="beam_copy")
-        gmsh.model.addPhysicalGroup(
-            2, [s for s, c in com.items() if abs(c[0]) < 1e-9], name="root")
-        gmsh.model.addPhysicalGroup(
-            2, [s for s, c in com.items() if abs(c[0] - L) < 1e-9], name="tip")
-        gmsh.model.addPhysicalGroup(
-            2, [s for s, c in com.items() if abs(c[2] - W) < 1e-9], name="top")
-        gmsh.model.addPhysicalGroup(2, list(com), name="outer")
-        gmsh.model.mesh.generate(3)
-        if order > 1:
-            gmsh.model.mesh.setOrder(order)
-        gmsh.option.setNumber("Mesh.MshFileVersion", version)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return path
+def write_box(gmsh_box, path, n=(10, 2, 2), hexa=False, size=0.04, version=4.1, order=1, extra=False):
+    """Box [0,L]x[0,H]x[0,W] with groups beam (3; also beam_copy when ``extra``), root (x=0),
+    tip (x=L), top (z=W), outer (all six faces); hexahedra (n per axis) when ``hexa``, else
+    tetrahedra of ``size``."""
+    return gmsh_box(path, (L, H, W), volume_groups=["beam", "beam_copy"] if extra else ["beam"],
+                    face_groups={"root": ["x0"], "tip": ["x1"], "top": ["z1"],
+                                 "outer": ["x0", "x1", "y0", "y1", "z0", "z1"]},
+                    divisions=n if hexa else None, size=size, msh_version=version, order=order)
 
 
 def write_cells(path, points, cells):
@@ -77,21 +44,21 @@ def write_cells(path, points, cells):
 
 
 @pytest.fixture(scope="module")
-def tet41(tmp_path_factory):
-    return load_mesh(write_box(tmp_path_factory.mktemp("m") / "t41.msh"))
+def tet41(tmp_path_factory, gmsh_box):
+    return load_mesh(write_box(gmsh_box, tmp_path_factory.mktemp("m") / "t41.msh"))
 
 
 @pytest.fixture(scope="module")
-def hex41(tmp_path_factory):
-    return load_mesh(write_box(tmp_path_factory.mktemp("m") / "h41.msh", hexa=True, n=(10, 2, 2)))
+def hex41(tmp_path_factory, gmsh_box):
+    return load_mesh(write_box(gmsh_box, tmp_path_factory.mktemp("m") / "h41.msh", hexa=True, n=(10, 2, 2)))
 
 
 @pytest.mark.parametrize("version", [4.1, 2.2])
-def test_groups_are_read_from_msh_41_and_22(tmp_path, version):
+def test_groups_are_read_from_msh_41_and_22(tmp_path, gmsh_box, version):
     """Both MSH versions give the same groups; facets of 'root' lie on x = 0 and cover its area
     H x W; an element listed in two volume groups (MSH 2.2 writes it twice) is kept once
     (reference: the box geometry, volume L H W)."""
-    m = load_mesh(write_box(tmp_path / "b.msh", version=version, extra=True))
+    m = load_mesh(write_box(gmsh_box, tmp_path / "b.msh", version=version, extra=True))
     assert m.kind == "tet"
     assert set(m.group_names) == {"beam", "beam_copy", "root", "tip", "top", "outer"}
     assert element_volumes(m).sum() == pytest.approx(L * H * W, rel=1e-12)
@@ -131,11 +98,11 @@ def test_missing_group_lists_the_groups(tet41):
         tet41.group_facets("beam")
 
 
-def test_second_order_and_mixed_meshes_are_refused(tmp_path):
+def test_second_order_and_mixed_meshes_are_refused(tmp_path, gmsh_box):
     """Second-order tetrahedra and meshes mixing tetrahedra and hexahedra are refused with a
     message saying what is supported."""
     with pytest.raises(ValueError, match="tetra10.*supported are first-order tetrahedra"):
-        load_mesh(write_box(tmp_path / "p2.msh", order=2))
+        load_mesh(write_box(gmsh_box, tmp_path / "p2.msh", order=2))
     pts = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [0, 1, 1], [1, 1, 1], [1, 0, 1],
            [0, 0, -1]]
     cells = [("hexahedron", np.array([[0, 1, 4, 2, 3, 7, 6, 5]])),

@@ -1,15 +1,15 @@
 """The elastic structure's surface interface (what the contact code sees) and its loads.
 
-A small steel block from gmsh (tetrahedra, or hexahedra by transfinite meshing) with a 'contact'
-group on its top face z = W. References: outward normals of a box, the consistent nodal load of a
-uniform traction on linear triangles (t A / 3 per node), Newton's second law for a free body
-(momentum = F t, and centre-of-mass motion F t^2 / (2 m), which leapfrog integrates exactly),
-resultant moment definition, rotation of normals with the body.
+A small steel block from gmsh (tetrahedra, or hexahedra by transfinite meshing; the
+``gmsh_box`` fixture of conftest.py) with a 'contact' group on its top face z = W. References:
+outward normals of a box, the consistent nodal load of a uniform traction on linear triangles
+(t A / 3 per node), Newton's second law for a free body (momentum = F t, and centre-of-mass
+motion F t^2 / (2 m), which leapfrog integrates exactly), resultant moment definition, rotation
+of normals with the body.
 """
 
 from __future__ import annotations
 
-import gmsh
 import numpy as np
 import pytest
 
@@ -23,41 +23,17 @@ LX, LY, W = 0.4, 0.2, 0.1
 STEEL = ElasticMaterial(density=7850.0, youngs_modulus=210e9, poisson_ratio=0.3)
 
 
-def write_block(path, hexa):
-    """Block [0,LX]x[0,LY]x[0,W]; groups block (3), contact (z = W), fixed (x = 0)."""
-    gmsh.initialize(interruptible=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("block")
-        vol = gmsh.model.occ.addBox(0, 0, 0, LX, LY, W)
-        gmsh.model.occ.synchronize()
-        if hexa:
-            for _, c in gmsh.model.getEntities(1):
-                gmsh.model.mesh.setTransfiniteCurve(c, 4)
-            for _, s in gmsh.model.getEntities(2):
-                gmsh.model.mesh.setTransfiniteSurface(s)
-                gmsh.model.mesh.setRecombine(2, s)
-            gmsh.model.mesh.setTransfiniteVolume(vol)
-        else:
-            gmsh.option.setNumber("Mesh.MeshSizeMax", 0.05)
-        com = {s: gmsh.model.occ.getCenterOfMass(2, s) for _, s in gmsh.model.getEntities(2)}
-        gmsh.model.addPhysicalGroup(3, [vol], name="block")
-        gmsh.model.addPhysicalGroup(
-            2, [s for s, c in com.items() if abs(c[2] - W) < 1e-9], name="contact")
-        gmsh.model.addPhysicalGroup(
-            2, [s for s, c in com.items() if abs(c[0]) < 1e-9], name="fixed")
-        gmsh.model.mesh.generate(3)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-    return path
+def write_block(gmsh_box, path, hexa):
+    """Block [0,LX]x[0,LY]x[0,W]; groups block (3), contact (z = W), fixed (x = 0); hexahedra
+    (3 per edge) or tetrahedra of size 0.05 m."""
+    return gmsh_box(path, (LX, LY, W), volume_groups=["block"], face_groups={"contact": ["z1"], "fixed": ["x0"]},
+                    divisions=(3, 3, 3) if hexa else None, size=0.05)
 
 
 @pytest.fixture(scope="module", params=["tet", "hex"])
-def mesh(request, tmp_path_factory):
+def mesh(request, tmp_path_factory, gmsh_box):
     path = tmp_path_factory.mktemp("block") / f"block_{request.param}.msh"
-    return load_mesh(write_block(path, request.param == "hex"))
+    return load_mesh(write_block(gmsh_box, path, request.param == "hex"))
 
 
 def test_surface_geometry_and_outward_normals(mesh):

@@ -15,8 +15,9 @@ import pytest
 from scipy.integrate import quad
 
 from pdfem.errors import InputError
-from pdfem.meshing import (MeshQualityError, ModelParameterError, coerce_parameters, finish_mesh, gmsh_session,
-                           mesh_model, parse_set, resolve_model, tet_inradii, tet_min_dihedral, triangle_min_angle)
+from pdfem.meshing import (MeshQualityError, ModelParameterError, available_models, coerce_parameters, finish_mesh,
+                           gmsh_session, mesh_model, parse_set, resolve_model, tet_inradii, tet_min_dihedral,
+                           triangle_min_angle)
 from pdfem.models import hull_panel, indenters, propeller_blade
 
 
@@ -58,20 +59,69 @@ def _groups(mesh: meshio.Mesh) -> dict[str, int]:
     return {name: int(v[1]) for name, v in mesh.field_data.items()}
 
 
+# ------------------------------------------------------------------------------------- every model
+
+HULL_PARAMS = dict(length=1.0, breadth=0.8, plate_thickness=0.015, stiffener_spacing=0.3, stiffener_height=0.1,
+                   stiffener_thickness=0.01, frame_spacing=0.5, frame_height=0.2, frame_thickness=0.012,
+                   frame_flange_width=0.06, frame_flange_thickness=0.014, element_size=0.06)
+BLADE_PARAMS = dict(radius=1.0, hub_radius=0.3, max_chord=0.5, max_chord_radius=0.6, tip_chord=0.15,
+                    root_thickness=0.07, tip_thickness=0.015, pitch=1.4, skew_angle=0.35, element_size=0.05)
+
+#: every model in models/: parameters for a coarse mesh, and the physical groups (name -> dim) it must have
+MODEL_CASES = {
+    "hull_panel": (HULL_PARAMS, {"hull": 3, "contact": 2, "fixed": 2}),
+    "propeller_blade": (BLADE_PARAMS, {"blade": 3, "contact": 2, "root": 2}),
+    "indenters": (dict(shape="sphere", element_size=0.25), {"contact": 2}),
+}
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """Factory: the model ``name`` meshed once per module with its MODEL_CASES parameters;
+    returns (MeshReport, the file read back with meshio)."""
+    folder = tmp_path_factory.mktemp("models")
+    cache = {}
+
+    def get(name: str) -> tuple:
+        if name not in cache:
+            report = resolve_model(name).build(folder / f"{name}.msh", **MODEL_CASES[name][0])
+            cache[name] = (report, meshio.read(report.path))
+        return cache[name]
+    return get
+
+
+@pytest.mark.parametrize("name", available_models())
+def test_every_model_meshes_coarsely_with_all_its_groups(name, built):
+    """Each model in models/ meshes at a coarse size; every physical group it documents is in
+    the file and holds elements, and every tetrahedron (triangle, for a surface mesh) has positive
+    volume (area), recomputed from the file read back with meshio (reference: signed volume of a
+    simplex, independent of pdfem.meshing)."""
+    assert name in MODEL_CASES, f"model '{name}' has no coarse test case in MODEL_CASES"
+    report, mesh = built(name)
+    groups = MODEL_CASES[name][1]
+    assert _groups(mesh) == groups
+    assert report.groups == groups
+    for group, dim in groups.items():
+        cells = _cells(mesh, group, "tetra" if dim == 3 else "triangle")
+        assert len(cells) > 0, group
+        if dim == 3:
+            assert np.all(_tet_volumes(mesh.points, cells) > 0)
+        else:
+            assert np.all(np.linalg.norm(_tri_normals(mesh.points, cells), axis=1) > 0)
+    assert report.min_volume > 0 and report.min_sicn > 0
+
+
 # ------------------------------------------------------------------------------------- hull panel
 
-def test_hull_panel_volume_areas_and_groups(tmp_path):
+def test_hull_panel_volume_areas_and_groups(built):
     """Reference: analytic volumes and areas of the boxes the panel is made of.
 
     hull volume = plate + stiffeners + frames (web and flange) - stiffener/frame crossings;
     contact area = length x breadth (normals +z, out of the steel toward the ice);
     fixed area = plate edges + stiffener and frame end faces.
     """
-    p = dict(length=1.0, breadth=0.8, plate_thickness=0.015, stiffener_spacing=0.3, stiffener_height=0.1,
-             stiffener_thickness=0.01, frame_spacing=0.5, frame_height=0.2, frame_thickness=0.012,
-             frame_flange_width=0.06, frame_flange_thickness=0.014, element_size=0.06)
-    report = hull_panel.build(tmp_path / "panel.msh", **p)
-    mesh = meshio.read(tmp_path / "panel.msh")
+    p = HULL_PARAMS
+    report, mesh = built("hull_panel")
     assert _groups(mesh) == {"hull": 3, "contact": 2, "fixed": 2}
     assert report.groups == {"hull": 3, "contact": 2, "fixed": 2}
 
@@ -137,14 +187,12 @@ def _naca_area_factor() -> float:
     return 2 * quad(half, 0.0, 1.0)[0]
 
 
-def test_blade_root_area_groups_and_closed_surface(tmp_path):
+def test_blade_root_area_groups_and_closed_surface(built):
     """Reference: the NACA 00xx section area 0.681 c t at the hub (0.685 c t for the open trailing
     edge), with c from the documented elliptic chord law; the divergence theorem for the closed
     root + contact surface versus the sum of tetrahedron volumes."""
-    p = dict(radius=1.0, hub_radius=0.3, max_chord=0.5, max_chord_radius=0.6, tip_chord=0.15,
-             root_thickness=0.07, tip_thickness=0.015, pitch=1.4, skew_angle=0.35, element_size=0.05)
-    report = propeller_blade.build(tmp_path / "blade.msh", **p)
-    mesh = meshio.read(tmp_path / "blade.msh")
+    p = BLADE_PARAMS
+    report, mesh = built("propeller_blade")
     assert _groups(mesh) == {"blade": 3, "contact": 2, "root": 2}
     pts = mesh.points
     tets = _cells(mesh, "blade", "tetra")

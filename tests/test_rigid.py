@@ -1,22 +1,27 @@
 """Rigid bodies with prescribed motion: exact kinematics, outward normals, contact-load reports.
 
 Surfaces are gmsh surface meshes (a closed cylinder and a sphere, 'contact' group only) written
-into tmp_path. References: rigid-body kinematics (circular motion, v = v0 + w x r), Rodrigues'
-formula vs scipy's rotation, outward normals of convex closed surfaces, the divergence theorem
-for the enclosed volume, and the definitions of resultant force and moment.
+into tmp_path, and the top face of a block (the ``gmsh_box`` fixture of conftest.py) read both
+as a rigid body and as an elastic structure. References: rigid-body kinematics (circular motion,
+v = v0 + w x r), Rodrigues' formula vs scipy's rotation, outward normals of convex closed
+surfaces, the divergence theorem for the enclosed volume, and the definitions of resultant force
+and moment.
 """
 
 from __future__ import annotations
 
 import math
 
-import gmsh
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from pdfem.fem.rigid import RigidBody, read_surface, rotation_matrix
+from pdfem.fem.elasticity import ElasticMaterial
+from pdfem.fem.mesh import load_mesh
+from pdfem.fem.structure import ElasticStructure
 from pdfem.fem.surface import ContactSurface, orient_outward
+from pdfem.meshing import gmsh_session
 
 R_CYL, LEN = 0.2, 0.5
 R_SPH = 0.3
@@ -26,10 +31,7 @@ CENTRE = np.array([1.0, -0.5, 0.25])
 def write_surface(path, shape, size):
     """Surface-only mesh of a closed cylinder (axis z, base at CENTRE) or a sphere at CENTRE,
     all faces in the group 'contact'."""
-    gmsh.initialize(interruptible=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add(shape)
+    with gmsh_session(shape) as gmsh:
         if shape == "cylinder":
             gmsh.model.occ.addCylinder(*CENTRE, 0.0, 0.0, LEN, R_CYL)
         else:
@@ -38,10 +40,7 @@ def write_surface(path, shape, size):
         gmsh.option.setNumber("Mesh.MeshSizeMax", size)
         gmsh.model.addPhysicalGroup(2, [s for _, s in gmsh.model.getEntities(2)], name="contact")
         gmsh.model.mesh.generate(2)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
         gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return path
 
 
@@ -187,3 +186,52 @@ def test_missing_surface_group_lists_groups(sphere_file):
     """A missing group raises ValueError listing the file's groups."""
     with pytest.raises(ValueError, match="group 'hull' not in .*; the file has groups: contact"):
         RigidBody.from_msh(sphere_file, "hull")
+
+
+def test_rigid_and_elastic_bodies_expose_the_same_surface(tmp_path, gmsh_box):
+    """A rigid body and an elastic structure read from the same file's 'contact' group (the top
+    face z = W of a tetrahedral block) expose the same ContactSurface: the same nodes, the same
+    triangles with the same outward normals (+z), zero velocities at rest, the same total force
+    and moment of the same nodal forces, and a step that leaves an unloaded body at rest
+    (references: the box geometry and the resultant definitions sum f, sum (x - a) x f)."""
+    LX, LY, W = 0.3, 0.2, 0.1
+    path = gmsh_box(tmp_path / "block.msh", (LX, LY, W), volume_groups=["block"],
+                    face_groups={"contact": ["z1"], "fixed": ["x0"]}, size=0.05)
+    steel = ElasticMaterial(density=7850.0, youngs_modulus=210e9, poisson_ratio=0.3)
+    elastic = ElasticStructure(load_mesh(path), steel, fixed_groups=["fixed"], contact_group="contact")
+    rigid = RigidBody.from_msh(path, "contact")
+    bodies = (rigid, elastic)
+    assert all(isinstance(b, ContactSurface) for b in bodies)
+    # the same nodes in possibly different order: match them by position
+    order = [np.lexsort(b.surface_points().T) for b in bodies]
+    x = [b.surface_points()[o] for b, o in zip(bodies, order)]
+    assert len(x[0]) == len(x[1]) == rigid.n_surface_nodes == elastic.n_surface_nodes
+    assert x[0] == pytest.approx(x[1], abs=1e-15)
+    assert np.all(x[0][:, 2] == pytest.approx(W))
+    # the same triangles (as sets of positions) with outward normals +z, covering LX LY
+    for b in bodies:
+        tri = b.surface_points()[b.surface_triangles]
+        assert b.surface_triangles.shape[1] == 3
+        area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        assert area.sum() == pytest.approx(LX * LY, rel=1e-12)
+        assert b.facet_normals() == pytest.approx(np.tile([0.0, 0.0, 1.0], (len(tri), 1)), abs=1e-12)
+        assert np.all(b.surface_velocities() == 0.0)
+    centroids = [b.surface_points()[b.surface_triangles].mean(axis=1) for b in bodies]
+    centroids = [c[np.lexsort(np.round(c, 12).T)] for c in centroids]
+    assert centroids[0] == pytest.approx(centroids[1], abs=1e-15)
+    # the same forces (given per node, in each body's own node order) give the same resultants
+    f = np.random.default_rng(5).standard_normal((len(x[0]), 3))
+    about = np.array([0.1, -0.2, 0.3])
+    for b, o in zip(bodies, order):
+        fb = np.empty_like(f)
+        fb[o] = f
+        b.add_surface_forces(fb)
+        assert b.total_surface_force() == pytest.approx(f.sum(axis=0), abs=1e-12)
+        assert b.total_surface_moment(about) == pytest.approx(np.cross(x[0] - about, f).sum(axis=0), abs=1e-12)
+        b.clear_surface_forces()
+        assert np.all(b.total_surface_force() == 0.0)
+        dt = min(b.stable_time_step(), 1e-6)
+        assert dt > 0
+        b.step(dt)
+        assert np.all(b.surface_velocities() == 0.0)
+    assert rigid.stable_time_step() == math.inf and np.isfinite(elastic.stable_time_step())
