@@ -14,6 +14,7 @@ from scipy.spatial import cKDTree
 
 from pdfem.pd import kernels as kn
 from pdfem.pd.family import build_family
+from pdfem.pd.influence import bond_weights, cubic_influence, isotropy_gain
 
 DX = 1e-2
 DELTA = 3.015 * DX
@@ -26,6 +27,7 @@ def moduli(nu: float) -> tuple[float, float]:
 
 
 K, MU = moduli(0.3)
+GAIN = isotropy_gain(DELTA / DX)  # the cubic-lattice influence function (bodies from shapes)
 
 
 def lattice(nx: int, ny: int | None = None, nz: int | None = None, dx: float = DX) -> np.ndarray:
@@ -51,64 +53,109 @@ def kdtree_pairs(x: np.ndarray, delta: float):
 class Body:
     """A lattice block with its pairs, weighted volume and scratch arrays."""
 
-    def __init__(self, shape=(8, 8, 8), dx=DX, delta=DELTA, vol=None, n_chunks=None):
+    def __init__(self, shape=(8, 8, 8), dx=DX, delta=DELTA, vol=None, n_chunks=None, gain=GAIN):
         self.x = lattice(*shape, dx=dx)
         self.n = len(self.x)
         self.dx, self.delta = dx, delta
         self.row_ptr, self.nbr, self.xi = kdtree_pairs(self.x, delta)
+        self.wt = bond_weights(self.x, self.row_ptr, self.nbr, self.xi, delta, dx, gain)
         self.vol = np.full(self.n, dx**3) if vol is None else vol
         self.ws = kn.PairWorkspace(self.row_ptr, self.nbr, n_chunks)
-        self.m = kn.weighted_volume(self.row_ptr, self.nbr, self.xi, self.vol, delta, dx, self.ws)
+        self.m = kn.weighted_volume(self.row_ptr, self.nbr, self.xi, self.wt, self.vol, self.ws)
         self.broken = np.zeros(len(self.nbr), np.uint8)
         self.nofail = np.zeros(self.n, np.uint8)
 
     def theta(self, y):
         th = np.empty(self.n)
-        kn.dilatation(y, self.row_ptr, self.nbr, self.xi, self.broken, self.vol, self.m,
-                      self.delta, self.dx, th, self.ws)
+        kn.dilatation(y, self.row_ptr, self.nbr, self.xi, self.wt, self.broken, self.vol, self.m,
+                      th, self.ws)
         return th
 
     def forces(self, y, th, s0=math.inf, K=K, mu=MU):
         f = np.empty((self.n, 3))
-        nb = kn.forces(y, self.row_ptr, self.nbr, self.xi, self.broken, self.vol, self.m, th,
-                       K, mu, self.delta, self.dx, s0, self.nofail, f, self.ws)
+        nb = kn.forces(y, self.row_ptr, self.nbr, self.xi, self.wt, self.broken, self.vol, self.m,
+                       th, K, mu, s0, self.nofail, f, self.ws)
         return f, nb
 
     def energy(self, y, K=K, mu=MU):
         th = self.theta(y)
-        W = kn.strain_energy(y, self.row_ptr, self.nbr, self.xi, self.broken, self.vol, self.m,
-                             th, K, mu, self.delta, self.dx, self.ws)
+        W = kn.strain_energy(y, self.row_ptr, self.nbr, self.xi, self.wt, self.broken, self.vol,
+                             self.m, th, K, mu, self.ws)
         return float((W * self.vol).sum())
 
     def surface_distance(self, size):
         return np.min(np.minimum(self.x, np.asarray(size) * self.dx - self.x), axis=1)
 
 
-def test_weighted_volume_interior_matches_lattice_sum():
-    """Reference: direct sum over the 122 integer vectors |v| <= 3.015 (the full 3-D family)."""
-    b = Body((10, 10, 10))
-    v = np.stack(np.meshgrid(*[np.arange(-3, 4)] * 3, indexing="ij"), -1).reshape(-1, 3)
+def lattice_vectors(factor=3.015):
+    """The integer vectors 0 < |v| <= factor, their lengths and partial-volume factors."""
+    r = int(factor)
+    v = np.stack(np.meshgrid(*[np.arange(-r, r + 1)] * 3, indexing="ij"), -1).reshape(-1, 3)
     ln = np.linalg.norm(v, axis=1)
-    v, ln = v[(ln > 0) & (ln <= 3.015)], ln[(ln > 0) & (ln <= 3.015)]
+    keep = (ln > 0) & (ln <= factor)
+    return v[keep], ln[keep], np.minimum(1.0, factor + 0.5 - ln[keep])
+
+
+@pytest.mark.parametrize("gain", [0.0, GAIN])
+def test_weighted_volume_interior_matches_lattice_sum(gain):
+    """Reference: direct sum over the 122 integer vectors |v| <= 3.015 (the full 3-D family),
+    with w = 1 and with the cubic influence function w = 1 + g (sum n^4 - 3/5) written out here
+    (float32 bond weights: 1e-7)."""
+    b = Body((10, 10, 10), gain=gain)
+    v, ln, beta = lattice_vectors()
     assert len(v) == 122
-    beta = np.minimum(1.0, (3.015 + 0.5 - ln))
-    m_ref = np.sum((ln * DX) ** 2 * beta) * DX**3
+    n = v / ln[:, None]
+    w = 1.0 + gain * (n[:, 0] ** 4 + n[:, 1] ** 4 + n[:, 2] ** 4 - 0.6)
+    m_ref = np.sum(w * (ln * DX) ** 2 * beta) * DX**3
     inner = b.surface_distance(10) > DELTA
-    np.testing.assert_allclose(b.m[inner], m_ref, rtol=1e-13)
+    np.testing.assert_allclose(b.m[inner], m_ref, rtol=1e-7)
     assert np.all(b.m[~inner] < m_ref)
 
 
-def test_uniform_strain_patch():
+@pytest.mark.parametrize("factor, g_expect", [(3.015, 1.017), (4.015, 0.347), (2.5, -0.321)])
+def test_isotropy_gain_makes_the_fourth_moment_isotropic(factor, g_expect):
+    """Reference: the isotropic rank-4 tensor (m/15)(d_ij d_kl + d_ik d_jl + d_il d_jk), with
+    m = sum w |xi|^2 beta, against the full fourth moment sum w |xi|^2 beta n_i n_j n_k n_l over
+    the lattice family (all 81 entries, by numpy einsum), to 1e-12; and the second moment (m/3) I.
+    Without the weight (g = 0) the fourth moment is not isotropic (A / 3B = 0.870 at 3.015)."""
+    g = isotropy_gain(factor)
+    assert g == pytest.approx(g_expect, abs=1e-3)
+    v, ln, beta = lattice_vectors(factor)
+    n = v / ln[:, None]
+    d = np.eye(3)
+    iso4 = (np.einsum("ij,kl->ijkl", d, d) + np.einsum("ik,jl->ijkl", d, d)
+            + np.einsum("il,jk->ijkl", d, d))
+    for gain, isotropic in ((g, True), (0.0, False)):
+        c = cubic_influence(n, gain) * ln**2 * beta
+        m = c.sum()
+        M4 = np.einsum("p,pi,pj,pk,pl->ijkl", c, n, n, n, n)
+        M2 = np.einsum("p,pi,pj->ij", c, n, n)
+        np.testing.assert_allclose(M2, m / 3 * d, rtol=0, atol=1e-13 * m)
+        err = np.abs(M4 - m / 15 * iso4).max() / m
+        assert (err < 1e-12) == isotropic
+    assert np.all(cubic_influence(n, g) > 0)
+
+
+def test_isotropy_gain_refuses_too_small_horizons():
+    """Reference: with only the 6 axis neighbours (horizon 1.2 dx) the fourth moment has
+    B = 0 for every weight, so no positive weight can give A = 3B."""
+    with pytest.raises(ValueError, match="too small"):
+        isotropy_gain(1.2)
+
+
+@pytest.mark.parametrize("gain", [0.0, GAIN])
+def test_uniform_strain_patch(gain):
     """Reference: LPS theory, theta = tr(eps) under a uniform strain, and zero force in the bulk.
 
-    On a cubic lattice the partial-volume weighted family sum of |xi|^2 M M is (m/3) I (cubic
-    symmetry), so theta = tr(eps) up to O(|eps|^2) for particles whose family is complete
-    (farther than delta from the surface). The force at i also involves theta_j and m_j of its
-    neighbours, so it vanishes (to round-off) only where those are bulk values too: particles
-    farther than 2 delta from the surface (the brief's 12^3 block has none, hence 16^3).
+    On a cubic lattice the weighted family sum of w beta |xi|^2 M M is (m/3) I for any weight
+    with cubic symmetry (w = 1 and the cubic influence function), so theta = tr(eps) up to
+    O(|eps|^2) for particles whose family is complete (farther than delta from the surface). The
+    force at i also involves theta_j and m_j of its neighbours, so it vanishes (to round-off)
+    only where those are bulk values too: particles farther than 2 delta from the surface (the
+    brief's 12^3 block has none, hence 16^3).
     """
     size = 16
-    b = Body((size,) * 3)
+    b = Body((size,) * 3, gain=gain)
     eps = np.array([[1.0, 0.4, -0.3], [0.4, -0.5, 0.2], [-0.3, 0.2, 0.8]]) * 1e-6
     y = b.x + b.x @ eps.T
     th = b.theta(y)
@@ -123,29 +170,32 @@ def test_uniform_strain_patch():
     assert nbroken == 0
 
 
-def test_bulk_stiffness_matches_lattice_moment_sums():
+@pytest.mark.parametrize("gain", [0.0, GAIN])
+def test_bulk_stiffness_matches_lattice_moment_sums(gain):
     """Reference: the LPS energy of a homogeneous strain, W = (K - 5mu/3) theta^2 / 2 +
-    (15 mu / 2m) sum_j w (M.eps.M)^2 with w = |xi|^2 beta V, evaluated by direct sums over the
+    (15 mu / 2m) sum_j c (M.eps.M)^2 with c = w |xi|^2 beta V, evaluated by direct sums over the
     122 lattice vectors. Gives c11 = K - 5mu/3 + 15 mu A / m and c44 = 15 mu B / m with
-    A = sum w Mx^4, B = sum w Mx^2 My^2. (On this lattice A / 3B = 0.870, not 1: the discrete
-    LPS is cubic, with E = 0.888 E_input and nu = 0.322 along the lattice axes for nu = 0.3.)"""
-    b = Body((12, 12, 12))
+    A = sum c Mx^4, B = sum c Mx^2 My^2. With w = 1, A / 3B = 0.870, not 1: the discrete LPS is
+    cubic, with E = 0.888 E_input and nu = 0.322 along the lattice axes for nu = 0.3. With the
+    cubic influence function A = 3B, and c11 = K + 4mu/3, c44 = mu: isotropic elasticity."""
+    b = Body((12, 12, 12), gain=gain)
     c = np.argmin(np.linalg.norm(b.x - b.x.mean(axis=0), axis=1))
-    v = np.stack(np.meshgrid(*[np.arange(-3, 4)] * 3, indexing="ij"), -1).reshape(-1, 3)
-    ln = np.linalg.norm(v, axis=1)
-    keep = (ln > 0) & (ln <= 3.015)
-    M, ln = v[keep] / ln[keep, None], ln[keep] * DX
-    w = ln**2 * np.minimum(1.0, (DELTA + 0.5 * DX - ln) / DX) * DX**3
+    v, ln, beta = lattice_vectors()
+    M, ln = v / ln[:, None], ln * DX
+    w = cubic_influence(M, gain) * ln**2 * beta * DX**3
     A, B = np.sum(w * M[:, 0] ** 4), np.sum(w * M[:, 0] ** 2 * M[:, 1] ** 2)
-    assert A / (3 * B) == pytest.approx(0.870, abs=1e-3)
+    assert A / (3 * B) == pytest.approx(0.870 if gain == 0.0 else 1.0, abs=1e-3)
     c11 = K - 5 * MU / 3 + 15 * MU * A / w.sum()
     c44 = 15 * MU * B / w.sum()
+    if gain != 0.0:
+        assert c11 == pytest.approx(K + 4 * MU / 3, rel=1e-12)
+        assert c44 == pytest.approx(MU, rel=1e-12)
     shear = np.array([[0.0, 0.5, 0.0], [0.5, 0.0, 0.0], [0.0, 0.0, 0.0]])
     # W = c11 exx^2 / 2 for exx = 1e-6, and W = 2 c44 exy^2 for exy = 0.5e-6
     for eps, expect in ((np.diag([1.0, 0.0, 0.0]), c11), (shear, c44)):
         y = b.x + 1e-6 * b.x @ eps.T
-        W = kn.strain_energy(y, b.row_ptr, b.nbr, b.xi, b.broken, b.vol, b.m, b.theta(y), K, MU,
-                             DELTA, DX, b.ws)
+        W = kn.strain_energy(y, b.row_ptr, b.nbr, b.xi, b.wt, b.broken, b.vol, b.m, b.theta(y),
+                             K, MU, b.ws)
         assert W[c] == pytest.approx(0.5e-12 * expect, rel=1e-5)
 
 
@@ -178,10 +228,10 @@ def test_pair_loop_matches_full_family_loop():
 
     br2 = broken0.copy()
     th2 = np.empty(b.n)
-    kn.dilatation_family(y, fam_ptr, fam_nbr, fam_bond, b.xi, br2, b.vol, b.m, DELTA, DX, th2)
+    kn.dilatation_family(y, fam_ptr, fam_nbr, fam_bond, b.xi, b.wt, br2, b.vol, b.m, th2)
     f2 = np.empty((b.n, 3))
-    nb2 = kn.forces_family(y, fam_ptr, fam_nbr, fam_bond, b.xi, br2, b.vol, b.m, th2, K, MU,
-                           DELTA, DX, s0, b.nofail, f2)
+    nb2 = kn.forces_family(y, fam_ptr, fam_nbr, fam_bond, b.xi, b.wt, br2, b.vol, b.m, th2, K, MU,
+                           s0, b.nofail, f2)
 
     np.testing.assert_allclose(th2, th, rtol=0, atol=1e-12 * np.abs(th).max())
     np.testing.assert_allclose(f2, f, rtol=0, atol=1e-12 * np.abs(f).max())
@@ -195,11 +245,13 @@ def test_pair_loop_matches_full_family_loop():
 
 
 def reference_energy(b: Body, y, K=K, mu=MU):
-    """The LPS energy written out directly in numpy (w = 1, partial volumes)."""
+    """The LPS energy written out directly in numpy (cubic influence function, partial volumes;
+    the bond weights computed here in float64)."""
     i = np.repeat(np.arange(b.n), np.diff(b.row_ptr))
     j = b.nbr.astype(np.int64)
     ok = b.broken == 0
-    beta = np.minimum(1.0, (b.delta + 0.5 * b.dx - b.xi) / b.dx)
+    n = (b.x[j] - b.x[i]) / b.xi[:, None]
+    beta = np.minimum(1.0, (b.delta + 0.5 * b.dx - b.xi) / b.dx) * cubic_influence(n, GAIN)
     e = np.linalg.norm(y[j] - y[i], axis=1) - b.xi
     th = np.zeros(b.n)
     np.add.at(th, i[ok], (b.xi * e * beta * b.vol[j])[ok])
@@ -218,7 +270,7 @@ def test_energy_matches_direct_formula_and_forces_are_its_gradient():
     energy itself against a direct numpy evaluation of the formula."""
     b = Body((6, 6, 6))
     y = random_state(b, 1e-3, 3)
-    assert b.energy(y) == pytest.approx(reference_energy(b, y), rel=1e-12)
+    assert b.energy(y) == pytest.approx(reference_energy(b, y), rel=1e-6)  # float32 weights
     f, _ = b.forces(y, b.theta(y))
     fv = f * b.vol[:, None]
     rng = np.random.default_rng(4)
@@ -270,9 +322,9 @@ def test_bond_breaking_and_damage():
     for s, expect in ((s0 * (1 - 1e-6), 0), (s0 * (1 + 1e-6), 1)):
         y = np.array([[0.0, 0, 0], [DX * (1 + s), 0, 0]])
         br, th, f = np.zeros(1, np.uint8), np.empty(2), np.empty((2, 3))
-        kn.dilatation(y, rp, nbr, xi, br, vol, m, DELTA, DX, th)
-        nb = kn.forces(y, rp, nbr, xi, br, vol, m, th, K, MU, DELTA, DX, s0,
-                       np.zeros(2, np.uint8), f)
+        wt = np.ones(1, np.float32)
+        kn.dilatation(y, rp, nbr, xi, wt, br, vol, m, th)
+        nb = kn.forces(y, rp, nbr, xi, wt, br, vol, m, th, K, MU, s0, np.zeros(2, np.uint8), f)
         assert nb == expect and br[0] == expect
         assert (np.abs(f).max() == 0.0) == bool(expect)  # a bond breaking now gives no force
 
@@ -339,8 +391,8 @@ def test_fused_step_equals_dilatation_then_forces():
         f, nb = b.forces(y, th, s0=1e-3)
         br1, b.broken = b.broken, br0
         th2, f2 = np.empty(b.n), np.empty((b.n, 3))
-        nb2 = kn.dilatation_and_forces(y, b.row_ptr, b.nbr, b.xi, b.broken, b.vol, b.m, K, MU,
-                                       DELTA, DX, 1e-3, b.nofail, th2, f2, b.ws)
+        nb2 = kn.dilatation_and_forces(y, b.row_ptr, b.nbr, b.xi, b.wt, b.broken, b.vol, b.m, K,
+                                       MU, 1e-3, b.nofail, th2, f2, b.ws)
         assert nb2 == nb > 0
         assert np.array_equal(th2, th) and np.array_equal(f2, f)
         assert np.array_equal(b.broken, br1)
@@ -356,14 +408,15 @@ def test_empty_and_isolated_particles():
     """Reference: a particle without bonds has m = 0, theta = 0, no force and no damage."""
     x = np.array([[0.0, 0, 0], [1.0, 0, 0], [1.0 + DX, 0, 0]])
     rp, nbr, xi = kdtree_pairs(x, DELTA)
+    wt = bond_weights(x, rp, nbr, xi, DELTA, DX, GAIN)
     vol = np.full(3, DX**3)
-    m = kn.weighted_volume(rp, nbr, xi, vol, DELTA, DX)
+    m = kn.weighted_volume(rp, nbr, xi, wt, vol)
     assert m[0] == 0.0 and m[1] > 0
     y = x.copy()
     y[2, 0] += 1e-5
     th, f = np.empty(3), np.empty((3, 3))
-    kn.dilatation(y, rp, nbr, xi, np.zeros(1, np.uint8), vol, m, DELTA, DX, th)
-    kn.forces(y, rp, nbr, xi, np.zeros(1, np.uint8), vol, m, th, K, MU, DELTA, DX, math.inf,
+    kn.dilatation(y, rp, nbr, xi, wt, np.zeros(1, np.uint8), vol, m, th)
+    kn.forces(y, rp, nbr, xi, wt, np.zeros(1, np.uint8), vol, m, th, K, MU, math.inf,
               np.zeros(3, np.uint8), f)
     assert th[0] == 0.0 and np.all(f[0] == 0.0) and np.all(np.isfinite(f))
     assert f[1, 0] > 0 > f[2, 0]
@@ -391,8 +444,8 @@ def test_max_eigenvalue_time_step_matches_dense_eigenvalues():
     """Reference: numpy eigvalsh of the dense finite-difference Jacobian of a 5^3 block."""
     b = Body((5, 5, 5))
     lam = fd_jacobian_eigmax(b, K, MU)
-    dt = kn.max_eigenvalue_time_step(b.x, b.row_ptr, b.nbr, b.xi, b.broken, b.vol, b.m, K, MU,
-                                     DELTA, DX, RHO, ws=b.ws)
+    dt = kn.max_eigenvalue_time_step(b.x, b.row_ptr, b.nbr, b.xi, b.wt, b.broken, b.vol, b.m, K,
+                                     MU, DX, RHO, ws=b.ws)
     assert dt == pytest.approx(2 / math.sqrt(lam), rel=1e-6)
 
 
@@ -405,20 +458,20 @@ def test_stable_time_step_is_below_true_limit(shape, nu):
     numpy evaluation of its formula gives the same number."""
     Kn, mun = moduli(nu)
     b = Body(shape)
-    true = kn.max_eigenvalue_time_step(b.x, b.row_ptr, b.nbr, b.xi, b.broken, b.vol, b.m, Kn,
-                                       mun, DELTA, DX, RHO, ws=b.ws)
-    lps = kn.stable_time_step(b.row_ptr, b.nbr, b.xi, b.vol, DELTA, DX, RHO, Kn, mun, b.ws)
+    true = kn.max_eigenvalue_time_step(b.x, b.row_ptr, b.nbr, b.xi, b.wt, b.broken, b.vol, b.m,
+                                       Kn, mun, DX, RHO, ws=b.ws)
+    lps = kn.stable_time_step(b.row_ptr, b.nbr, b.xi, b.wt, b.vol, DELTA, RHO, Kn, mun, b.ws)
     assert 0.35 * true < lps <= true
-    sa = kn.stable_time_step(b.row_ptr, b.nbr, b.xi, b.vol, DELTA, DX, RHO, Kn, ws=b.ws)
+    sa = kn.stable_time_step(b.row_ptr, b.nbr, b.xi, b.wt, b.vol, DELTA, RHO, Kn, ws=b.ws)
     i = np.repeat(np.arange(b.n), np.diff(b.row_ptr))
-    beta = np.minimum(1.0, (DELTA + 0.5 * DX - b.xi) / DX)
+    beta = b.wt.astype(np.float64)  # omega = w beta
     s = (np.bincount(i, beta * b.vol[b.nbr] / b.xi, b.n)
          + np.bincount(b.nbr, beta * b.vol[i] / b.xi, b.n))
     c = 18 * Kn / (math.pi * DELTA**4)
     assert sa == pytest.approx(np.min(np.sqrt(2 * RHO / (c * s))), rel=1e-12)
     if min(shape) >= 10:
         assert sa <= true
-    if shape == (16, 16, 1):
+    if shape == (16, 16, 1) and nu < 0.4:
         assert sa > true  # the reason for the LPS bound: thin bodies break the SA estimate
 
 
@@ -438,8 +491,8 @@ def verlet_run(b: Body, dt: float, steps: int, K=K, mu=MU):
     for step in range(steps):
         kn.verlet_kick(v, f, 1.0 / RHO, 0.5 * dt)
         if v_prev is not None:
-            W = kn.strain_energy(y, b.row_ptr, b.nbr, b.xi, b.broken, b.vol, b.m, th, K, mu,
-                                 DELTA, DX, b.ws)
+            W = kn.strain_energy(y, b.row_ptr, b.nbr, b.xi, b.wt, b.broken, b.vol, b.m, th, K,
+                                 mu, b.ws)
             en = 0.5 * np.sum(mass[:, None] * v_prev * v) + np.sum(W * b.vol)
             e0 = en if e0 is None else e0
             dev = max(dev, abs(en / e0 - 1.0))
@@ -460,10 +513,10 @@ def test_verlet_is_stable_at_the_stable_step_and_diverges_beyond_the_true_limit(
     sum(m v_{n-1/2} . v_{n+1/2}) / 2 + U(y_n) exactly while it is stable; at 1.5x the true
     critical step (eigenvalue check) the solution must blow up."""
     b = Body((6, 6, 6))
-    dt_sa = kn.stable_time_step(b.row_ptr, b.nbr, b.xi, b.vol, DELTA, DX, RHO, K, ws=b.ws)
-    dt_lps = kn.stable_time_step(b.row_ptr, b.nbr, b.xi, b.vol, DELTA, DX, RHO, K, MU, b.ws)
-    true = kn.max_eigenvalue_time_step(b.x, b.row_ptr, b.nbr, b.xi, b.broken, b.vol, b.m, K, MU,
-                                       DELTA, DX, RHO, ws=b.ws)
+    dt_sa = kn.stable_time_step(b.row_ptr, b.nbr, b.xi, b.wt, b.vol, DELTA, RHO, K, ws=b.ws)
+    dt_lps = kn.stable_time_step(b.row_ptr, b.nbr, b.xi, b.wt, b.vol, DELTA, RHO, K, MU, b.ws)
+    true = kn.max_eigenvalue_time_step(b.x, b.row_ptr, b.nbr, b.xi, b.wt, b.broken, b.vol, b.m, K,
+                                       MU, DX, RHO, ws=b.ws)
     assert verlet_run(b, dt_sa, 2000) < 1e-3
     assert verlet_run(b, dt_lps, 2000) < 1e-3
     assert verlet_run(b, 1.5 * true, 2000) > 1e3

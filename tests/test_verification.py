@@ -91,12 +91,13 @@ def test_wave_speed_in_slender_bar():
     assert T == pytest.approx(T_exact, rel=0.03)
 
 
-@pytest.mark.xfail(strict=True, reason="cubic-lattice anisotropy at horizon 3.015 dx gives nu = 0.322-0.327 "
-                   "along the lattice axes (lattice sums); isotropy correction pending")
 def test_recovered_youngs_modulus_and_poisson_ratio():
     """A block under uniaxial stress (traction on its end faces, dynamic relaxation): the interior
     strains give E and nu within 3 % of the input, nu = 0.3 (Hooke's law; shows the state-based
-    model is free of bond-based PD's nu = 1/4)."""
+    model is free of bond-based PD's nu = 1/4). It needs both bond-weight corrections of lattice
+    bodies: with w = 1 the lattice LPS is cubic (here E = 0.99 E, nu = 0.327), with the cubic
+    influence function alone the stiff surface layers of the 14 x 14 section give E = 1.12 E
+    (pdfem.pd.influence, pdfem.pd.surface)."""
     nx, ny, nz, dx = 36, 14, 14, 0.01
     b = block(nx, ny, nz, dx)
     sigma = 1e6  # Pa
@@ -189,7 +190,12 @@ def test_notched_bar_fracture_energy():
                 first_break = stretch(b.y)[newly]
                 assert stretch(y_before)[live].max() <= s0
         if k % 100 == 0 and first_break is not None:
-            ok = b.broken == 0
+            # bonds between particles that keep at least 30 % of their family: debris hanging on
+            # by a few bonds links the halves like a two-bar linkage that pivots instead of
+            # stretching and carries no load (one along the top face kept the halves "connected"
+            # for 20000 steps after the crack had gone through)
+            keep = b.damage() < 0.7
+            ok = (b.broken == 0) & keep[i_of_bond] & keep[b.nbr]
             g = coo_matrix((np.ones(ok.sum()), (i_of_bond[ok], b.nbr[ok])), shape=(b.n, b.n))
             _, label = connected_components(g, directed=False)
             if label[il] != label[ir]:

@@ -66,17 +66,16 @@ def _warm_up(horizon_factor: float) -> None:
     n = x.shape[0]
     vol = np.ones(n)
     ws = kn.PairWorkspace(row_ptr, nbr, n_chunks=max(2, numba.get_num_threads()))
-    m = kn.weighted_volume(row_ptr, nbr, xi, vol, horizon_factor * dx, dx, ws)
+    wt = kn.bond_weights(x, row_ptr, nbr, xi, horizon_factor * dx, dx, 1.0)
+    m = kn.weighted_volume(row_ptr, nbr, xi, wt, vol, ws)
     th, f = np.empty(n), np.empty((n, 3))
     br, nf = np.zeros(len(nbr), np.uint8), np.zeros(n, np.uint8)
-    kn.dilatation(x, row_ptr, nbr, xi, br, vol, m, horizon_factor * dx, dx, th, ws)
-    kn.forces(x, row_ptr, nbr, xi, br, vol, m, th, 1.0, 1.0, horizon_factor * dx, dx, 1.0, nf, f,
-              ws)
-    kn.dilatation_and_forces(x, row_ptr, nbr, xi, br, vol, m, 1.0, 1.0, horizon_factor * dx, dx,
-                             1.0, nf, th, f, ws)
+    kn.dilatation(x, row_ptr, nbr, xi, wt, br, vol, m, th, ws)
+    kn.forces(x, row_ptr, nbr, xi, wt, br, vol, m, th, 1.0, 1.0, 1.0, nf, f, ws)
+    kn.dilatation_and_forces(x, row_ptr, nbr, xi, wt, br, vol, m, 1.0, 1.0, 1.0, nf, th, f, ws)
     fam = build_family(row_ptr, nbr, n)
-    kn.dilatation_family(x, *fam, xi, br, vol, m, horizon_factor * dx, dx, th)
-    kn.forces_family(x, *fam, xi, br, vol, m, th, 1.0, 1.0, horizon_factor * dx, dx, 1.0, nf, f)
+    kn.dilatation_family(x, *fam, xi, wt, br, vol, m, th)
+    kn.forces_family(x, *fam, xi, wt, br, vol, m, th, 1.0, 1.0, 1.0, nf, f)
 
 
 def _timed(step, broken, steps: int) -> tuple[float, float, int]:
@@ -144,20 +143,22 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
     vol = np.full(npart, dx**3)
     nofail = np.zeros(npart, np.uint8)
     ws = kn.PairWorkspace(row_ptr, nbr)
-    m = kn.weighted_volume(row_ptr, nbr, xi, vol, delta, dx, ws)
+    # bond weights of a cubic lattice body: influence function times partial-volume factor
+    wt = kn.bond_weights(x, row_ptr, nbr, xi, delta, dx, kn.isotropy_gain(horizon_factor))
+    m = kn.weighted_volume(row_ptr, nbr, xi, wt, vol, ws)
     theta = np.empty(npart)
     f_pair = np.empty((npart, 3))
     f_fam = np.empty((npart, 3))
     load = os.getloadavg()[0]
 
     def pair_step(broken):
-        return kn.dilatation_and_forces(y, row_ptr, nbr, xi, broken, vol, m, K, mu, delta, dx,
-                                        s0, nofail, theta, f_pair, ws)
+        return kn.dilatation_and_forces(y, row_ptr, nbr, xi, wt, broken, vol, m, K, mu, s0,
+                                        nofail, theta, f_pair, ws)
 
     def separate_step(broken):
-        kn.dilatation(y, row_ptr, nbr, xi, broken, vol, m, delta, dx, theta, ws)
-        return kn.forces(y, row_ptr, nbr, xi, broken, vol, m, theta, K, mu, delta, dx, s0,
-                         nofail, f_fam, ws)
+        kn.dilatation(y, row_ptr, nbr, xi, wt, broken, vol, m, theta, ws)
+        return kn.forces(y, row_ptr, nbr, xi, wt, broken, vol, m, theta, K, mu, s0, nofail,
+                         f_fam, ws)
 
     broken = np.zeros(npairs, np.uint8)
     t_pair, best_pair, nbroken = _timed(pair_step, broken, steps)
@@ -168,9 +169,9 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
     coef = np.empty((npart, 2))
 
     def family_step(broken):
-        kn.dilatation_family(y, fam_ptr, fam_nbr, fam_bond, xi, broken, vol, m, delta, dx, theta)
-        return kn.forces_family(y, fam_ptr, fam_nbr, fam_bond, xi, broken, vol, m, theta, K, mu,
-                                delta, dx, s0, nofail, f_fam, coef)
+        kn.dilatation_family(y, fam_ptr, fam_nbr, fam_bond, xi, wt, broken, vol, m, theta)
+        return kn.forces_family(y, fam_ptr, fam_nbr, fam_bond, xi, wt, broken, vol, m, theta, K,
+                                mu, s0, nofail, f_fam, coef)
 
     broken_fam = np.zeros(npairs, np.uint8)
     t_fam, best_fam, nbroken_fam = _timed(family_step, broken_fam, steps)

@@ -4,6 +4,13 @@ The class holds flat arrays and calls the numba kernels of :mod:`pdfem.pd.kernel
 loops over particles or bonds of its own. Particles are numbered in cell order (the order the
 neighbour search sorts them into), so bond partners sit close in memory.
 
+Bodies filled with a cubic lattice (:meth:`IceBody.from_shape`, hence every body of a case file)
+weigh their bonds with the cubic influence function of :mod:`pdfem.pd.influence`, which makes the
+lattice LPS isotropic (E and nu as input, not E = 0.89 E_input and nu = 0.32 along the lattice
+axes), and correct the weights near free surfaces (:mod:`pdfem.pd.surface`), which removes the
+stiff surface layers of the LPS; bodies from arbitrary point clouds
+(:meth:`IceBody.from_points`) use w = 1 and no correction unless asked.
+
 One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (kg/m^3)::
 
     v += dt/2 (f/rho + g)        kick
@@ -23,6 +30,8 @@ import numpy as np
 from . import kernels
 from .bonds import bond_lengths, cut_crack
 from .family import build_family
+from .influence import bond_weights, isotropy_gain
+from .surface import surface_corrected_weights
 from .lattice import fill
 from .material import IceMaterial
 from .search import cell_pairs
@@ -69,6 +78,8 @@ class IceBody:
     f: np.ndarray = None      # (N,3) force density, N/m^3
     m: np.ndarray = None      # (N,) weighted volume, m^5
     theta: np.ndarray = None  # (N,) dilatation
+    weight: np.ndarray = None  # (P,) float32 bond weights omega = w beta
+    influence_gain: float = 0.0  # gain g of the cubic influence function (0: w = 1)
     loop: str = "pairs"
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     fixed: np.ndarray = None  # (N,) bool
@@ -78,7 +89,8 @@ class IceBody:
 
     @classmethod
     def from_points(cls, name: str, x: np.ndarray, material: IceMaterial, dx: float, delta: float,
-                    *, loop: str = "pairs", volume: np.ndarray | None = None) -> "IceBody":
+                    *, loop: str = "pairs", volume: np.ndarray | None = None,
+                    isotropic: bool = False, surface_correction: bool = False) -> "IceBody":
         """Build a body from particle positions: cell-sort them, find bonds, set up state.
 
         Parameters
@@ -97,7 +109,23 @@ class IceBody:
             ``"pairs"`` (the particle-pair loop) or ``"full_family"`` (per-particle reference).
         volume
             Optional (N,) particle volumes, m^3, in the order of ``x``.
+        isotropic
+            Weigh the bonds with the cubic influence function that makes a cubic lattice of
+            spacing ``dx`` aligned with the axes isotropic
+            (:func:`pdfem.pd.influence.isotropy_gain`); only right for such lattices.
+            False: w = 1.
+        surface_correction
+            Correct the bond weights so that every family's second moment is isotropic
+            (:func:`pdfem.pd.surface.surface_corrected_weights`).
+
+        Raises
+        ------
+        ValueError
+            For an unknown ``loop``, or ``isotropic`` with a horizon too small for it.
         """
+        if loop not in ("pairs", "full_family"):
+            raise ValueError(f"unknown PD loop {loop!r}; valid: 'pairs', 'full_family'")
+        gain = isotropy_gain(delta / dx) if isotropic else 0.0
         x = np.ascontiguousarray(x, dtype=np.float64)
         perm, row_ptr, nbr = cell_pairs(x, delta)
         x0 = np.ascontiguousarray(x[perm])
@@ -113,18 +141,27 @@ class IceBody:
         body.f = np.zeros_like(x0)
         body.theta = np.zeros(n)
         body.fixed = np.zeros(n, dtype=bool)
+        body.influence_gain = gain
+        body.weight = bond_weights(x0, row_ptr, nbr, body.xi_len, body.delta, body.dx, gain)
+        if surface_correction:
+            body.weight = surface_corrected_weights(x0, row_ptr, nbr, body.xi_len, body.weight, vol)
         body._ws = kernels.PairWorkspace(row_ptr, nbr)
-        body.m = kernels.weighted_volume(row_ptr, nbr, body.xi_len, vol, body.delta, body.dx, body._ws)
+        body.m = kernels.weighted_volume(row_ptr, nbr, body.xi_len, body.weight, vol, body._ws)
         if loop == "full_family":
             body._family = build_family(row_ptr, nbr, n)
-        elif loop != "pairs":
-            raise ValueError(f"unknown PD loop {loop!r}; valid: 'pairs', 'full_family'")
         return body
 
     @classmethod
     def from_shape(cls, name: str, shape, material: IceMaterial, dx: float, delta: float,
                    **kwargs) -> "IceBody":
-        """Fill ``shape`` (a :mod:`pdfem.shapes` object) with a cubic lattice of spacing ``dx``."""
+        """Fill ``shape`` (a :mod:`pdfem.shapes` object) with a cubic lattice of spacing ``dx``.
+
+        The lattice is aligned with the axes, so the bonds get the isotropic cubic influence
+        function and the surface correction by default (``isotropic=True``,
+        ``surface_correction=True``); other keywords as in :meth:`from_points`.
+        """
+        kwargs.setdefault("isotropic", True)
+        kwargs.setdefault("surface_correction", True)
         return cls.from_points(name, fill(shape, dx), material, dx, delta, **kwargs)
 
     # -- set-up ------------------------------------------------------------------------------
@@ -170,16 +207,15 @@ class IceBody:
         """
         mat = self.material
         if self.loop == "pairs":
-            kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
-                               self.m, self.delta, self.dx, self.theta, self._ws)
-            return kernels.forces(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
-                                  self.m, self.theta, mat.K, mat.mu, self.delta, self.dx, self.s0,
-                                  self.nofail, self.f, self._ws)
+            return kernels.dilatation_and_forces(self.y, self.row_ptr, self.nbr, self.xi_len,
+                                                 self.weight, self.broken, self.vol, self.m, mat.K,
+                                                 mat.mu, self.s0, self.nofail, self.theta, self.f,
+                                                 self._ws)
         fam_ptr, fam_nbr, fam_bond = self._family
-        kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.broken,
-                                  self.vol, self.m, self.delta, self.dx, self.theta)
-        return kernels.forces_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.broken,
-                                     self.vol, self.m, self.theta, mat.K, mat.mu, self.delta, self.dx,
+        kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.weight,
+                                  self.broken, self.vol, self.m, self.theta)
+        return kernels.forces_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.weight,
+                                     self.broken, self.vol, self.m, self.theta, mat.K, mat.mu,
                                      self.s0, self.nofail, self.f)
 
     def _apply_constraints(self, t: float) -> None:
@@ -200,25 +236,42 @@ class IceBody:
         return power
 
     def stable_time_step(self) -> float:
-        """Silling & Askari's stable step estimate (s) for this body (no safety factor)."""
-        return kernels.stable_time_step(self.row_ptr, self.nbr, self.xi_len, self.vol, self.delta,
-                                        self.dx, self.material.density, self.material.K)
+        """A stable velocity-Verlet step (s) for this body, safe for every body shape.
+
+        The smaller of Silling & Askari's estimate and the Gershgorin bound of the linearised
+        LPS (:func:`pdfem.pd.timestep.stable_time_step` without and with ``mu``), both with the
+        bond weights. The Gershgorin bound is guaranteed below the true critical step for any
+        shape; Silling & Askari's estimate is not for bodies one or two particles thick, and it
+        only wins (is smaller) on bodies where it is safe. No further safety factor is applied.
+        """
+        mat = self.material
+        args = (self.row_ptr, self.nbr, self.xi_len, self.weight, self.vol, self.delta,
+                mat.density, mat.K)
+        return min(kernels.stable_time_step(*args, ws=self._ws),
+                   kernels.stable_time_step(*args, mat.mu, self._ws))
 
     def start(self) -> None:
         """Compute the forces of the initial state (call once before the first step)."""
         self._apply_constraints(self.time)
         self.compute_forces()
 
-    def step(self, dt: float) -> int:
-        """Advance by ``dt`` (s) with velocity Verlet; returns the number of bonds broken."""
+    def step(self, dt: float, after_drift=None) -> int:
+        """Advance by ``dt`` (s) with velocity Verlet; returns the number of bonds broken.
+
+        ``after_drift(y_old)``, if given, is called right after the position update with the
+        positions before it; it may correct ``y`` and ``v`` in place (contact does).
+        """
         inv_rho = 1.0 / self.material.density
         half = 0.5 * dt
         t0 = self.time
         p0 = self._constraint_force(t0) if self.constraints else 0.0
         self.v += half * (self.f * inv_rho + self.gravity)
         self._apply_constraints(t0 + half)
+        y_old = self.y.copy() if after_drift is not None else None
         self.y += dt * self.v
         self.time = t0 + dt
+        if after_drift is not None:
+            after_drift(y_old)
         nbroken = self.compute_forces()
         self.v += half * (self.f * inv_rho + self.gravity)
         self._apply_constraints(self.time)
@@ -243,10 +296,10 @@ class IceBody:
         """Elastic energy of the unbroken bonds at the current positions, J."""
         mat = self.material
         theta = np.empty(self.n)  # of the current bond set (bonds broken this step excluded)
-        kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
-                           self.m, self.delta, self.dx, theta, self._ws)
-        W = kernels.strain_energy(self.y, self.row_ptr, self.nbr, self.xi_len, self.broken, self.vol,
-                                  self.m, theta, mat.K, mat.mu, self.delta, self.dx, self._ws)
+        kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight, self.broken,
+                           self.vol, self.m, theta, self._ws)
+        W = kernels.strain_energy(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight,
+                                  self.broken, self.vol, self.m, theta, mat.K, mat.mu, self._ws)
         return float(np.dot(W, self.vol))
 
     def gravity_potential(self) -> float:

@@ -11,6 +11,7 @@ import numpy as np
 from ..config import IceConfig, RunConfig
 from ..errors import InputError
 from .body import IceBody
+from .influence import isotropy_gain
 
 
 def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:
@@ -30,6 +31,11 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
     IceBody
         The body at rest in its reference state (initial velocity applied), forces not yet computed.
     """
+    try:
+        isotropy_gain(cfg.horizon / cfg.dx)
+    except ValueError as exc:
+        raise InputError(file, f"{cfg.field}.horizon_factor", str(exc),
+                         cfg.horizon / cfg.dx) from None
     try:
         body = IceBody.from_shape(cfg.name, cfg.shape, cfg.material, cfg.dx, cfg.horizon, loop=run.pd_loop)
     except ValueError as exc:

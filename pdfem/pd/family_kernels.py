@@ -1,0 +1,160 @@
+"""The per-particle full-family loop of the original PD algorithm: the reference LPS kernels.
+
+Every particle loops over its whole family (:func:`pdfem.pd.family.build_family`), so every
+bond is computed twice, once from each end, and each particle writes only its own entries (no
+races, no chunking). The pair loops of :mod:`pdfem.pd.pair_kernels` compute the same quantities
+with the same formulas and bond weights; tests and the step benchmark compare the two.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numba import prange
+
+from .pair_kernels import check_weight, force_coefficients
+from .workspace import FASTMATH, U64, c_contiguous
+
+@numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
+def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, m, wt, theta):
+    y = y2.reshape(y2.size)
+    for i in prange(fam_ptr.shape[0] - 1):
+        yi0 = y[3 * i]
+        yi1 = y[3 * i + 1]
+        yi2 = y[3 * i + 2]
+        acc = 0.0
+        for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
+            k = U64(fam_bond[q])
+            if broken[k] != 0:
+                continue
+            j = U64(fam_nbr[q])
+            j3 = U64(3) * j
+            l = xi_len[k]
+            d0 = y[j3] - yi0
+            d1 = y[j3 + U64(1)] - yi1
+            d2 = y[j3 + U64(2)] - yi2
+            r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            acc += wt[k] * l * (r - l) * vol[j]
+        theta[i] = 3.0 * acc / m[i] if m[i] > 0.0 else 0.0
+
+
+@numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
+def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, coef2, wt, s0,
+                   nofail, fout):
+    y = y2.reshape(y2.size)
+    coef = coef2.reshape(coef2.size)
+    f = fout.reshape(fout.size)
+    nb = 0
+    for i in prange(fam_ptr.shape[0] - 1):
+        yi0 = y[3 * i]
+        yi1 = y[3 * i + 1]
+        yi2 = y[3 * i + 2]
+        ai = coef[2 * i]
+        bi = coef[2 * i + 1]
+        can_i = nofail[i] == 0
+        iu = U64(i)
+        fx = 0.0
+        fy = 0.0
+        fz = 0.0
+        for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
+            k = U64(fam_bond[q])
+            if broken[k] != 0:
+                continue
+            j = U64(fam_nbr[q])
+            j3 = U64(3) * j
+            l = xi_len[k]
+            d0 = y[j3] - yi0
+            d1 = y[j3 + U64(1)] - yi1
+            d2 = y[j3 + U64(2)] - yi2
+            r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            e = r - l
+            if e > s0 * l and can_i and nofail[j] == 0:
+                # Both ends reach the same decision from the same stretch; only the smaller
+                # index marks and counts the bond, so the count is exact. (The larger end may
+                # read the flag before or after that write: it skips the bond either way.)
+                if iu < j:
+                    broken[k] = 1
+                    nb += 1
+                continue
+            j2 = U64(2) * j
+            g = ((ai + coef[j2]) * l + (bi + coef[j2 + U64(1)]) * e) * wt[k] / r
+            g *= vol[j]
+            fx += g * d0
+            fy += g * d1
+            fz += g * d2
+        f[3 * i] = fx
+        f[3 * i + 1] = fy
+        f[3 * i + 2] = fz
+    return nb
+
+
+def dilatation_family(
+    y: np.ndarray,
+    fam_ptr: np.ndarray,
+    fam_nbr: np.ndarray,
+    fam_bond: np.ndarray,
+    xi_len: np.ndarray,
+    weight: np.ndarray,
+    broken: np.ndarray,
+    vol: np.ndarray,
+    m: np.ndarray,
+    theta_out: np.ndarray,
+) -> None:
+    """Dilatation by the per-particle full-family loop (reference for the pair loop).
+
+    ``fam_ptr``, ``fam_nbr``, ``fam_bond`` come from :func:`pdfem.pd.family.build_family`; the
+    other parameters are as in :func:`pdfem.pd.pair_kernels.dilatation`.
+    """
+    _dilatation_family(c_contiguous(y, "y"), fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, m,
+                       check_weight(weight, xi_len), theta_out)
+
+
+def forces_family(
+    y: np.ndarray,
+    fam_ptr: np.ndarray,
+    fam_nbr: np.ndarray,
+    fam_bond: np.ndarray,
+    xi_len: np.ndarray,
+    weight: np.ndarray,
+    broken: np.ndarray,
+    vol: np.ndarray,
+    m: np.ndarray,
+    theta: np.ndarray,
+    K: float,
+    mu: float,
+    s0: float,
+    nofail: np.ndarray,
+    f_out: np.ndarray,
+    coef: np.ndarray | None = None,
+) -> int:
+    """Force density by the per-particle full-family loop (reference for the pair loop).
+
+    Every bond is evaluated from both ends; each particle writes only its own force. A bond
+    breaking in this call is marked by its smaller-index end (both ends reach the same decision
+    from the same stretch, so the larger end needs no write and the count is exact).
+
+    Parameters
+    ----------
+    fam_ptr, fam_nbr, fam_bond
+        Family lists from :func:`pdfem.pd.family.build_family`.
+    coef
+        Optional (N, 2) float64 scratch for the per-particle coefficients.
+    others
+        As in :func:`pdfem.pd.pair_kernels.forces`.
+
+    Returns
+    -------
+    int
+        Number of bonds broken in this call.
+    """
+    n = fam_ptr.shape[0] - 1
+    if coef is None:
+        coef = np.empty((n, 2))
+    force_coefficients(True, m, theta, K, mu, coef)
+    return int(_forces_family(c_contiguous(y, "y"), fam_ptr, fam_nbr, fam_bond, xi_len, broken,
+                              vol, c_contiguous(coef, "coef"), check_weight(weight, xi_len),
+                              float(s0), nofail, c_contiguous(f_out, "f_out")))
+
+

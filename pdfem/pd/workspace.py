@@ -1,0 +1,216 @@
+"""Race-free, deterministic parallel loops over a unique-pair list: chunks and overflow buffers.
+
+The pair kernels (:mod:`pdfem.pd.pair_kernels`) loop over unique bonds i < j grouped by i (CSR:
+``row_ptr`` int64 (N+1,), ``nbr`` int32 (P,)) and add each bond's contribution to both ends.
+To do that in parallel without data races, the particles (rows) are cut into C chunks of equal
+pair count (:class:`PairWorkspace`); a ``prange`` over chunks accumulates the i side of each row
+in registers and writes the j side directly into the output when j lies in the chunk's own rows
+and otherwise into the chunk's overflow buffer (pairs point forwards, j > i, so only later rows
+can be hit from outside). A second ``prange`` over chunks adds the overflow buffers of the
+earlier chunks in fixed chunk order (:func:`add_overflow1`, :func:`add_overflow3`). The result is
+therefore bit-identical from run to run for a given chunk count (by default the number of numba
+threads). Small pair lists (fewer than ``SERIAL_BELOW_PAIRS``) get one chunk and run a serial
+build of the same kernel (:func:`twin`).
+"""
+
+from __future__ import annotations
+
+import types
+
+import numba
+import numpy as np
+
+FASTMATH = {"nsz", "arcp", "contract", "reassoc"}
+U64 = np.uint64
+
+# Below these sizes the kernels run their serial build: a parallel region costs more than the
+# work, and a lot more when the machine is oversubscribed (the threads wait at a barrier for a
+# descheduled peer).
+SERIAL_BELOW_PAIRS = 50_000
+SERIAL_BELOW_PARTICLES = 20_000
+
+
+class Twin:
+    """A kernel compiled twice: thread-parallel (``prange``) and serial (``prange`` = range).
+
+    Called as ``kernel(parallel, *args)``. The serial build is a clone of the function under
+    another qualified name, so both builds have their own on-disk cache entries.
+    """
+
+    __slots__ = ("par", "ser")
+
+    def __init__(self, pyfunc, fastmath):
+        fm = FASTMATH if fastmath else False
+        self.par = numba.njit(parallel=True, cache=True, fastmath=fm, error_model="numpy")(pyfunc)
+        clone = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__ + "_serial",
+                                   pyfunc.__defaults__, pyfunc.__closure__)
+        clone.__qualname__ = pyfunc.__qualname__ + "_serial"
+        clone.__doc__ = pyfunc.__doc__
+        self.ser = numba.njit(cache=True, fastmath=fm, error_model="numpy")(clone)
+
+    def __call__(self, parallel, *args):
+        return (self.par if parallel else self.ser)(*args)
+
+
+def twin(fastmath: bool = True):
+    """Decorator: compile a kernel as a :class:`Twin` (``fastmath`` uses ``FASTMATH``)."""
+    return lambda pyfunc: Twin(pyfunc, fastmath)
+
+
+@numba.njit(cache=True)
+def add_overflow1(t, cb, ov_ptr, ov, col, out):
+    """Add the overflow of chunks 0..t-1 (in that order) into the rows of chunk t."""
+    r0 = cb[t]
+    r1 = cb[t + 1]
+    for c in range(t):
+        s = cb[c + 1]
+        base = ov_ptr[c]
+        e = s + (ov_ptr[c + 1] - base)
+        lo = max(s, r0)
+        hi = min(e, r1)
+        for p in range(lo, hi):
+            out[p] += ov[base + p - s, col]
+
+
+@numba.njit(cache=True)
+def add_overflow3(t, cb, ov_ptr, ov, out):
+    """:func:`add_overflow1` for (N, 3) outputs (all three columns)."""
+    for col in range(3):
+        add_overflow1(t, cb, ov_ptr, ov, col, out[:, col])
+
+
+@numba.njit(cache=True)
+def _pairs_forward(row_ptr, nbr):
+    """True when every pair of row i has i < nbr[k] < N (what the chunked loops rely on)."""
+    n = row_ptr.shape[0] - 1
+    for i in range(n):
+        if row_ptr[i + 1] < row_ptr[i]:
+            return False
+        for k in range(row_ptr[i], row_ptr[i + 1]):
+            j = nbr[k]
+            if j <= i or j >= n:
+                return False
+    return True
+
+
+@numba.njit(cache=True)
+def _chunk_split(row_ptr, nbr, cb):
+    """Per chunk, the first row with a partner beyond the chunk (rows before it need no check)."""
+    C = cb.shape[0] - 1
+    split = cb[1:].copy()
+    for c in range(C):
+        for i in range(cb[c], cb[c + 1]):
+            hit = False
+            for k in range(row_ptr[i], row_ptr[i + 1]):
+                if nbr[k] >= cb[c + 1]:
+                    hit = True
+                    break
+            if hit:
+                split[c] = i
+                break
+    return split
+
+
+class PairWorkspace:
+    """Chunk layout and scratch buffers for the pair loops over one pair list.
+
+    Build it once per pair list and pass it to every kernel call (the kernels make a temporary
+    one when none is given).
+
+    Parameters
+    ----------
+    row_ptr, nbr
+        The CSR pair list (int64 (N+1,), int32 (P,)); every pair must have i < nbr[k] < N.
+    n_chunks
+        Number of chunks C; default ``numba.get_num_threads()``, or 1 for fewer than
+        ``SERIAL_BELOW_PAIRS`` pairs. With C = 1 the kernels run their serial build. Results are
+        bit-identical run to run for the same C.
+
+    Attributes
+    ----------
+    chunk_ptr
+        int64 (C+1,) first row of each chunk (chunks hold equal numbers of pairs).
+    split
+        int64 (C,) first row of each chunk with a partner beyond the chunk; the hot loops check
+        for overflow only from there on.
+    ov_ptr
+        int64 (C+1,) offsets of each chunk's overflow rows in ``ov``; chunk c's overflow covers
+        particles ``chunk_ptr[c+1] : chunk_ptr[c+1] + ov_ptr[c+1] - ov_ptr[c]``.
+    ov
+        float64 (ov_ptr[-1], 3) overflow buffer.
+    coef
+        float64 (N, 2) per-particle force coefficients (theta (3K - 5mu) / m, 15 mu / m).
+    bond_length
+        float64 (P,) current bond lengths kept by
+        :func:`pdfem.pd.pair_kernels.dilatation_and_forces` (None until that is first called).
+    """
+
+    def __init__(self, row_ptr: np.ndarray, nbr: np.ndarray, n_chunks: int | None = None):
+        row_ptr = np.asarray(row_ptr)
+        nbr = np.asarray(nbr)
+        n = row_ptr.shape[0] - 1
+        if n < 0 or row_ptr[0] != 0 or row_ptr[-1] != nbr.shape[0]:
+            raise ValueError("row_ptr must start at 0 and end at the number of pairs len(nbr)")
+        if not _pairs_forward(row_ptr, nbr):
+            raise ValueError(
+                "the pair list must hold unique pairs i < j grouped by i (nbr[k] > i for k in "
+                "row i, and every index below N)"
+            )
+        P = nbr.shape[0]
+        if n_chunks is None:
+            C = 1 if P < SERIAL_BELOW_PAIRS else int(numba.get_num_threads())
+        else:
+            C = int(n_chunks)
+        C = max(1, min(C, max(n, 1)))
+        targets = (np.arange(C + 1, dtype=np.int64) * P) // C
+        cb = np.searchsorted(row_ptr, targets, side="left").astype(np.int64)
+        cb[0] = 0
+        cb[-1] = n
+        cb = np.maximum.accumulate(cb)
+        ov_len = np.zeros(C, dtype=np.int64)
+        for c in range(C):
+            k0, k1 = row_ptr[cb[c]], row_ptr[cb[c + 1]]
+            if k1 > k0:
+                ov_len[c] = max(0, int(nbr[k0:k1].max()) + 1 - int(cb[c + 1]))
+        self.n = n
+        self.n_pairs = P
+        self.n_chunks = C
+        self.chunk_ptr = cb
+        self.split = _chunk_split(row_ptr, nbr, cb)
+        self.ov_ptr = np.concatenate(([0], np.cumsum(ov_len))).astype(np.int64)
+        self.ov = np.zeros((int(self.ov_ptr[-1]), 3))
+        self.coef = np.empty((n, 2))
+        self.counts = np.zeros(C, dtype=np.int64)
+        self.parallel = C > 1
+        self.bond_length: np.ndarray | None = None
+
+    def bond_length_buffer(self) -> np.ndarray:
+        """The (P,) float64 bond-length scratch of the fused step (allocated on first use)."""
+        if self.bond_length is None:
+            self.bond_length = np.empty(self.n_pairs)
+        return self.bond_length
+
+    def check(self, row_ptr: np.ndarray, nbr: np.ndarray) -> None:
+        """Raise ValueError if this workspace was not built for a list of this size."""
+        if row_ptr.shape[0] - 1 != self.n or nbr.shape[0] != self.n_pairs:
+            raise ValueError(
+                f"workspace built for {self.n} particles and {self.n_pairs} pairs, got "
+                f"{row_ptr.shape[0] - 1} and {nbr.shape[0]}"
+            )
+
+
+def c_contiguous(a: np.ndarray, name: str) -> np.ndarray:
+    """``a`` itself if C-contiguous (the kernels index flat views), else ValueError."""
+    if not a.flags.c_contiguous:
+        raise ValueError(f"{name} must be a C-contiguous array")
+    return a
+
+
+def workspace_for(ws: PairWorkspace | None, row_ptr: np.ndarray, nbr: np.ndarray) -> PairWorkspace:
+    """``ws`` checked against the pair list, or a new workspace for it when ``ws`` is None."""
+    if ws is None:
+        return PairWorkspace(row_ptr, nbr)
+    ws.check(row_ptr, nbr)
+    return ws
+
+
