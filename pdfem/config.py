@@ -39,6 +39,21 @@ Shape of a case file::
     loads = [ { group = "contact", pressure = 1e5, pulse = { start = 0, rise = 1e-3, hold = 2e-3, fall = 1e-3 } } ]
     # kind = "rigid": motion = { velocity = [..] (m/s), angular_velocity = [..] (rad/s), center = [..] (m) }
 
+    [[contact]]                # which ice body meets which structure (default: every pair)
+    ice = "sheet"
+    structure = "panel"
+    name = "sheet-panel"       # default "<ice>-<structure>"
+    friction = 0.0             # Coulomb coefficient
+    search_radius = 0.0        # m; 0 = half the ice spacing dx
+
+    [[monitor]]                # a probe recorded at every coupling step
+    name = "mid"
+    structure = "panel"
+    point = [1.0, 0.6, 0.0]    # m; the nearest node (u) and the element containing it (von_mises)
+
+The coupling step is the larger of the ice and structure stable steps; the faster side takes
+``run.substeps`` steps per coupling step (0 or absent = chosen automatically).
+
 Shapes and regions are one of ``box = {min, max}``, ``cylinder = {base, axis, radius, length}``,
 ``sphere = {center, radius}`` or (shapes only) ``mesh = {file, group}`` for a closed surface mesh
 (path relative to the case file).
@@ -160,6 +175,7 @@ class RunConfig:
     pd_loop: str = "pairs"
     gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     title: str = ""
+    substeps: int = 0
 
 
 @dataclass(frozen=True)
@@ -261,12 +277,37 @@ class StructureConfig:
 
 
 @dataclass(frozen=True)
+class ContactConfig:
+    """Contact between one ice body and one structure's contact surface."""
+
+    name: str
+    ice: str
+    structure: str
+    friction: float = 0.0
+    search_radius: float = 0.0   # m; 0 = half the ice spacing
+    field: str = ""
+
+
+@dataclass(frozen=True)
+class MonitorConfig:
+    """A probe on a structure: displacement of the node nearest ``point`` and von Mises stress
+    of the element containing it, recorded at every coupling step."""
+
+    name: str
+    structure: str
+    point: tuple[float, float, float]
+    field: str = ""
+
+
+@dataclass(frozen=True)
 class Case:
     """A validated case: what to simulate and how."""
 
     run: RunConfig
     ice: tuple[IceConfig, ...]
     structures: tuple[StructureConfig, ...] = ()
+    contacts: tuple[ContactConfig, ...] = ()
+    monitors: tuple[MonitorConfig, ...] = ()
     file: str = "<built-in>"
     text: str = ""
     directory: Path = field(default_factory=Path.cwd)
@@ -438,8 +479,60 @@ def _run(t: Table) -> RunConfig:
     title = t.raw("title", "")
     if not isinstance(title, str):
         raise t.error("title", "expected a string", title)
+    sub = t.raw("substeps", 0)
+    if isinstance(sub, bool) or not isinstance(sub, int) or sub < 0:
+        raise t.error("substeps", "expected a whole number >= 0 (0 = automatic)", sub)
     t.done()
-    return RunConfig(end, out, dt, sf, loop, g, title)
+    return RunConfig(end, out, dt, sf, loop, g, title, sub)
+
+
+def _contacts(top: Table, ice: tuple[IceConfig, ...],
+              structures: tuple[StructureConfig, ...]) -> tuple[ContactConfig, ...]:
+    tables = top.tables("contact")
+    if not tables:  # default: every ice body meets every structure
+        return tuple(ContactConfig(f"{b.name}-{s.name}", b.name, s.name) for b in ice
+                     for s in structures)
+    ice_names = [b.name for b in ice]
+    st_names = [s.name for s in structures]
+    out: list[ContactConfig] = []
+    for t in tables:
+        b = t.string("ice")
+        if b not in ice_names:
+            raise t.error("ice", "no ice body of that name; the case has: "
+                          + (", ".join(ice_names) or "(none)"), b)
+        st = t.string("structure")
+        if st not in st_names:
+            raise t.error("structure", "no structure of that name; the case has: "
+                          + (", ".join(st_names) or "(none)"), st)
+        name = t.string("name", f"{b}-{st}")
+        if any(c.name == name for c in out):
+            raise t.error("name", "contact names must be unique", name)
+        if any((c.ice, c.structure) == (b, st) for c in out):
+            raise t.error("structure", f"ice '{b}' and structure '{st}' already have a contact")
+        mu = t.number("friction", 0.0, low=0.0)
+        r = t.number("search_radius", 0.0, low=0.0, unit="m")
+        t.done()
+        out.append(ContactConfig(name, b, st, mu, r, t.path))
+    return tuple(out)
+
+
+def _monitors(top: Table, structures: tuple[StructureConfig, ...]) -> tuple[MonitorConfig, ...]:
+    names = [s.name for s in structures]
+    out: list[MonitorConfig] = []
+    for t in top.tables("monitor"):
+        name = t.string("name")
+        if any(m.name == name for m in out):
+            raise t.error("name", "monitor names must be unique", name)
+        st = t.string("structure")
+        if st not in names:
+            raise t.error("structure", "no structure of that name; the case has: "
+                          + (", ".join(names) or "(none)"), st)
+        if next(s for s in structures if s.name == st).kind != "elastic":
+            raise t.error("structure", "monitors need an elastic structure", st)
+        point = t.vector("point", unit="m")
+        t.done()
+        out.append(MonitorConfig(name, st, point, t.path))
+    return tuple(out)
 
 
 def parse_case(text: str, file: str = "<string>", directory: Path | None = None) -> Case:
@@ -480,8 +573,11 @@ def parse_case(text: str, file: str = "<string>", directory: Path | None = None)
     for i, n in enumerate(names):
         if n in names[:i]:
             raise InputError(file, f"{fields[i]}.name", "body and structure names must be unique", n)
+    contacts = _contacts(top, ice, structures)
+    monitors = _monitors(top, structures)
     top.done()
-    return Case(run=run, ice=ice, structures=structures, file=file, text=text, directory=directory)
+    return Case(run=run, ice=ice, structures=structures, contacts=contacts, monitors=monitors,
+                file=file, text=text, directory=directory)
 
 
 def load_case(path: str | Path) -> Case:

@@ -1,9 +1,11 @@
-"""The time loop of a run: build the bodies of a case, advance them, write results.
+"""The time loop of a run: build the bodies of a case, advance them together, write results.
 
-The driver knows the physics objects and the results writer, nothing of numba or MPI. It steps
-every ice body with one global time step (the smallest stable step times the safety factor,
-or the case's ``time_step``), writes a frame every ``output_interval`` and an energy history
-(kinetic, strain, external work, and the energy taken out by broken bonds as the balance).
+The driver knows the physics objects, the coupler and the results writer, nothing of numba or
+MPI. Each coupling step (:class:`pdfem.coupling.coupler.Coupler`) advances the structures and
+the ice bodies, the faster side subcycling, with surface-element contact between the pairs the
+case names. Results: a frame every ``output_interval`` (ice and structure fields, energies,
+structure reactions), and at every coupling step the ice load on each structure (force,
+moment, particles in contact) and the monitor probes.
 """
 
 from __future__ import annotations
@@ -19,7 +21,9 @@ import numpy as np
 
 from . import __version__
 from .config import Case
-from .errors import InstabilityError
+from .coupling.contact import SurfaceContact, overlapping
+from .coupling.coupler import ContactPair, Coupler, substep_counts
+from .errors import InputError, InstabilityError
 from .io import ResultsWriter
 from .fem.build import build_structure
 from .fem.structure import ElasticStructure
@@ -52,7 +56,8 @@ class RunSummary:
 
 
 def critical_step(obj) -> float:
-    """Stable-step limit (s) of an ice body (Silling & Askari) or a structure (2/omega_max)."""
+    """Stable-step limit (s) of an ice body (the smaller of Silling & Askari's estimate and a
+    guaranteed bound) or a structure (2/omega_max); ``inf`` for a rigid body."""
     if isinstance(obj, IceBody):
         return obj.stable_time_step()
     if isinstance(obj, ElasticStructure):
@@ -60,17 +65,29 @@ def critical_step(obj) -> float:
     return math.inf  # rigid bodies move as prescribed
 
 
-def choose_time_step(case: Case, bodies: list, log=print) -> float:
-    """The global step (s): the case's ``time_step`` or safety_factor x the smallest stable step."""
-    estimate = min(critical_step(b) for b in bodies)
-    if not math.isfinite(estimate):
-        estimate = case.run.output_interval / 10
-    if case.run.time_step is None:
-        return case.run.safety_factor * estimate
-    if case.run.time_step > estimate:
-        warnings.warn(f"{case.file}: run.time_step = {case.run.time_step:.3e} s exceeds the stable "
-                      f"estimate {estimate:.3e} s (Silling & Askari); the run may blow up", stacklevel=2)
-    return case.run.time_step
+def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float, int, int]:
+    """The coupling step (s) and the substeps of the ice and of the structures per step.
+
+    The ice step is the case's ``time_step`` or safety_factor x the smallest stable ice step;
+    the structure step is safety_factor x the smallest critical structure step. The faster side
+    subcycles (:func:`pdfem.coupling.coupler.substep_counts`); ``run.substeps`` overrides the
+    count. The coupling step is then shortened so that a whole number of steps ends the run.
+    """
+    run = case.run
+    ice = min((critical_step(b) for b in bodies), default=math.inf)
+    if run.time_step is not None:
+        if run.time_step > ice:
+            warnings.warn(f"{case.file}: run.time_step = {run.time_step:.3e} s exceeds the stable "
+                          f"ice step {ice:.3e} s; the run may blow up", stacklevel=2)
+        ice = run.time_step
+    else:
+        ice *= run.safety_factor
+    st = run.safety_factor * min((critical_step(s) for s in structures), default=math.inf)
+    if not math.isfinite(ice) and not math.isfinite(st):
+        ice = run.output_interval / 10  # rigid bodies only
+    dt, n_ice, n_st = substep_counts(ice, st, run.substeps)
+    nsteps = max(1, math.ceil(run.end_time / dt - 1e-9))
+    return run.end_time / nsteps, n_ice, n_st
 
 
 def _structure_fields(s) -> dict[str, np.ndarray]:
@@ -87,6 +104,16 @@ def _energies(bodies: list[IceBody]) -> dict[str, float]:
     return {"kinetic": kin, "strain": strain, "gravity_potential": pot, "external_work": work}
 
 
+def _system_energies(structures: list, coupler: Coupler) -> dict[str, float]:
+    """Energies (J) of the elastic structures, and the work done on the ice by rigid bodies
+    (minus the work of the contact loads on them)."""
+    elastic = [s for s in structures if isinstance(s, ElasticStructure)]
+    return {"structure_kinetic": sum(s.kinetic_energy() for s in elastic),
+            "structure_strain": sum(s.strain_energy() for s in elastic),
+            "rigid_body_work": -sum(coupler.contact_work[id(s)] for s in structures
+                                    if not isinstance(s, ElasticStructure))}
+
+
 def _check_finite(bodies: list[IceBody], t: float) -> None:
     for b in bodies:
         bad = ~np.isfinite(b.y).all(axis=1) | ~np.isfinite(b.v).all(axis=1)
@@ -96,6 +123,30 @@ def _check_finite(bodies: list[IceBody], t: float) -> None:
                 f"the state of ice body '{b.name}' became NaN/Inf at t = {t:.4e} s "
                 f"(first at particle {i}, reference position {b.x0[i].tolist()} m); "
                 "the time step is probably too large: lower run.safety_factor or run.time_step")
+
+
+def _contact_pairs(case: Case, bodies: list[IceBody], structures: list) -> list[ContactPair]:
+    by_name = {b.name: b for b in bodies} | {s.name: s for s in structures}
+    pairs = []
+    for c in case.contacts:
+        body, st = by_name[c.ice], by_name[c.structure]
+        if len(st.surface_triangles) == 0:
+            raise InputError(case.file, f"{c.field or 'contact'}.structure",
+                             f"structure '{st.name}' has no contact surface (its contact_group "
+                             "names no faces)", c.structure)
+        radius = c.search_radius or 0.5 * body.dx
+        depth = max(radius, body.delta)
+        inside = overlapping(st, body.y, depth)
+        if inside.any():
+            i = int(np.flatnonzero(inside)[0])
+            raise InputError(case.file, c.field or "contact",
+                             f"{int(inside.sum())} particles of ice '{body.name}' start inside "
+                             f"structure '{st.name}' (behind its contact surface, up to {depth:g} m "
+                             f"deep; the first at {body.x0[i].round(6).tolist()} m); move the ice "
+                             "or the structure so that they start apart")
+        pairs.append(ContactPair(c.name, body, st,
+                                 SurfaceContact(st, radius, c.friction, name=c.name)))
+    return pairs
 
 
 def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: bool | None = None,
@@ -125,10 +176,15 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     t_setup = time.perf_counter()
     bodies = [build_ice_body(cfg, case.run, case.file) for cfg in case.ice]
     structures = [build_structure(cfg, out, case.file) for cfg in case.structures]
-    dt = choose_time_step(case, bodies + structures)
+    pairs = _contact_pairs(case, bodies, structures)
+    st_by_name = {s.name: s for s in structures}
+    probes = []
+    for m in case.monitors:
+        st = st_by_name[m.structure]
+        probes.append((m, st, st.probe(m.point)))
+    dt, n_ice, n_st = choose_time_steps(case, bodies, structures)
     end = case.run.end_time
-    nsteps = max(1, math.ceil(end / dt - 1e-9))
-    dt = end / nsteps
+    nsteps = max(1, round(end / dt))
     n_part = sum(b.n for b in bodies)
     n_bonds = sum(b.n_bonds for b in bodies)
     mem = sum(b.n * 200 + b.n_bonds * 13 for b in bodies)
@@ -142,41 +198,71 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
                 f"elements, critical step {st.solver.critical_time_step():.3e} s")
         else:
             say(f"  rigid body '{st.name}': {len(st.x0):,} surface nodes")
-    say(f"  time step {dt:.3e} s, {nsteps:,} steps to {end:g} s; about {mem / 2**20:.0f} MiB of state")
+    for p in pairs:
+        say(f"  contact '{p.name}': ice '{p.body.name}' on structure '{p.structure.name}', "
+            f"search radius {p.contact.search_radius:g} m, friction {p.contact.friction:g}")
+    sub = ""
+    if n_ice > 1:
+        sub = f" (ice subcycles: {n_ice} steps of {dt / n_ice:.3e} s)"
+    elif n_st > 1:
+        sub = f" (structures subcycle: {n_st} steps of {dt / n_st:.3e} s)"
+    say(f"  coupling step {dt:.3e} s{sub}, {nsteps:,} steps to {end:g} s; "
+        f"about {mem / 2**20:.0f} MiB of state")
 
     path = out / "results.h5"
     writer = ResultsWriter(path, case.text, {"title": case.run.title, "ranks": 1,
-                                             "time_step": dt, "pd_loop": case.run.pd_loop})
+                                             "time_step": dt, "ice_substeps": n_ice,
+                                             "structure_substeps": n_st,
+                                             "pd_loop": case.run.pd_loop})
     for b in bodies:
         writer.add_ice_body(b.name, b.x0, b.vol)
-        b.start()
     for st in structures:
         if isinstance(st, ElasticStructure):
             writer.add_structure(st.name, st.points, st.cells, st.cell_type)
         else:
             writer.add_structure(st.name, st.x0, st.surface_triangles, "triangle")
+    coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st)
+    coupler.start()
 
     def frame(t: float) -> None:
         ice = {b.name: {"u": b.displacement(), "v": b.v, "damage": b.damage()} for b in bodies}
-        if structures:
-            writer.write_frame(t, ice, structures={st.name: _structure_fields(st) for st in structures})
-        else:
-            writer.write_frame(t, ice)
-        for st in structures:
+        writer.write_frame(t, ice, structures={st.name: _structure_fields(st) for st in structures})
+        e = _energies(bodies)
+        for st, cfg in zip(structures, case.structures):
             if isinstance(st, ElasticStructure):
                 hist = {"kinetic": st.kinetic_energy(), "strain": st.strain_energy()}
-                for g in case.structures[structures.index(st)].fixed_groups:
+                for g in cfg.fixed_groups:
                     hist[f"reaction_{g}"] = st.reaction(g)
                 writer.append_history(f"structures/{st.name}", t, hist)
         if not bodies:
             return
-        e = _energies(bodies)
-        e0 = initial_energy
-        e["dissipated"] = e0 + e["external_work"] - (e["kinetic"] + e["strain"] + e["gravity_potential"])
+        e.update(_system_energies(structures, coupler))
+        total = e["kinetic"] + e["strain"] + e["gravity_potential"] + e["structure_kinetic"] \
+            + e["structure_strain"]
+        e["dissipated"] = initial_energy + e["external_work"] + e["rigid_body_work"] - total
+        e["contact_dissipated"] = coupler.contact_dissipated
+        e["fracture_dissipated"] = e["dissipated"] - e["contact_dissipated"]
         writer.append_history("energy", t, e)
 
-    initial_energy = sum(_energies(bodies)[k] for k in ("kinetic", "strain", "gravity_potential"))
+    def loads(t: float) -> None:
+        for st in structures:
+            if any(p.structure is st for p in pairs):
+                force, moment, n = coupler.structure_load(st)
+                writer.append_history(f"loads/{st.name}", t,
+                                      {"force": force, "moment": moment, "contacts": n})
+        if len(pairs) > 1:
+            for p in pairs:
+                writer.append_history(f"contacts/{p.name}", t,
+                                      {"force": p.force, "moment": p.moment, "contacts": p.contacts})
+        for m, st, pr in probes:
+            u, vm = st.probe_values(pr)
+            writer.append_history(f"monitors/{m.name}", t, {"u": u, "von_mises": vm})
+
+    initial_energy = (sum(_energies(bodies)[k] for k in ("kinetic", "strain", "gravity_potential"))
+                      + sum(_system_energies(structures, coupler)[k]
+                            for k in ("structure_kinetic", "structure_strain")))
     frame(0.0)
+    loads(0.0)
     frames = 1
     say(f"  set-up {time.perf_counter() - t_setup:.1f} s; running")
     bar = Progress(end, enabled=False if quiet else progress)
@@ -185,11 +271,9 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     step = 0
     try:
         for step in range(1, nsteps + 1):
-            for b in bodies:
-                broken += b.step(dt)
-            for st in structures:
-                st.step(dt)
+            broken += coupler.step()
             t = step * dt
+            loads(t)
             if t >= next_out * (1 - 1e-9) or step == nsteps:
                 _check_finite(bodies, t)
                 frame(t)

@@ -99,11 +99,14 @@ def _detect(y, active, cell_start, cell_facets, origin, inv_h, dims, pts, tri, t
 
 @numba.njit(cache=True)
 def _respond(facet, weight, normal, y, y_old, v, mass, dt, pts, vel, tri, friction,
-             node_impulse, totals):
+             force, inv_rho, g, node_impulse, totals):
     """Move contacting particles onto the surface, set Eq. (5) velocities, book impulses.
 
     Serial over particles in index order, so the nodal sums are deterministic. ``totals``
-    accumulates: [0:3] impulse to the structure (N s), [3] contacts, [4] energy dissipated (J).
+    accumulates: [0:3] impulse to the structure (N s), [3] contacts, [4] work done on the
+    particles (J). The work is that of an impulse at the step's start time t, where the
+    velocity is v(t) = v - dt/2 (force / rho + g) (velocity Verlet's first half kick undone): the
+    correction of Eq. (5) equals replacing the drift velocity, i.e. an impulse at time t.
     """
     inv_dt = 1.0 / dt
     for i in range(facet.shape[0]):
@@ -135,18 +138,21 @@ def _respond(facet, weight, normal, y, y_old, v, mass, dt, pts, vel, tri, fricti
                 for d in range(3):
                     vbar[d] -= cut * vt[d]
                     cp[d] -= cut * vt[d] * dt
-        e_loss = 0.0
+        work = 0.0
+        for d in range(3):
+            dv = vbar[d] - v[i, d]
+            vt = v[i, d] - 0.5 * dt * (force[i, d] * inv_rho + g[d])
+            work += m * (vt * dv + 0.5 * dv * dv)
+        totals[4] += work
         for d in range(3):
             j = m * (v[i, d] - vbar[d])          # impulse to the structure, Eq. (6) x dt
             node_impulse[na, d] += u * j         # Eqs. (7)-(8), barycentric shares
             node_impulse[nb, d] += w1 * j
             node_impulse[nc, d] += w2 * j
             totals[d] += j
-            e_loss += 0.5 * m * ((v[i, d] - vw[d]) ** 2 - (vbar[d] - vw[d]) ** 2)
             y[i, d] = cp[d]
             v[i, d] = vbar[d]
         totals[3] += 1.0
-        totals[4] += e_loss
 
 
 @dataclass
@@ -155,7 +161,7 @@ class ContactStep:
 
     contacts: int
     impulse: np.ndarray        # (3,) impulse given to the structure, N s
-    dissipated: float          # kinetic energy lost in the contact, relative to the wall, J
+    work: float                # work done on the particles, J
 
 
 class SurfaceContact:
@@ -196,7 +202,6 @@ class SurfaceContact:
         self.grid = FacetGrid(self.topology.triangles, self.search_radius)
         self.node_impulse = np.zeros((len(points), 3))
         self.total_impulse = np.zeros(3)
-        self.dissipated = 0.0
         self._points = self._velocities = None
         self._normals = None
         self._facet = self._weight = self._normal = None
@@ -217,7 +222,7 @@ class SurfaceContact:
             self._normal = np.empty((n, 3))
 
     def resolve(self, y: np.ndarray, y_old: np.ndarray, v: np.ndarray, mass: np.ndarray,
-                dt: float, active: np.ndarray | None = None) -> ContactStep:
+                dt: float, active: np.ndarray | None = None, kick=None) -> ContactStep:
         """Push particles that crossed the surface back onto it (in place on ``y`` and ``v``).
 
         Parameters
@@ -234,6 +239,10 @@ class SurfaceContact:
             The step (s) from ``y_old`` to ``y``.
         active
             (N,) bool, particles that may touch this surface (default all).
+        kick
+            ``(f, rho, g)``: force density (N/m^3, (N, 3)), density (kg/m^3) and gravity
+            (m/s^2, (3,)) of the velocity-Verlet half kick that preceded the update, so that the
+            work done on the particles is exact (:attr:`ContactStep.work`); default none.
 
         Returns
         -------
@@ -248,12 +257,15 @@ class SurfaceContact:
                 t.triangles, t.tri_edges, nr[0], nr[1], nr[2], t.boundary_edge, t.boundary_node,
                 self.search_radius, self._facet, self._weight, self._normal)
         totals = np.zeros(5)
+        if kick is None:  # no half kick to undo: the work is taken at the drift velocity
+            f, inv_rho, grav = np.zeros((n, 3)), 0.0, np.zeros(3)
+        else:
+            f, inv_rho, grav = kick[0], 1.0 / kick[1], np.asarray(kick[2], dtype=np.float64)
         _respond(self._facet, self._weight, self._normal, y, y_old, v, mass, float(dt),
-                 self._points, self._velocities, t.triangles, self.friction, self.node_impulse,
-                 totals)
+                 self._points, self._velocities, t.triangles, self.friction, f, inv_rho, grav,
+                 self.node_impulse, totals)
         impulse = totals[:3].copy()
         self.total_impulse += impulse
-        self.dissipated += totals[4]
         return ContactStep(int(totals[3]), impulse, float(totals[4]))
 
     def take_impulse(self) -> np.ndarray:
@@ -272,3 +284,9 @@ class SurfaceContact:
                 t.tri_edges, nr[0], nr[1], nr[2], t.boundary_edge, t.boundary_node,
                 self.search_radius, self._facet, self._weight, self._normal)
         return self._facet >= 0
+
+
+def overlapping(surface, y: np.ndarray, depth: float) -> np.ndarray:
+    """(N,) bool: points behind ``surface`` by up to ``depth`` (m), e.g. ice that would start
+    inside a structure. A check for set-up, not for every step."""
+    return SurfaceContact(surface, depth).inside(y)

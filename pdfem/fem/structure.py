@@ -22,9 +22,11 @@ positions and normals reported to the contact code use the current one (referenc
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from collections.abc import Mapping, Sequence
 
 import numpy as np
+import skfem
 from skfem.io.meshio import HEX_MAPPING
 
 from ..errors import InstabilityError
@@ -35,6 +37,18 @@ from .mesh import FEMesh, load_mesh
 from .stress import (centre_basis, element_stress, kinetic_energy, nodal_average, reaction_force,
                      strain_energy, von_mises)
 from .surface import SurfaceBody, split_quads
+
+
+@dataclass(frozen=True)
+class Probe:
+    """A point of a structure read every step: a node and an element (see
+    :meth:`ElasticStructure.probe`)."""
+
+    node: int
+    element: int
+    node_dofs: np.ndarray       # (3,) DOFs of the node
+    element_dofs: np.ndarray    # (k,) DOFs of the element
+    gradient: np.ndarray        # (9, k) displacement gradient at the element centre per DOF
 
 
 class ElasticStructure(SurfaceBody):
@@ -234,6 +248,21 @@ class ElasticStructure(SurfaceBody):
         f[self._surface_dofs] += self._surface_forces.ravel()
         return f
 
+    def set_surface_forces(self, forces: np.ndarray) -> None:
+        """Replace the contact forces (N), (Ns, 3), effective from the current time on.
+
+        The current acceleration is updated with the change, so the central-difference steps
+        that follow integrate the new load from their start: a load held over steps summing
+        to T gives the structure exactly the impulse T x load (piecewise-constant loading).
+        """
+        old = self._surface_forces.copy()
+        super().set_surface_forces(forces)
+        change = np.zeros(self.dofmap.n_dofs)
+        change[self._surface_dofs] = (self._surface_forces - old).ravel()
+        change[self.solver.fixed] = 0.0
+        self.solver.a += change / self.solver.m
+        self.solver.f_ext = self.solver.f_ext + change
+
     # ------------------------------------------------------------------ surface interface
     def surface_points(self) -> np.ndarray:
         """(Ns, 3) current positions of the contact-surface nodes (m)."""
@@ -273,6 +302,10 @@ class ElasticStructure(SurfaceBody):
         """Kinetic energy 1/2 v.M v (J)."""
         return kinetic_energy(self.mass, self.solver.v)
 
+    def momentum(self) -> np.ndarray:
+        """(3,) linear momentum sum M v (kg m/s) with the lumped mass."""
+        return self.dofmap.to_nodal(self.solver.m * self.solver.v).sum(axis=0)
+
     def strain_energy(self) -> float:
         """Strain energy 1/2 u.K u (J)."""
         return strain_energy(self.K, self.solver.u)
@@ -288,6 +321,35 @@ class ElasticStructure(SurfaceBody):
     def nodal_von_mises(self) -> np.ndarray:
         """(Nn,) volume-weighted nodal average of the element von Mises stress (Pa)."""
         return nodal_average(self.mesh, self.von_mises(), self._volumes)
+
+    def probe(self, point) -> "Probe":
+        """A probe at ``point`` (m): the nearest node, and the element whose centre is nearest.
+
+        Probes are cheap to read every step (:meth:`probe_values`): the displacement gradient of
+        the element is one small precomputed matrix times the element's DOFs.
+        """
+        point = np.asarray(point, dtype=np.float64).reshape(3)
+        node = int(np.argmin(np.linalg.norm(self._x0 - point, axis=1)))
+        t = self.mesh.mesh.t
+        centres = self._x0[t].mean(axis=0)  # (Ne, 3)
+        element = int(np.argmin(np.linalg.norm(centres - point, axis=1)))
+        dofs = self.basis.element_dofs[:, element]
+        grad = np.empty((9, len(dofs)))
+        sub = skfem.Basis(self.mesh.mesh, self._stress_basis.elem, quadrature=(
+            self._stress_basis.X, self._stress_basis.W), elements=np.array([element]))
+        for k in range(len(dofs)):
+            e = np.zeros(self.dofmap.n_dofs)
+            e[dofs[k]] = 1.0
+            grad[:, k] = sub.interpolate(e).grad[:, :, 0, 0].ravel()
+        return Probe(node, element, self.dofmap.nodal_dofs[:, node].copy(), dofs.copy(), grad)
+
+    def probe_values(self, probe: "Probe") -> tuple[np.ndarray, float]:
+        """Displacement (m, (3,)) of the probe's node and von Mises stress (Pa) of its element."""
+        g = (probe.gradient @ self.solver.u[probe.element_dofs]).reshape(3, 3)
+        eps = 0.5 * (g + g.T)
+        lam, mu = self.material.lame
+        sigma = 2.0 * mu * eps + lam * np.trace(eps) * np.eye(3)
+        return self.solver.u[probe.node_dofs].copy(), float(von_mises(sigma))
 
     def reaction(self, group: str) -> np.ndarray:
         """(3,) force (N) that the supports at the named group's nodes exert on the structure

@@ -209,6 +209,15 @@ class SurfaceBody:
         """Reset the accumulated surface forces to zero."""
         self._surface_forces[:] = 0.0
 
+    def set_surface_forces(self, forces: np.ndarray) -> None:
+        """Replace the surface forces (N), (Ns, 3), effective from the current time on: a
+        piecewise-constant load, so that a load held over a time T gives the impulse T x load."""
+        forces = np.asarray(forces, dtype=np.float64)
+        if forces.shape != self._surface_forces.shape:
+            raise ValueError(f"surface forces must have shape {self._surface_forces.shape}, "
+                             f"got {forces.shape}")
+        self._surface_forces[:] = forces
+
     @property
     def surface_forces(self) -> np.ndarray:
         """(Ns, 3) accumulated surface forces (N), read-only view."""
