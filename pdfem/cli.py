@@ -1,10 +1,14 @@
 """The ``pdfem`` command line.
 
-    pdfem run CASE.toml [--out DIR] [--quiet] [--json]
+    pdfem run [CASE.toml] [--out DIR] [--quiet] [--json]
+    pdfem post RESULTS.h5 [--plots DIR] [--csv FILE] [--json]
     pdfem mesh MODEL [--set key=value ...] [-o FILE.msh] [--json]
     pdfem bench {search,step} [--n N] [--json]
     pdfem info [--json]
     pdfem --version
+
+``pdfem run`` without a case runs the built-in demo (``demo_ice_sheet_panel.toml`` of the
+package ``pdfem.models``) into ``results/demo_ice_sheet_panel/`` and prints its post summary.
 
 Exit status: 0 success, 2 bad input (the message names file and field), 3 a run stopped by a
 detected instability, 1 anything else. With ``--json`` standard output holds exactly one JSON
@@ -15,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib.resources
 import io
 import json
 import platform
@@ -25,6 +30,9 @@ from pathlib import Path
 
 from . import __version__
 from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, EXIT_OK, InputError, InstabilityError
+
+DEMO_CASE = "demo_ice_sheet_panel.toml"
+"""The built-in demo case (package data of ``pdfem.models``) that ``pdfem run`` runs without a case."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -38,11 +46,19 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"pdfem {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    r = sub.add_parser("run", help="run a case file")
-    r.add_argument("case", help="case file (TOML, SI units)")
+    r = sub.add_parser("run", help="run a case file (no case: the built-in demo)")
+    r.add_argument("case", nargs="?", default=None,
+                   help=f"case file (TOML, SI units); default: the demo {DEMO_CASE}")
     r.add_argument("--out", default=None, help="output directory (default: results/<case name>)")
     r.add_argument("--quiet", action="store_true", help="no progress or messages")
     r.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
+
+    q = sub.add_parser("post", help="summarise a results file: table, plots, CSV")
+    q.add_argument("results", help="results file (results.h5 written by 'pdfem run')")
+    q.add_argument("--plots", default=None, metavar="DIR", help="write PNG plots into DIR")
+    q.add_argument("--csv", default=None, metavar="FILE",
+                   help="write the per-step load and monitor histories to FILE (CSV)")
+    q.add_argument("--json", action="store_true", help="print the summary as one JSON object")
 
     m = sub.add_parser("mesh", help="mesh a model of models/ (or a .py file) with gmsh")
     m.add_argument("model", help="model name (hull_panel, propeller_blade, indenters) or a .py file with build()")
@@ -79,24 +95,83 @@ def _info() -> dict:
     return out
 
 
+def demo_case_file() -> contextlib.AbstractContextManager[Path]:
+    """The built-in demo case, a file of the package ``pdfem.models``, as a context manager
+    giving its path on disk."""
+    return importlib.resources.as_file(importlib.resources.files("pdfem.models") / DEMO_CASE)
+
+
 def _cmd_run(args) -> int:
     from .config import load_case
     from .driver import run_case
-    case = load_case(args.case)
-    out = Path(args.out) if args.out else Path("results") / Path(args.case).stem
+    if args.case is None:  # the demo: run it, then summarise its results
+        with demo_case_file() as path:
+            if not path.is_file():
+                raise InputError(str(path), None, "the built-in demo case is missing from this "
+                                 "installation; give a case file: pdfem run CASE.toml")
+            case = load_case(path)
+        stem = Path(DEMO_CASE).stem
+    else:
+        case = load_case(args.case)
+        stem = Path(args.case).stem
+    out = Path(args.out) if args.out else Path("results") / stem
+    demo = args.case is None
     if args.json:
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
             summary = run_case(case, out, quiet=True)
-        print(json.dumps({"results": str(summary.results), "steps": summary.steps,
-                          "time_step": summary.time_step, "end_time": summary.end_time,
-                          "wall_seconds": summary.wall_seconds, "particles": summary.particles,
-                          "bonds": summary.bonds, "broken_bonds": summary.broken_bonds,
-                          "frames": summary.frames}))
+        report = {"results": str(summary.results), "steps": summary.steps,
+                  "time_step": summary.time_step, "end_time": summary.end_time,
+                  "wall_seconds": summary.wall_seconds, "particles": summary.particles,
+                  "bonds": summary.bonds, "broken_bonds": summary.broken_bonds,
+                  "frames": summary.frames}
+        if demo:
+            from .post import load_results, summarize
+            report["case"] = str(case.file)
+            report["xdmf"] = str(summary.results.with_suffix(".xdmf"))
+            report["post"] = summarize(load_results(summary.results))
+        print(json.dumps(report))
     else:
         summary = run_case(case, out, quiet=args.quiet)
         if not args.quiet:
             print(summary.text())
+            if demo:
+                from .post import format_summary, load_results, summarize
+                print()
+                print(format_summary(summarize(load_results(summary.results))))
+                print()
+                print(f"Results: {summary.results} (HDF5); open "
+                      f"{summary.results.with_suffix('.xdmf')} in ParaView.\n"
+                      f"Plots: pdfem post {summary.results} --plots {out / 'plots'}")
+    return EXIT_OK
+
+
+def _cmd_post(args) -> int:
+    from .post import format_summary, load_results, summarize, write_csv, write_plots
+    results = load_results(args.results)
+    summary = summarize(results)
+    written: list[str] = []
+    if args.csv:
+        try:
+            write_csv(results, args.csv)
+        except OSError as exc:
+            raise InputError(args.csv, "--csv", f"cannot write the CSV file ({exc})") from None
+        summary["csv"] = args.csv
+    if args.plots:
+        try:
+            written = [str(p) for p in write_plots(results, args.plots)]
+        except OSError as exc:
+            raise InputError(args.plots, "--plots", f"cannot write the plots ({exc})") from None
+        summary["plots"] = written
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(format_summary(summary))
+        if args.csv:
+            print(f"\nCSV of the per-step histories: {args.csv}")
+        if args.plots:
+            print(f"\nPlots in {args.plots}: " + (", ".join(Path(p).name for p in written)
+                                                  or "none (nothing to plot)"))
     return EXIT_OK
 
 
@@ -140,7 +215,7 @@ def main(argv: list[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("default")
             warnings.showwarning = lambda msg, *a, **k: print(f"warning: {msg}", file=sys.stderr)
-            return {"run": _cmd_run, "mesh": _cmd_mesh, "bench": _cmd_bench,
+            return {"run": _cmd_run, "post": _cmd_post, "mesh": _cmd_mesh, "bench": _cmd_bench,
                     "info": _cmd_info}[args.command](args)
     except InputError as exc:
         print(exc.text(), file=sys.stderr)
