@@ -255,28 +255,43 @@ class IceBody:
         self._apply_constraints(self.time)
         self.compute_forces()
 
+    def begin_step(self, dt: float, keep_old: bool = False) -> np.ndarray | None:
+        """First half of a velocity-Verlet step: half kick, constraints, position update.
+
+        Returns the positions before the update if ``keep_old`` (contact needs them), else
+        ``None``. Follow with :meth:`compute_forces` (plus any extra force density added to
+        ``f``) and :meth:`end_step`.
+        """
+        half = 0.5 * dt
+        t0 = self.time
+        self._power0 = self._constraint_force(t0) if self.constraints else 0.0
+        self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
+        self._apply_constraints(t0 + half)
+        y_old = self.y.copy() if keep_old else None
+        self.y += dt * self.v
+        self.time = t0 + dt
+        return y_old
+
+    def end_step(self, dt: float) -> None:
+        """Second half of the step begun by :meth:`begin_step`, once ``f`` holds the forces at
+        the new positions: half kick, constraints, work of the constraints."""
+        half = 0.5 * dt
+        self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
+        self._apply_constraints(self.time)
+        if self.constraints:
+            self.external_work += half * (self._power0 + self._constraint_force(self.time))
+
     def step(self, dt: float, after_drift=None) -> int:
         """Advance by ``dt`` (s) with velocity Verlet; returns the number of bonds broken.
 
         ``after_drift(y_old)``, if given, is called right after the position update with the
         positions before it; it may correct ``y`` and ``v`` in place (contact does).
         """
-        inv_rho = 1.0 / self.material.density
-        half = 0.5 * dt
-        t0 = self.time
-        p0 = self._constraint_force(t0) if self.constraints else 0.0
-        self.v += half * (self.f * inv_rho + self.gravity)
-        self._apply_constraints(t0 + half)
-        y_old = self.y.copy() if after_drift is not None else None
-        self.y += dt * self.v
-        self.time = t0 + dt
+        y_old = self.begin_step(dt, keep_old=after_drift is not None)
         if after_drift is not None:
             after_drift(y_old)
         nbroken = self.compute_forces()
-        self.v += half * (self.f * inv_rho + self.gravity)
-        self._apply_constraints(self.time)
-        if self.constraints:
-            self.external_work += half * (p0 + self._constraint_force(self.time))
+        self.end_step(dt)
         return nbroken
 
     # -- diagnostics ---------------------------------------------------------------------------
