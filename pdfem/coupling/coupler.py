@@ -75,8 +75,8 @@ class Coupler:
     Parameters
     ----------
     bodies
-        The ice bodies (:class:`pdfem.pd.body.IceBody`: ``step(dt, after_drift=...)``, ``y``,
-        ``v``, ``vol``, ``material.density``, ``external_work``).
+        The ice bodies (:class:`pdfem.pd.body.IceBody`: ``begin_step``, ``compute_forces``,
+        ``end_step``, ``y``, ``v``, ``f``, ``vol``, ``material.density``, ``gravity``).
     structures
         The structures (elastic or rigid), each a contact surface with ``step(dt)``.
     pairs
@@ -85,10 +85,15 @@ class Coupler:
         D (s).
     ice_substeps, structure_substeps
         Steps per coupling step of each side.
+    short_range
+        Optional short-range contact between ice particles (an object whose ``add_forces()``
+        adds force density to the bodies' ``f`` at their current positions, e.g.
+        :class:`pdfem.coupling.ice_contact.ShortRangeContact`).
     """
 
     def __init__(self, bodies: list, structures: list, pairs: list[ContactPair],
-                 coupling_step: float, ice_substeps: int = 1, structure_substeps: int = 1):
+                 coupling_step: float, ice_substeps: int = 1, structure_substeps: int = 1,
+                 short_range=None):
         if ice_substeps < 1 or structure_substeps < 1:
             raise ValueError("substep counts must be >= 1")
         self.bodies = list(bodies)
@@ -97,6 +102,7 @@ class Coupler:
         self.dt = float(coupling_step)
         self.ice_substeps = int(ice_substeps)
         self.structure_substeps = int(structure_substeps)
+        self.short_range = short_range
         self.time = 0.0
         self._pairs_of = {id(b): [p for p in self.pairs if p.body is b] for b in self.bodies}
         self._mass = {id(b): b.material.density * b.vol for b in self.bodies}  # kg
@@ -122,6 +128,8 @@ class Coupler:
         """Initial forces of the ice (call once before the first step)."""
         for b in self.bodies:
             b.start()
+        if self.short_range is not None:
+            self.short_range.add_forces()
 
     def step(self) -> int:
         """Advance everything by one coupling step; return the number of bonds broken."""
@@ -146,9 +154,7 @@ class Coupler:
             for p in self.pairs:
                 a, b = p0[id(p.structure)], p1[id(p.structure)]
                 p.contact.set_surface(a + frac * (b - a), (b - a) / D)
-            for body in self.bodies:
-                pairs = self._pairs_of[id(body)]
-                broken += body.step(h, after_drift=self._contact_hook(body, pairs, h) if pairs else None)
+            broken += self._ice_step(h)
         for s in self.structures:
             self._load[id(s)][:] = 0.0
         for p in self.pairs:
@@ -159,16 +165,22 @@ class Coupler:
         self.time += D
         return broken
 
-    def _contact_hook(self, body, pairs: list[ContactPair], h: float):
-        mass = self._mass[id(body)]
-        kick = (body.f, body.material.density, body.gravity)
-
-        def hook(y_old: np.ndarray) -> None:
-            for p in pairs:
-                s = p.contact.resolve(body.y, y_old, body.v, mass, h, kick=kick)
+    def _ice_step(self, h: float) -> int:
+        """One velocity-Verlet step of every ice body, with surface contact after the position
+        update and the short-range forces added to the bond forces; bonds broken."""
+        olds = [b.begin_step(h, keep_old=bool(self._pairs_of[id(b)])) for b in self.bodies]
+        for body, y_old in zip(self.bodies, olds):
+            kick = (body.f, body.material.density, body.gravity)
+            for p in self._pairs_of[id(body)]:
+                s = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h, kick=kick)
                 p.contacts += s.contacts
                 self.contact_work_on_ice += s.work
-        return hook
+        broken = sum(b.compute_forces() for b in self.bodies)
+        if self.short_range is not None:
+            self.short_range.add_forces()
+        for b in self.bodies:
+            b.end_step(h)
+        return broken
 
     def structure_load(self, structure) -> tuple[np.ndarray, np.ndarray, int]:
         """Force (N), moment (N m, about the origin) and particle contacts of the last coupling
