@@ -14,6 +14,8 @@ Shape of a case file::
     safety_factor = 0.8        # applied to the automatic step
     pd_loop = "pairs"          # or "full_family" (the per-particle reference loop)
     gravity = [0, 0, 0]        # m/s^2
+    short_range_contact = false  # repulsion between ice particles closer than 0.9 of their
+                               # initial distance (fragments meeting again, floes meeting)
 
     [[ice]]
     name = "beam"
@@ -176,6 +178,7 @@ class RunConfig:
     gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     title: str = ""
     substeps: int = 0
+    short_range_contact: bool = False
 
 
 @dataclass(frozen=True)
@@ -482,8 +485,11 @@ def _run(t: Table) -> RunConfig:
     sub = t.raw("substeps", 0)
     if isinstance(sub, bool) or not isinstance(sub, int) or sub < 0:
         raise t.error("substeps", "expected a whole number >= 0 (0 = automatic)", sub)
+    short = t.raw("short_range_contact", False)
+    if not isinstance(short, bool):
+        raise t.error("short_range_contact", "expected true or false", short)
     t.done()
-    return RunConfig(end, out, dt, sf, loop, g, title, sub)
+    return RunConfig(end, out, dt, sf, loop, g, title, sub, short)
 
 
 def _contacts(top: Table, ice: tuple[IceConfig, ...],

@@ -23,6 +23,7 @@ from . import __version__
 from .config import Case
 from .coupling.contact import SurfaceContact, overlapping
 from .coupling.coupler import ContactPair, Coupler, substep_counts
+from .coupling.ice_contact import ShortRangeContact
 from .errors import InputError, InstabilityError
 from .io import ResultsWriter
 from .fem.build import build_structure
@@ -110,6 +111,8 @@ def _system_energies(structures: list, coupler: Coupler) -> dict[str, float]:
     elastic = [s for s in structures if isinstance(s, ElasticStructure)]
     return {"structure_kinetic": sum(s.kinetic_energy() for s in elastic),
             "structure_strain": sum(s.strain_energy() for s in elastic),
+            "short_range_potential": (coupler.short_range.potential_energy()
+                                      if coupler.short_range is not None else 0.0),
             "rigid_body_work": -sum(coupler.contact_work[id(s)] for s in structures
                                     if not isinstance(s, ElasticStructure))}
 
@@ -221,7 +224,9 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
             writer.add_structure(st.name, st.points, st.cells, st.cell_type)
         else:
             writer.add_structure(st.name, st.x0, st.surface_triangles, "triangle")
-    coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st)
+    short_range = (ShortRangeContact(bodies) if case.run.short_range_contact and bodies
+                   else None)
+    coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st, short_range)
     coupler.start()
 
     def frame(t: float) -> None:
@@ -238,7 +243,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
             return
         e.update(_system_energies(structures, coupler))
         total = e["kinetic"] + e["strain"] + e["gravity_potential"] + e["structure_kinetic"] \
-            + e["structure_strain"]
+            + e["structure_strain"] + e["short_range_potential"]
         e["dissipated"] = initial_energy + e["external_work"] + e["rigid_body_work"] - total
         e["contact_dissipated"] = coupler.contact_dissipated
         e["fracture_dissipated"] = e["dissipated"] - e["contact_dissipated"]
@@ -260,7 +265,8 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
 
     initial_energy = (sum(_energies(bodies)[k] for k in ("kinetic", "strain", "gravity_potential"))
                       + sum(_system_energies(structures, coupler)[k]
-                            for k in ("structure_kinetic", "structure_strain")))
+                            for k in ("structure_kinetic", "structure_strain",
+                                      "short_range_potential")))
     frame(0.0)
     loads(0.0)
     frames = 1

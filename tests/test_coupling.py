@@ -11,6 +11,8 @@ unsubcycled run at the small step as the reference for subcycling.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -295,3 +297,39 @@ point = [1.0, 0.6, 0.0]
     u_sub = np.abs(h_sub["monitors/centre"]["u"]).max()
     u_ref = np.abs(h_ref["monitors/centre"]["u"]).max()
     assert u_sub == pytest.approx(u_ref, rel=0.02)
+
+
+def test_bar_impact_on_a_rigid_wall_follows_elastic_wave_theory():
+    """A slender unbreakable ice bar hits a fixed rigid wall end-on at v = 1 m/s. One-dimensional
+    elastic impact theory (e.g. Johnson, Impact Strength of Materials, ch. 1): the contact
+    lasts 2 L / c with c = sqrt(E / rho), the wall force is rho c A v meanwhile, and the
+    total impulse on the wall equals the bar's momentum change (momentum conservation, to
+    round-off). Duration and mean force within 5 %."""
+    from pdfem.fem.rigid import RigidBody
+
+    dx, n_side, length, v0 = 0.005, 4, 0.3, 1.0
+    side = n_side * dx
+    wall = RigidBody(np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float),
+                     np.array([[0, 1, 2], [0, 2, 3]]), name="wall")
+    bar = IceBody.from_shape("bar", Box((0.0, 0.0, 1e-6 - dx / 2), (side, side, length + 1e-6 - dx / 2)),
+                             ICE, dx, 3.015 * dx)
+    bar.v[:, 2] = -v0
+    pair = ContactPair("bar-wall", bar, wall, SurfaceContact(wall, 0.5 * dx))
+    dt = 0.8 * bar.stable_time_step()
+    c = Coupler([bar], [wall], [pair], dt)
+    c.start()
+    p0 = bar.momentum()[2]
+    c_bar = math.sqrt(ICE.youngs_modulus / ICE.density)
+    t_contact = 2 * length / c_bar
+    forces = []
+    for _ in range(int(1.6 * t_contact / dt)):
+        c.step()
+        forces.append(pair.force[2])
+    forces = np.array(forces)
+    on = np.flatnonzero(forces != 0.0)
+    duration = (on[-1] - on[0] + 1) * dt
+    assert duration == pytest.approx(t_contact, rel=0.05)
+    impulse = forces.sum() * dt
+    assert impulse == pytest.approx(-(bar.momentum()[2] - p0), rel=1e-10)
+    plateau = -forces[on[0] + 2:on[-1] - 1].mean()   # the first-touch step left out
+    assert plateau == pytest.approx(ICE.density * c_bar * side * side * v0, rel=0.05)

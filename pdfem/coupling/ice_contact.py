@@ -1,0 +1,576 @@
+"""Short-range repulsion between ice particles: contact of fragments and of separate ice bodies.
+
+Peridynamic bonds act only between particles bonded at t = 0, so once bonds break, fragments
+could pass through each other. The short-range force of the seed paper's Eq. (4) (Zhang et al.
+2023, after Silling & Askari 2005 and Liu et al.) stops that. pdfem uses the calibration of
+Silling & Askari (2005, "A meshfree method based on the peridynamic model of solid mechanics",
+Computers & Structures 83, the section on short-range forces) as the force density on particle i::
+
+    f_i = sum_j  -k_ij (r_ij - |p|) (p / |p|) V_j        for |p| < r_ij, else 0
+    p = y_j - y_i,   k_i = c_S / delta_i = 15 c_i / delta_i,   c_i = 18 K_i / (pi delta_i^4)
+
+(N/m^3; c is the bond-based micromodulus, N/m^6, so k is in N/m^7). Seed Eq. (4) is the same
+linear repulsion written as c_sh (|p| / r_sh - 1); only the scaling of the constant differs.
+
+The critical distance ``r_ij`` (Silling & Askari's d_ij, with particle radius r_i = dx_i / 2):
+
+- same body: ``r_ij = min(0.9 |x_j - x_i|, 1.35 (r_i + r_j))`` with the reference positions x.
+  In an undeformed lattice nothing acts: nearest neighbours sit at dx > 0.9 dx, the next ones at
+  sqrt(2) dx > 1.35 dx.
+- different bodies: there is no reference distance, so the rule is applied with the distance at
+  which the two particles' cells touch, |x_j - x_i| := r_i + r_j (two lattices in contact across
+  a face have their facing sites that far apart), which gives ``r_ij = 0.9 (r_i + r_j)``. Two
+  bodies placed in contact therefore start force-free, exactly like two neighbours in one body,
+  and the force switches on when they interpenetrate by 10 % of a spacing; the alternative
+  1.35 (r_i + r_j) would push touching bodies apart across a gap of 0.35 dx.
+
+Bodies may differ in spacing and material: the constants are per particle, and a pair uses the
+harmonic mean ``k_ij = 2 k_i k_j / (k_i + k_j)`` (equal to k for equal materials; at most twice
+the softer side's constant, so a stiff body does not destabilise a soft body's time step).
+``k_ij`` and ``r_ij`` are symmetric and constant in time, so the force is equal and opposite
+(momentum is conserved exactly, up to the rounding of V_j f_j) and conservative, with the pair
+potential (J)::
+
+    U_ij = 1/2 k_ij V_i V_j (r_ij - |p|)^2     for |p| < r_ij, else 0
+
+(-dU_ij/dy_i = V_i f_i from this pair), reported by :meth:`ShortRangeContact.potential_energy`.
+The force acts between all pairs closer than r_ij, bonded or not, as in Silling & Askari and Emu.
+
+Search, every call over all bodies' current positions (no state kept between calls): a cell grid
+of side ``h = max r_ij = 1.35 max(dx)`` (times 1 + 1e-12, so that rounding of the cell
+coordinates cannot lose a pair at exactly h), over the box of the current positions, with the
+particles counting-sorted by cell. Every pair is examined once, from the particle earlier in
+sorted order:
+
+- dense grid (at most ``DENSE_CELLS_PER_PARTICLE`` cells per particle, the usual case), padded
+  by one empty cell: the forward half stencil of a cell is five contiguous runs of sorted
+  positions (own cell after the particle and cell +z; the three cells +y; three columns +x);
+- folded grid, when fragments fly apart and the box would need more cells: the longest axes are
+  folded in halves (cell ix goes to bucket ix mod F) until the table has at most
+  ``DENSE_CELLS_PER_PARTICLE * N`` buckets, and coordinates are clamped to 2^20 cells per axis
+  (clamping and folding never separate neighbouring cells, so no pair is lost). Each particle
+  scans the buckets of its 27 neighbour cells that come at or after its own, and within them
+  only the particles of the cell asked for.
+
+The scan runs in parallel (above ``SERIAL_BELOW_PARTICLES``) over contiguous chunks of sorted
+positions, each chunk writing the pairs it finds into its own buffer; the buffers are then
+summed serially in chunk order, i.e. in sorted-position order, so the forces are bit-identical
+from run to run and for any thread or chunk count. Candidates further apart than h are rejected
+with one squared distance, which is all the work an intact body costs (about 30 candidates per
+particle).
+
+Units: m, m^3, Pa, N/m^3 (force density), J.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Sequence
+
+import numba
+import numpy as np
+from numba import prange
+
+from ..pd.workspace import SERIAL_BELOW_PARTICLES, twin
+
+if TYPE_CHECKING:
+    from ..pd.body import IceBody
+
+__all__ = ["ShortRangeContact", "short_range_constant", "DENSE_CELLS_PER_PARTICLE"]
+
+#: number the cells densely while the grid has at most this many cells per particle, else fold
+DENSE_CELLS_PER_PARTICLE = 4
+#: cell coordinates are clamped to [0, _AXIS_CELLS) per axis (keys pack 21 bits per axis)
+_AXIS_CELLS = 1 << 20
+_INITIAL_CAPACITY = 1024  # pair slots per chunk before the first growth
+
+
+def short_range_constant(K: float, delta: float, factor: float = 15.0) -> float:
+    """Silling & Askari's short-range constant per unit length, k = factor * c / delta (N/m^7).
+
+    Parameters
+    ----------
+    K
+        Bulk modulus (Pa).
+    delta
+        Horizon (m).
+    factor
+        c_S / c; Silling & Askari (2005) use 15.
+
+    Returns
+    -------
+    float
+        ``factor * 18 K / (pi delta^4) / delta``, with 18 K / (pi delta^4) the bond-based
+        micromodulus c (N/m^6).
+    """
+    return factor * 18.0 * float(K) / (math.pi * float(delta) ** 5)
+
+
+# --------------------------------------------------------------------------------------------
+# kernels
+
+
+@numba.njit(cache=True)
+def _extent(y):
+    """Per-axis min and max of y, and whether every entry is finite (N >= 1)."""
+    lo = np.empty(3)
+    hi = np.empty(3)
+    finite = True
+    for k in range(3):
+        lo[k] = y[0, k]
+        hi[k] = y[0, k]
+    for i in range(y.shape[0]):
+        for k in range(3):
+            v = y[i, k]
+            if not math.isfinite(v):
+                finite = False
+            if v < lo[k]:
+                lo[k] = v
+            if v > hi[k]:
+                hi[k] = v
+    return lo, hi, finite
+
+
+@numba.njit(cache=True, inline="always")
+def _bucket(ix, iy, iz, fold):
+    """Bucket of cell (ix, iy, iz): its linear index in the grid folded to ``fold`` cells."""
+    if ix >= fold[0]:
+        ix %= fold[0]
+    if iy >= fold[1]:
+        iy %= fold[1]
+    if iz >= fold[2]:
+        iz %= fold[2]
+    return (ix * fold[1] + iy) * fold[2] + iz
+
+
+@numba.njit(cache=True)
+def _cells(y, lo, inv_h, dims, pad, fold, ijk, key, bucket):
+    """Clamped (and padded) cell coordinates, packed cell key and bucket of every particle."""
+    top_x = float(dims[0] - 1)
+    top_y = float(dims[1] - 1)
+    top_z = float(dims[2] - 1)
+    for i in range(y.shape[0]):
+        # y >= lo, so the scaled offset is >= 0 and int() floors it; clamp before converting
+        cx = int(min((y[i, 0] - lo[0]) * inv_h, top_x)) + pad
+        cy = int(min((y[i, 1] - lo[1]) * inv_h, top_y)) + pad
+        cz = int(min((y[i, 2] - lo[2]) * inv_h, top_z)) + pad
+        ijk[i, 0] = cx
+        ijk[i, 1] = cy
+        ijk[i, 2] = cz
+        key[i] = (cx << 42) | (cy << 21) | cz
+        bucket[i] = _bucket(cx, cy, cz, fold)
+
+
+@numba.njit(cache=True)
+def _sort(bucket, nb, start, perm):
+    """Stable counting sort by bucket: ``start`` (nb+1,) bucket offsets and ``perm``."""
+    start[:] = 0
+    for i in range(bucket.shape[0]):
+        start[bucket[i] + 1] += 1
+    for b in range(nb):
+        start[b + 1] += start[b]
+    for i in range(bucket.shape[0]):
+        b = bucket[i]
+        perm[start[b]] = i
+        start[b] += 1
+    for b in range(nb, 0, -1):
+        start[b] = start[b - 1]
+    start[0] = 0
+
+
+@numba.njit(cache=True)
+def _gather(perm, y, ijk, key, bucket, ys, ijks, keys, buckets, all_fields):
+    for s in range(perm.shape[0]):
+        i = perm[s]
+        ys[s, 0] = y[i, 0]
+        ys[s, 1] = y[i, 1]
+        ys[s, 2] = y[i, 2]
+        buckets[s] = bucket[i]
+        if all_fields:
+            ijks[s, 0] = ijk[i, 0]
+            ijks[s, 1] = ijk[i, 1]
+            ijks[s, 2] = ijk[i, 2]
+            keys[s] = key[i]
+
+
+@numba.njit(cache=True, inline="always")
+def _interact(i, j, px, py, pz, d2, x0, vol, stiff, rad, body, dist_factor, rad_factor, store,
+              slot, pair, val):
+    """Whether particles i, j (p = y_j - y_i, d2 = |p|^2) interact; if so and ``store``, write
+    the pair, its force on i (N) and its potential (J) into ``slot``."""
+    rsum = rad[i] + rad[j]
+    if body[i] == body[j]:
+        ex = x0[j, 0] - x0[i, 0]
+        ey = x0[j, 1] - x0[i, 1]
+        ez = x0[j, 2] - x0[i, 2]
+        r = min(dist_factor * math.sqrt(ex * ex + ey * ey + ez * ez), rad_factor * rsum)
+    else:
+        r = dist_factor * rsum
+    if d2 >= r * r:
+        return False
+    if store:
+        d = math.sqrt(d2)
+        k = 2.0 * stiff[i] * stiff[j] / (stiff[i] + stiff[j]) * vol[i] * vol[j]
+        s = -k * (r - d) / d  # force on i (N) = s p
+        pair[slot, 0] = i
+        pair[slot, 1] = j
+        val[slot, 0] = s * px
+        val[slot, 1] = s * py
+        val[slot, 2] = s * pz
+        val[slot, 3] = 0.5 * k * (r - d) * (r - d)
+    return True
+
+
+@twin(fastmath=False)
+def _find_dense(ys, buckets, start, perm, x0, vol, stiff, rad, body, h, fold, dist_factor,
+                rad_factor, chunk_ptr, cap, pair, val, counts):
+    """Pairs on a dense grid padded by one empty cell on every side, per chunk of sorted
+    positions, into the chunk's slots ``[c*cap, (c+1)*cap)``.
+
+    The forward half stencil of a particle's cell is five contiguous runs of sorted positions:
+    the own cell after the particle and the cell +z; the three cells +y; and the three columns
+    of three cells +x. The runs' bounds are looked up once per cell.
+    """
+    h2 = h * h
+    nz = fold[2]
+    nyz = fold[1] * fold[2]
+    C = chunk_ptr.shape[0] - 1
+    for c in prange(C):
+        run_lo = np.empty(5, dtype=np.int64)
+        run_hi = np.empty(5, dtype=np.int64)
+        last = -1
+        cnt = 0
+        base = c * cap
+        for a in range(chunk_ptr[c], chunk_ptr[c + 1]):
+            ba = buckets[a]
+            if ba != last:  # a new cell
+                last = ba
+                run_hi[0] = start[ba + 2]
+                for run in range(1, 5):
+                    b = ba + nz if run == 1 else ba + nyz + (run - 3) * nz
+                    run_lo[run] = start[b - 1]
+                    run_hi[run] = start[b + 2]
+            run_lo[0] = a + 1
+            yax = ys[a, 0]
+            yay = ys[a, 1]
+            yaz = ys[a, 2]
+            for run in range(5):
+                for q in range(run_lo[run], run_hi[run]):
+                    px = ys[q, 0] - yax
+                    py = ys[q, 1] - yay
+                    pz = ys[q, 2] - yaz
+                    d2 = px * px + py * py + pz * pz
+                    if d2 >= h2:
+                        continue
+                    if _interact(perm[a], perm[q], px, py, pz, d2, x0, vol, stiff, rad, body,
+                                 dist_factor, rad_factor, cnt < cap, base + cnt, pair, val):
+                        cnt += 1
+        counts[c] = cnt
+
+
+@twin(fastmath=False)
+def _find_folded(ys, ijks, keys, buckets, start, perm, x0, vol, stiff, rad, body, h, dims, fold,
+                 dist_factor, rad_factor, chunk_ptr, cap, pair, val, counts):
+    """:func:`_find_dense` for a folded grid: buckets hold several cells, told apart by key.
+
+    Each particle scans the buckets of its 27 neighbour cells that come at or after its own
+    bucket, from the sorted position after its own on, and only the particles of the cell asked
+    for, so each pair is seen once, from the particle earlier in sorted order."""
+    h2 = h * h
+    C = chunk_ptr.shape[0] - 1
+    for c in prange(C):
+        nb_bucket = np.empty(27, dtype=np.int64)
+        nb_key = np.empty(27, dtype=np.int64)
+        n_nb = 0
+        last_key = np.int64(-1)
+        cnt = 0
+        base = c * cap
+        for a in range(chunk_ptr[c], chunk_ptr[c + 1]):
+            ka = keys[a]
+            ba = buckets[a]
+            if ka != last_key:  # the stencil of a new cell
+                last_key = ka
+                n_nb = 0
+                for ox in range(-1, 2):
+                    ix = ijks[a, 0] + ox
+                    if ix < 0 or ix >= dims[0]:
+                        continue
+                    for oy in range(-1, 2):
+                        iy = ijks[a, 1] + oy
+                        if iy < 0 or iy >= dims[1]:
+                            continue
+                        for oz in range(-1, 2):
+                            iz = ijks[a, 2] + oz
+                            if iz < 0 or iz >= dims[2]:
+                                continue
+                            b = _bucket(ix, iy, iz, fold)
+                            if b < ba:
+                                continue
+                            nb_bucket[n_nb] = b
+                            nb_key[n_nb] = (ix << 42) | (iy << 21) | iz
+                            n_nb += 1
+            yax = ys[a, 0]
+            yay = ys[a, 1]
+            yaz = ys[a, 2]
+            for t in range(n_nb):
+                b = nb_bucket[t]
+                kb = nb_key[t]
+                q0 = start[b]
+                if b == ba:
+                    q0 = a + 1
+                for q in range(q0, start[b + 1]):
+                    if keys[q] != kb:
+                        continue
+                    px = ys[q, 0] - yax
+                    py = ys[q, 1] - yay
+                    pz = ys[q, 2] - yaz
+                    d2 = px * px + py * py + pz * pz
+                    if d2 >= h2:
+                        continue
+                    if _interact(perm[a], perm[q], px, py, pz, d2, x0, vol, stiff, rad, body,
+                                 dist_factor, rad_factor, cnt < cap, base + cnt, pair, val):
+                        cnt += 1
+        counts[c] = cnt
+
+
+@numba.njit(cache=True)
+def _sum_pairs(counts, cap, pair, val, vol, acc, mark, touched):
+    """Force density per touched particle into ``acc`` (chunk order); returns (touched, U)."""
+    nt = 0
+    energy = 0.0
+    for c in range(counts.shape[0]):
+        for t in range(c * cap, c * cap + counts[c]):
+            for e in range(2):
+                g = pair[t, e]
+                if mark[g] == 0:
+                    mark[g] = 1
+                    acc[g, 0] = 0.0
+                    acc[g, 1] = 0.0
+                    acc[g, 2] = 0.0
+                    touched[nt] = g
+                    nt += 1
+            i = pair[t, 0]
+            j = pair[t, 1]
+            for k in range(3):
+                acc[i, k] += val[t, k]
+                acc[j, k] -= val[t, k]
+            energy += val[t, 3]
+    for t in range(nt):
+        g = touched[t]
+        mark[g] = 0
+        inv_v = 1.0 / vol[g]
+        for k in range(3):
+            acc[g, k] *= inv_v
+    return nt, energy
+
+
+@numba.njit(cache=True)
+def _add_into(f, offset, touched, nt, acc):
+    """f[g - offset] += acc[g] for the touched particles g of the body starting at ``offset``."""
+    n = f.shape[0]
+    for t in range(nt):
+        g = touched[t]
+        loc = g - offset
+        if 0 <= loc < n:
+            f[loc, 0] += acc[g, 0]
+            f[loc, 1] += acc[g, 1]
+            f[loc, 2] += acc[g, 2]
+
+
+# --------------------------------------------------------------------------------------------
+# the contact object
+
+
+class ShortRangeContact:
+    """Short-range repulsion among the particles of one or more ice bodies.
+
+    Parameters
+    ----------
+    bodies
+        The ice bodies (:class:`pdfem.pd.body.IceBody`: ``y``, ``x0``, ``vol``, ``dx``,
+        ``delta``, ``material.K``, ``f``); a single body may be passed alone.
+    stiffness_factor
+        c_S / c, the short-range constant over the bond-based micromodulus (Silling & Askari: 15).
+    distance_factor
+        Fraction of the reference distance at which the force starts (Silling & Askari: 0.9).
+    radius_factor
+        Cap of the critical distance in particle radii dx / 2 (Silling & Askari: 1.35).
+    n_chunks
+        Chunks of the parallel scan (default: 4 per numba thread). The forces do not depend on it.
+
+    Attributes
+    ----------
+    n_active
+        Number of interacting pairs found by the last call.
+    cell_size
+        Side of the search cells, m (the largest critical distance).
+    dense, n_buckets
+        Whether the last search used the dense grid (else the folded one), and its number of
+        buckets (at most ``DENSE_CELLS_PER_PARTICLE * max(N, 1024)``).
+    """
+
+    def __init__(self, bodies: "IceBody | Sequence[IceBody]", *, stiffness_factor: float = 15.0,
+                 distance_factor: float = 0.9, radius_factor: float = 1.35,
+                 n_chunks: int | None = None):
+        if not isinstance(bodies, (list, tuple)):
+            bodies = [bodies]
+        if len(bodies) == 0:
+            raise ValueError("short-range contact needs at least one ice body")
+        for name, v in (("stiffness_factor", stiffness_factor),
+                        ("distance_factor", distance_factor), ("radius_factor", radius_factor)):
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"{name} must be a positive finite number, got {v!r}")
+        self.bodies: list = list(bodies)
+        sizes = [int(b.x0.shape[0]) for b in self.bodies]
+        self.offsets = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
+        n = int(self.offsets[-1])
+        if n >= 2 ** 31 - 1:
+            raise ValueError(f"at most 2**31 - 2 particles in short-range contact, got {n}")
+        self.n = n
+        self.distance_factor = float(distance_factor)
+        self.radius_factor = float(radius_factor)
+        self.x0 = np.concatenate([b.x0 for b in self.bodies]).astype(np.float64)
+        self.vol = np.concatenate([b.vol for b in self.bodies]).astype(np.float64)
+        self.stiffness = np.concatenate([
+            np.full(s, short_range_constant(b.material.K, b.delta, stiffness_factor))
+            for b, s in zip(self.bodies, sizes)])
+        self.radius = np.concatenate([np.full(s, 0.5 * b.dx) for b, s in zip(self.bodies, sizes)])
+        self.body = np.concatenate([np.full(s, k, dtype=np.int32) for k, s in enumerate(sizes)])
+        dx_max = max(float(b.dx) for b in self.bodies)
+        # a margin of 1e-12 keeps pairs at a critical distance of exactly h from being lost to
+        # the rounding of the cell coordinates
+        self.cell_size = max(self.radius_factor, self.distance_factor) * dx_max * (1.0 + 1e-12)
+        threads = int(numba.get_num_threads())
+        C = 4 * threads if n_chunks is None else int(n_chunks)
+        self.n_chunks = max(1, min(C, max(n, 1)))
+        self.chunk_ptr = (np.arange(self.n_chunks + 1, dtype=np.int64) * n) // self.n_chunks
+        self._cap = _INITIAL_CAPACITY
+        self._pair = np.empty((self.n_chunks * self._cap, 2), dtype=np.int32)
+        self._val = np.empty((self.n_chunks * self._cap, 4))
+        self._counts = np.zeros(self.n_chunks, dtype=np.int64)
+        self._ijk = np.empty((n, 3), dtype=np.int64)
+        self._key = np.empty(n, dtype=np.int64)
+        self._bucket = np.empty(n, dtype=np.int64)
+        self._perm = np.empty(n, dtype=np.int32)
+        self._ys = np.empty((n, 3))
+        self._ijks = np.empty((n, 3), dtype=np.int64)
+        self._keys = np.empty(n, dtype=np.int64)
+        self._buckets = np.empty(n, dtype=np.int64)
+        self._acc = np.zeros((n, 3))
+        self._mark = np.zeros(n, dtype=np.uint8)
+        self._touched = np.empty(n, dtype=np.int32)
+        self._n_touched = 0
+        self._start = np.empty(1, dtype=np.int64)
+        self.n_active = 0
+        self.dense = True
+        self.n_buckets = 0
+
+    # -- search ---------------------------------------------------------------------------------
+    def _positions(self) -> np.ndarray:
+        if len(self.bodies) == 1:
+            return np.ascontiguousarray(self.bodies[0].y, dtype=np.float64)
+        return np.concatenate([b.y for b in self.bodies])
+
+    def _search(self) -> float:
+        """Find the interacting pairs at the current positions; returns their potential (J)."""
+        n = self.n
+        self._n_touched = 0
+        self.n_active = 0
+        if n < 2:
+            return 0.0
+        y = self._positions()
+        lo, hi, finite = _extent(y)
+        if not finite:
+            raise FloatingPointError("ice particle positions are not finite (NaN or Inf): "
+                                     "the run has become unstable")
+        h = self.cell_size
+        inv_h = 1.0 / h
+        dims = np.array([min(int((hi[k] - lo[k]) * inv_h) + 1, _AXIS_CELLS) for k in range(3)],
+                        dtype=np.int64)
+        budget = DENSE_CELLS_PER_PARTICLE * max(n, 1024)
+        self.dense = float(np.prod(dims + 2)) <= budget
+        if self.dense:  # one empty cell around the grid: the stencil needs no bounds checks
+            pad = 1
+            fold = dims + 2
+        else:  # fold the longest axes in halves until the table fits the budget
+            pad = 0
+            fold = dims.copy()
+            while float(np.prod(fold)) > budget:
+                k = int(np.argmax(fold))
+                fold[k] = (fold[k] + 1) // 2
+        nb = int(np.prod(fold))
+        self.n_buckets = nb
+        if self._start.shape[0] != nb + 1:
+            self._start = np.empty(nb + 1, dtype=np.int64)
+        _cells(y, lo, inv_h, dims, pad, fold, self._ijk, self._key, self._bucket)
+        _sort(self._bucket, nb, self._start, self._perm)
+        _gather(self._perm, y, self._ijk, self._key, self._bucket, self._ys, self._ijks,
+                self._keys, self._buckets, not self.dense)
+        while True:
+            par = n >= SERIAL_BELOW_PARTICLES
+            if self.dense:
+                _find_dense(par, self._ys, self._buckets, self._start, self._perm, self.x0,
+                            self.vol, self.stiffness, self.radius, self.body, h, fold,
+                            self.distance_factor, self.radius_factor, self.chunk_ptr, self._cap,
+                            self._pair, self._val, self._counts)
+            else:
+                _find_folded(par, self._ys, self._ijks, self._keys, self._buckets, self._start,
+                             self._perm, self.x0, self.vol, self.stiffness, self.radius, self.body,
+                             h, dims, fold, self.distance_factor, self.radius_factor,
+                             self.chunk_ptr, self._cap, self._pair, self._val, self._counts)
+            most = int(self._counts.max())
+            if most <= self._cap:
+                break
+            self._cap = 2 * most
+            self._pair = np.empty((self.n_chunks * self._cap, 2), dtype=np.int32)
+            self._val = np.empty((self.n_chunks * self._cap, 4))
+        self.n_active = int(self._counts.sum())
+        if self.n_active == 0:
+            return 0.0
+        nt, energy = _sum_pairs(self._counts, self._cap, self._pair, self._val, self.vol,
+                                self._acc, self._mark, self._touched)
+        self._n_touched = nt
+        return energy
+
+    # -- public ---------------------------------------------------------------------------------
+    def add_forces(self) -> int:
+        """Add the short-range force density (N/m^3) at the current positions into each body's f.
+
+        Call after the bodies' peridynamic forces were computed at the same positions.
+
+        Returns
+        -------
+        int
+            The number of interacting pairs.
+
+        Raises
+        ------
+        FloatingPointError
+            If a position is NaN or infinite.
+        """
+        self._search()
+        if self._n_touched:
+            for b, off in zip(self.bodies, self.offsets[:-1]):
+                _add_into(b.f, int(off), self._touched, self._n_touched, self._acc)
+        return self.n_active
+
+    def forces(self) -> list[np.ndarray]:
+        """The short-range force density (N/m^3) on each body at the current positions.
+
+        Returns
+        -------
+        list of ndarray
+            One (N_b, 3) array per body; the bodies' ``f`` are not touched.
+        """
+        self._search()
+        out = [np.zeros((b.x0.shape[0], 3)) for b in self.bodies]
+        for f, off in zip(out, self.offsets[:-1]):
+            _add_into(f, int(off), self._touched, self._n_touched, self._acc)
+        return out
+
+    def potential_energy(self) -> float:
+        """Potential energy of the short-range force at the current positions, J.
+
+        ``sum over interacting pairs of 1/2 k_ij V_i V_j (r_ij - |y_j - y_i|)^2``.
+        """
+        return self._search()
