@@ -255,10 +255,9 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
                 force, moment, n = coupler.structure_load(st)
                 writer.append_history(f"loads/{st.name}", t,
                                       {"force": force, "moment": moment, "contacts": n})
-        if len(pairs) > 1:
-            for p in pairs:
-                writer.append_history(f"contacts/{p.name}", t,
-                                      {"force": p.force, "moment": p.moment, "contacts": p.contacts})
+        for p in pairs:
+            writer.append_history(f"contacts/{p.name}", t,
+                                  {"force": p.force, "moment": p.moment, "contacts": p.contacts})
         for m, st, pr in probes:
             u, vm = st.probe_values(pr)
             writer.append_history(f"monitors/{m.name}", t, {"u": u, "von_mises": vm})
