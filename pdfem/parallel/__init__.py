@@ -1,0 +1,1 @@
+"""Distributed-memory parallelism: static domain partitions of the ice and their halos."""
