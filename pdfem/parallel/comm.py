@@ -1,0 +1,96 @@
+"""The communicator a run uses: MPI's world when started under mpiexec, else a serial stand-in.
+
+mpi4py is imported only when the process was started by an MPI launcher (so a serial run needs
+no mpiexec and no MPI library at all). Both communicators offer the few operations pdfem
+needs: rank and size, a sum over ranks, a gather to rank 0, a broadcast, and the point-to-point
+halo exchange of :mod:`pdfem.parallel.distributed`.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+_LAUNCHER_VARIABLES = ("PMI_RANK", "PMI_SIZE", "PMIX_RANK", "OMPI_COMM_WORLD_SIZE",
+                       "MPI_LOCALNRANKS", "HYDRA_CONTROL_FD")
+
+
+class SerialComm:
+    """One process: every collective is the identity."""
+
+    rank = 0
+    size = 1
+
+    def allreduce_sum(self, value):
+        return value
+
+    def gather(self, value):
+        return [value]
+
+    def bcast(self, value):
+        return value
+
+    def exchange(self, sends: dict, recvs: dict) -> dict:
+        if sends or recvs:
+            raise ValueError("a serial run has no neighbours to exchange with")
+        return {}
+
+    def abort(self, code: int = 1) -> None:
+        raise SystemExit(code)
+
+
+class MPIComm:
+    """mpi4py's COMM_WORLD behind the same interface as :class:`SerialComm`."""
+
+    def __init__(self, comm) -> None:
+        self.comm = comm
+        self.rank = comm.Get_rank()
+        self.size = comm.Get_size()
+
+    def allreduce_sum(self, value):
+        """Sum over ranks, in rank order on every rank (so every rank gets identical bits)."""
+        parts = self.comm.allgather(value)
+        total = parts[0]
+        for p in parts[1:]:
+            total = total + p
+        return total
+
+    def gather(self, value):
+        return self.comm.gather(value, root=0)
+
+    def bcast(self, value):
+        return self.comm.bcast(value, root=0)
+
+    def exchange(self, sends: dict, recvs: dict) -> dict:
+        """Send ``sends[q]`` (contiguous arrays) to each rank q and receive from each rank in
+        ``recvs`` (q -> (shape, dtype)); returns q -> received array."""
+        from mpi4py import MPI
+
+        requests, out = [], {}
+        for q, (shape, dtype) in recvs.items():
+            out[q] = np.empty(shape, dtype=dtype)
+            requests.append(self.comm.Irecv(out[q], source=q, tag=7))
+        for q, buf in sends.items():
+            requests.append(self.comm.Isend(np.ascontiguousarray(buf), dest=q, tag=7))
+        MPI.Request.Waitall(requests)
+        return out
+
+    def abort(self, code: int = 1) -> None:
+        self.comm.Abort(code)
+
+
+def launched_by_mpi() -> bool:
+    """True if an MPI launcher (mpiexec/mpirun/srun) started this process."""
+    return any(v in os.environ for v in _LAUNCHER_VARIABLES)
+
+
+def world():
+    """The communicator of this process: :class:`MPIComm` under an MPI launcher with more than
+    one rank, else :class:`SerialComm`."""
+    if not launched_by_mpi():
+        return SerialComm()
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    return MPIComm(comm) if comm.Get_size() > 1 else SerialComm()
