@@ -89,11 +89,16 @@ class Coupler:
         Optional short-range contact between ice particles (an object whose ``add_forces()``
         adds force density to the bodies' ``f`` at their current positions, e.g.
         :class:`pdfem.coupling.ice_contact.ShortRangeContact`).
+    comm
+        With ice bodies split over MPI ranks (:class:`pdfem.parallel.distributed.DistributedIce`,
+        whose ``owned`` particles are the ones each rank resolves contact for): the
+        communicator over which the contact impulses are summed (one sum per structure and
+        coupling step), so every rank advances the replicated structures identically.
     """
 
     def __init__(self, bodies: list, structures: list, pairs: list[ContactPair],
                  coupling_step: float, ice_substeps: int = 1, structure_substeps: int = 1,
-                 short_range=None):
+                 short_range=None, comm=None):
         if ice_substeps < 1 or structure_substeps < 1:
             raise ValueError("substep counts must be >= 1")
         self.bodies = list(bodies)
@@ -103,6 +108,7 @@ class Coupler:
         self.ice_substeps = int(ice_substeps)
         self.structure_substeps = int(structure_substeps)
         self.short_range = short_range
+        self.comm = comm
         self.time = 0.0
         self._pairs_of = {id(b): [p for p in self.pairs if p.body is b] for b in self.bodies}
         self._mass = {id(b): b.material.density * b.vol for b in self.bodies}  # kg
@@ -116,13 +122,50 @@ class Coupler:
         """Energy (J) lost in contacts so far: minus the work of the contact impulses on the
         ice and on the structures. The contact of Eq. (5) is perfectly plastic particle by
         particle; this loss shrinks as the ice is refined."""
-        return -(self.contact_work_on_ice + sum(self.contact_work.values()))
+        on_ice = self.contact_work_on_ice
+        if self.comm is not None:
+            on_ice = self.comm.allreduce_sum(on_ice)
+        return -(on_ice + sum(self.contact_work.values()))
 
     def pending_impulse(self) -> np.ndarray:
         """(3,) impulse (N s) taken from the ice in the last coupling step that the structures
         receive in the next one."""
         return sum((self._load[id(s)].sum(axis=0) * self.dt for s in self.structures),
                    np.zeros(3))
+
+    def state(self) -> dict[str, np.ndarray | float]:
+        """The coupler's own state, for a checkpoint: ``time`` (s), per structure (in order)
+        ``load_<k>`` (the pending contact load, N per surface node) and ``contact_work_<k>``
+        (J), ``contact_work_on_ice`` (J), and per pair (in order) ``force_<k>`` (N),
+        ``moment_<k>`` (N m), ``contacts_<k>`` and ``total_impulse_<k>`` (N s)."""
+        out: dict[str, np.ndarray | float] = {"time": self.time,
+                                              "contact_work_on_ice": self.contact_work_on_ice}
+        for k, s in enumerate(self.structures):
+            out[f"load_{k}"] = self._load[id(s)].copy()
+            out[f"contact_work_{k}"] = self.contact_work[id(s)]
+        for k, p in enumerate(self.pairs):
+            out[f"force_{k}"] = p.force.copy()
+            out[f"moment_{k}"] = p.moment.copy()
+            out[f"contacts_{k}"] = p.contacts
+            out[f"total_impulse_{k}"] = p.contact.total_impulse.copy()
+        return out
+
+    def set_state(self, state: dict) -> None:
+        """Restore a state from :meth:`state` exactly (same structures and pairs, same order)."""
+        self.time = float(state["time"])
+        self.contact_work_on_ice = float(state["contact_work_on_ice"])
+        for k, s in enumerate(self.structures):
+            load = np.asarray(state[f"load_{k}"], dtype=np.float64)
+            if load.shape != self._load[id(s)].shape:
+                raise ValueError(f"load_{k} has shape {load.shape}, expected "
+                                 f"{self._load[id(s)].shape}")
+            self._load[id(s)][:] = load
+            self.contact_work[id(s)] = float(state[f"contact_work_{k}"])
+        for k, p in enumerate(self.pairs):
+            p.force = np.array(state[f"force_{k}"], dtype=np.float64)
+            p.moment = np.array(state[f"moment_{k}"], dtype=np.float64)
+            p.contacts = int(state[f"contacts_{k}"])
+            p.contact.total_impulse[:] = state[f"total_impulse_{k}"]
 
     def start(self) -> None:
         """Initial forces of the ice (call once before the first step)."""
@@ -159,6 +202,9 @@ class Coupler:
             self._load[id(s)][:] = 0.0
         for p in self.pairs:
             impulse = p.contact.take_impulse()
+            if self.comm is not None:
+                impulse = self.comm.allreduce_sum(impulse)
+                p.contacts = int(self.comm.allreduce_sum(p.contacts))
             self._load[id(p.structure)] += impulse / D
             p.force = impulse.sum(axis=0) / D
             p.moment = np.cross(p1[id(p.structure)], impulse).sum(axis=0) / D
@@ -171,8 +217,10 @@ class Coupler:
         olds = [b.begin_step(h, keep_old=bool(self._pairs_of[id(b)])) for b in self.bodies]
         for body, y_old in zip(self.bodies, olds):
             kick = (body.f, body.material.density, body.gravity)
+            active = getattr(body, "owned", None)
             for p in self._pairs_of[id(body)]:
-                s = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h, kick=kick)
+                s = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h,
+                                      active=active, kick=kick)
                 p.contacts += s.contacts
                 self.contact_work_on_ice += s.work
         broken = sum(b.compute_forces() for b in self.bodies)

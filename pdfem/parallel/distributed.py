@@ -152,6 +152,76 @@ class DistributedIce:
         self.body.end_step(dt)
         return int(self.comm.allreduce_sum(broken))
 
+    # -- the IceBody interface the coupler and the driver use ---------------------------------
+    # Arrays are the local ones (owned and halo particles); sums are over owned particles and
+    # over all ranks, so every rank gets the same totals.
+    name = property(lambda self: self.body.name)
+    material = property(lambda self: self.body.material)
+    gravity = property(lambda self: self.body.gravity)
+    dx = property(lambda self: self.body.dx)
+    delta = property(lambda self: self.body.delta)
+    s0 = property(lambda self: self.body.s0)
+    x0 = property(lambda self: self.body.x0)
+    vol = property(lambda self: self.body.vol)
+    y = property(lambda self: self.body.y)
+    v = property(lambda self: self.body.v)
+    f = property(lambda self: self.body.f)
+    broken = property(lambda self: self.body.broken)
+    time = property(lambda self: self.body.time)
+
+    @property
+    def owned(self) -> np.ndarray:
+        """(n_local,) bool: the particles this rank owns (contact is resolved for these)."""
+        return self.plan.owned
+
+    def begin_step(self, dt: float, keep_old: bool = False):
+        return self.body.begin_step(dt, keep_old)
+
+    def compute_forces(self) -> int:
+        """Forces at the current positions (two exchanges); bonds broken on this rank."""
+        return self._compute_forces()
+
+    def end_step(self, dt: float) -> None:
+        self.body.end_step(dt)
+
+    def _sum(self, per_particle: np.ndarray):
+        return self.comm.allreduce_sum(per_particle[self.plan.owned].sum(axis=0))
+
+    @property
+    def external_work(self) -> float:
+        return float(self.comm.allreduce_sum(self.body.external_work))
+
+    @external_work.setter
+    def external_work(self, value: float) -> None:
+        self.body.external_work = value if self.comm.rank == 0 else 0.0
+
+    def kinetic_energy(self) -> float:
+        b = self.body
+        return 0.5 * b.material.density * float(self._sum(b.vol * np.einsum("ij,ij->i", b.v, b.v)))
+
+    def strain_energy(self) -> float:
+        b, mat = self.body, self.body.material
+        theta = np.empty(len(b.vol))
+        kernels.dilatation(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b.broken, b.vol, b.m,
+                           theta, b._ws)
+        self._exchange(theta)
+        W = kernels.strain_energy(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b.broken, b.vol,
+                                  b.m, theta, mat.K, mat.mu, b._ws)
+        return float(self._sum(W * b.vol))
+
+    def gravity_potential(self) -> float:
+        b = self.body
+        if not np.any(b.gravity):
+            return 0.0
+        return -b.material.density * float(self._sum(b.vol * ((b.y - b.x0) @ b.gravity)))
+
+    def momentum(self) -> np.ndarray:
+        b = self.body
+        return b.material.density * self._sum(b.vol[:, None] * b.v)
+
+    def displacement(self) -> np.ndarray:
+        return self.body.displacement()
+
     # -- results -----------------------------------------------------------------------------
     def gather(self, values: np.ndarray) -> np.ndarray | None:
         """The owned entries of a local per-particle array, assembled in global order on rank 0
