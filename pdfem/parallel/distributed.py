@@ -21,6 +21,7 @@ some sums can differ, so 1 and N ranks agree to round-off. Units: SI.
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import numpy as np
 
@@ -116,17 +117,20 @@ class DistributedIce:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
             local.constraints.append(VelocityConstraint(g2l[mine], c.velocity, c.ramp_time))
         self.body = local
+        self.exchange_seconds = 0.0  # wall time spent in halo exchanges, s
         # bonds whose lower end is owned here: counted once over all ranks
         self._counted = plan.owned[np.repeat(np.arange(len(loc)), np.diff(row_ptr))]
 
     # -- exchanges ---------------------------------------------------------------------------
     def _exchange(self, values: np.ndarray) -> None:
         """Overwrite the halo entries of ``values`` with their owners' values."""
+        t0 = time.perf_counter()
         p = self.plan
         sends = {q: values[idx] for q, idx in p.send.items()}
         recvs = {q: ((len(idx),) + values.shape[1:], values.dtype) for q, idx in p.recv.items()}
         for q, got in self.comm.exchange(sends, recvs).items():
             values[p.recv[q]] = got
+        self.exchange_seconds += time.perf_counter() - t0
 
     def _compute_forces(self) -> int:
         b, mat = self.body, self.body.material
