@@ -147,3 +147,35 @@ def test_coupled_contact_split_matches_serial(tmp_path, ranks):
     assert float(fields["fmax"]) > 1e3 and int(fields["broken"]) > 0
     assert float(fields["err_y"]) <= 1e-10 and float(fields["err_f"]) <= 1e-10
     assert fields["same_damage"] == "True"
+
+
+FAULT = textwrap.dedent('''
+    import time
+    from pdfem.errors import InstabilityError
+    from pdfem.parallel.comm import run_guarded, world
+
+    def work():
+        comm = world()
+        comm.allreduce_sum(1)
+        if comm.rank == 1:
+            raise InstabilityError("injected fault on rank 1")
+        comm.allreduce_sum(1)   # the other ranks wait here for rank 1, which never comes
+        time.sleep(60)
+
+    run_guarded(work)
+''')
+
+
+def test_an_error_on_one_rank_ends_the_job_quickly(tmp_path):
+    """An exception on rank 1 of 3 (injected) ends every rank within seconds, with that rank's
+    message and a non-zero exit status, instead of leaving the others waiting forever."""
+    import time
+
+    script = tmp_path / "fault.py"
+    script.write_text(FAULT)
+    t0 = time.perf_counter()
+    r = subprocess.run([_mpiexec(), "-n", "3", sys.executable, str(script)],
+                       capture_output=True, text=True, timeout=120)
+    assert time.perf_counter() - t0 < 30
+    assert r.returncode != 0
+    assert "pdfem rank 1: InstabilityError: injected fault on rank 1" in r.stderr

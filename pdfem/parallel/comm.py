@@ -94,3 +94,29 @@ def world():
 
     comm = MPI.COMM_WORLD
     return MPIComm(comm) if comm.Get_size() > 1 else SerialComm()
+
+
+def run_guarded(fn, *args, comm=None, **kwargs):
+    """Call ``fn``; under MPI, an exception on any rank ends the whole job at once.
+
+    The failing rank prints ``pdfem rank R: <message>`` to standard error and calls
+    ``MPI_Abort`` with the exit status of the error (2 bad input, 3 instability, 1 otherwise,
+    as in :mod:`pdfem.errors`), so the other ranks do not wait for it in a collective. A serial
+    run just raises.
+    """
+    comm = comm or world()
+    if comm.size == 1:
+        return fn(*args, **kwargs)
+    try:
+        return fn(*args, **kwargs)
+    except BaseException as exc:  # noqa: BLE001 - any failure must end every rank
+        import sys
+
+        from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError, InstabilityError
+
+        code = (EXIT_BAD_INPUT if isinstance(exc, InputError) else
+                EXIT_INSTABILITY if isinstance(exc, InstabilityError) else EXIT_FAILURE)
+        text = exc.text() if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
+        print(f"pdfem rank {comm.rank}: {text}", file=sys.stderr, flush=True)
+        comm.abort(code)
+        raise
