@@ -16,12 +16,16 @@ from .rigid import RigidBody
 from .structure import ElasticStructure
 
 
-def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>") -> Path:
-    """The .msh file of a structure: the case's file, or its model meshed into ``out_dir``."""
+def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
+                   remesh: bool = True) -> Path:
+    """The .msh file of a structure: the case's file, or its model meshed into ``out_dir``
+    (``remesh=False``: the mesh already written there, e.g. by MPI rank 0)."""
     if cfg.mesh.endswith(".msh"):
         return Path(cfg.mesh)
     from ..meshing import mesh_model
     target = Path(out_dir) / f"{cfg.name}.msh"
+    if not remesh:
+        return target
     try:
         mesh_model(cfg.mesh, {k: v for k, v in cfg.params.items()}, target)
     except InputError as exc:
@@ -30,14 +34,16 @@ def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>") ->
     return target
 
 
-def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>"):
-    """Build the elastic structure or rigid body that ``cfg`` describes.
+def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
+                    remesh: bool = True):
+    """Build the elastic structure or rigid body that ``cfg`` describes (``remesh``: see
+    :func:`structure_mesh`).
 
     Returns
     -------
     ElasticStructure or RigidBody
     """
-    path = structure_mesh(cfg, out_dir, file)
+    path = structure_mesh(cfg, out_dir, file, remesh)
     try:
         if cfg.kind == "rigid":
             return RigidBody.from_msh(path, cfg.contact_group, velocity=cfg.velocity,
