@@ -1,11 +1,14 @@
 """The ``pdfem`` command line.
 
-    pdfem run [CASE.toml] [--out DIR] [--quiet] [--json]
+    pdfem run [CASE.toml] [--out DIR] [--restart CHECKPOINT] [--quiet] [--json]
     pdfem post RESULTS.h5 [--plots DIR] [--csv FILE] [--json]
     pdfem mesh MODEL [--set key=value ...] [-o FILE.msh] [--json]
     pdfem bench {search,step} [--n N] [--json]
     pdfem info [--json]
     pdfem --version
+
+``pdfem run CASE --restart DIR/checkpoint.h5`` continues a run of CASE from its last checkpoint,
+appending to the results file in DIR (``--out`` defaults to the checkpoint's directory).
 
 ``pdfem run`` without a case runs the built-in demo (``demo_ice_sheet_panel.toml`` of the
 package ``pdfem.models``) into ``results/demo_ice_sheet_panel/`` and prints its post summary.
@@ -50,6 +53,9 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("case", nargs="?", default=None,
                    help=f"case file (TOML, SI units); default: the demo {DEMO_CASE}")
     r.add_argument("--out", default=None, help="output directory (default: results/<case name>)")
+    r.add_argument("--restart", default=None, metavar="CHECKPOINT",
+                   help="continue the run of CASE from this checkpoint (checkpoint.h5 in the "
+                        "run's output directory), appending to its results")
     r.add_argument("--quiet", action="store_true", help="no progress or messages")
     r.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
 
@@ -114,12 +120,20 @@ def _cmd_run(args) -> int:
     else:
         case = load_case(args.case)
         stem = Path(args.case).stem
-    out = Path(args.out) if args.out else Path("results") / stem
+    if args.restart is not None and args.case is None:
+        raise InputError(None, "--restart", "give the case file of the run to continue: "
+                         "pdfem run CASE.toml --restart CHECKPOINT")
+    if args.out:
+        out = Path(args.out)
+    elif args.restart is not None:
+        out = Path(args.restart).parent
+    else:
+        out = Path("results") / stem
     demo = args.case is None
     if args.json:
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
-            summary = run_case(case, out, quiet=True)
+            summary = run_case(case, out, quiet=True, restart=args.restart)
         report = {"results": str(summary.results), "steps": summary.steps,
                   "time_step": summary.time_step, "end_time": summary.end_time,
                   "wall_seconds": summary.wall_seconds, "particles": summary.particles,
@@ -132,7 +146,7 @@ def _cmd_run(args) -> int:
             report["post"] = summarize(load_results(summary.results))
         print(json.dumps(report))
     else:
-        summary = run_case(case, out, quiet=args.quiet)
+        summary = run_case(case, out, quiet=args.quiet, restart=args.restart)
         if not args.quiet:
             print(summary.text())
             if demo:

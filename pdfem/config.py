@@ -16,6 +16,11 @@ Shape of a case file::
     gravity = [0, 0, 0]        # m/s^2
     short_range_contact = false  # repulsion between ice particles closer than 0.9 of their
                                # initial distance (fragments meeting again, floes meeting)
+    allow_unstable_time_step = false  # a time_step above the stable estimate is an error
+                               # (exit 2) unless this is true (then only a warning)
+    checkpoint_interval_steps = 0      # write <out>/checkpoint.h5 every N coupling steps (0 = off)
+    checkpoint_interval_minutes = 30.0 # ... and every M minutes of wall time (0 = off)
+    stability_check_interval_steps = 10  # coupling steps between blow-up checks (speed, NaN)
 
     [[ice]]
     name = "beam"
@@ -52,6 +57,11 @@ Shape of a case file::
     name = "mid"
     structure = "panel"
     point = [1.0, 0.6, 0.0]    # m; the nearest node (u) and the element containing it (von_mises)
+
+Checkpoints hold the whole state (ice, structures, contact, clock, output counters); continue
+a run with ``pdfem run CASE --restart <out>/checkpoint.h5``, which appends to the same results
+file. A run whose state blows up (NaN/Inf, a particle moving more than a horizon in one step,
+energy growing without work input) stops with exit 3 and a diagnosis (:mod:`pdfem.blowup`).
 
 The coupling step is the larger of the ice and structure stable steps; the faster side takes
 ``run.substeps`` steps per coupling step (0 or absent = chosen automatically).
@@ -179,6 +189,10 @@ class RunConfig:
     title: str = ""
     substeps: int = 0
     short_range_contact: bool = False
+    allow_unstable_time_step: bool = False
+    checkpoint_interval_steps: int = 0
+    checkpoint_interval_minutes: float = 30.0
+    stability_check_interval_steps: int = 10
 
 
 @dataclass(frozen=True)
@@ -415,6 +429,15 @@ def _strings(t: Table, key: str, default: tuple = ()) -> tuple[str, ...]:
     return tuple(v)
 
 
+def _is_gmsh(path: Path) -> bool:
+    """Whether ``path`` starts like a gmsh .msh file (ASCII or binary: ``$MeshFormat``)."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(64).lstrip().startswith(b"$MeshFormat")
+    except OSError:
+        return False
+
+
 def _structure(t: Table, base_dir: Path) -> StructureConfig:
     name = t.string("name")
     kind = t.string("kind", "elastic", choices=("elastic", "rigid"))
@@ -424,6 +447,9 @@ def _structure(t: Table, base_dir: Path) -> StructureConfig:
         if not path.is_file():
             raise t.error("mesh", f"no such file ({path}); give a .msh file, a .py model file, "
                           "or the name of a model in models/", mesh)
+        if mesh.endswith(".msh") and not _is_gmsh(path):
+            raise t.error("mesh", f"{path} is not a gmsh mesh file (it does not start with "
+                          "$MeshFormat); write it from gmsh as .msh (format 4.1 or 2.2)", mesh)
         mesh = str(path)
     params = t.raw("params", {})
     if not isinstance(params, dict):
@@ -485,11 +511,27 @@ def _run(t: Table) -> RunConfig:
     sub = t.raw("substeps", 0)
     if isinstance(sub, bool) or not isinstance(sub, int) or sub < 0:
         raise t.error("substeps", "expected a whole number >= 0 (0 = automatic)", sub)
-    short = t.raw("short_range_contact", False)
-    if not isinstance(short, bool):
-        raise t.error("short_range_contact", "expected true or false", short)
+    short = _boolean(t, "short_range_contact")
+    unstable = _boolean(t, "allow_unstable_time_step")
+    every = _whole(t, "checkpoint_interval_steps", 0, 0, "(0 = no step-based checkpoints)")
+    minutes = t.number("checkpoint_interval_minutes", 30.0, low=0.0, unit="minutes")
+    check = _whole(t, "stability_check_interval_steps", 10, 1, "")
     t.done()
-    return RunConfig(end, out, dt, sf, loop, g, title, sub, short)
+    return RunConfig(end, out, dt, sf, loop, g, title, sub, short, unstable, every, minutes, check)
+
+
+def _boolean(t: Table, key: str, default: bool = False) -> bool:
+    v = t.raw(key, default)
+    if not isinstance(v, bool):
+        raise t.error(key, "expected true or false", v)
+    return v
+
+
+def _whole(t: Table, key: str, default: int, low: int, note: str) -> int:
+    v = t.raw(key, default)
+    if isinstance(v, bool) or not isinstance(v, int) or v < low:
+        raise t.error(key, f"expected a whole number >= {low} {note}".rstrip(), v)
+    return v
 
 
 def _contacts(top: Table, ice: tuple[IceConfig, ...],

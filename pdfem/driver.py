@@ -6,12 +6,17 @@ the ice bodies, the faster side subcycling, with surface-element contact between
 case names. Results: a frame every ``output_interval`` (ice and structure fields, energies,
 structure reactions), and at every coupling step the ice load on each structure (force,
 moment, particles in contact) and the monitor probes.
+
+Around the loop: up-front estimates of particles, bonds and memory (a run that cannot fit is
+refused before anything is allocated), the time-step check (a ``run.time_step`` above the
+stable estimate is bad input unless ``run.allow_unstable_time_step``), checkpoints and
+restart (:mod:`pdfem.checkpoint`; the results file is continued in place), and blow-up
+detection (:mod:`pdfem.blowup`; exit 3 with the results so far kept).
 """
 
 from __future__ import annotations
 
 import math
-import sys
 import time
 import warnings
 from dataclasses import dataclass
@@ -24,8 +29,13 @@ from .config import Case
 from .coupling.contact import SurfaceContact, overlapping
 from .coupling.coupler import ContactPair, Coupler, substep_counts
 from .coupling.ice_contact import ShortRangeContact
+from .blowup import BlowupMonitor
+from .checkpoint import CHECKPOINT_NAME, DriverState, read_checkpoint, restore, write_checkpoint
 from .errors import InputError, InstabilityError
+from .estimates import (FIXED_BYTES, BodyEstimate, available_memory, estimate_body,
+                        format_bytes)
 from .io import ResultsWriter
+from .mesh_quality import MeshQualityError, check_cells
 from .fem.build import build_structure
 from .fem.structure import ElasticStructure
 from .pd.body import IceBody
@@ -73,13 +83,28 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
     the structure step is safety_factor x the smallest critical structure step. The faster side
     subcycles (:func:`pdfem.coupling.coupler.substep_counts`); ``run.substeps`` overrides the
     count. The coupling step is then shortened so that a whole number of steps ends the run.
+
+    Raises
+    ------
+    InputError
+        If ``run.time_step`` exceeds the stable ice step and the case does not set
+        ``run.allow_unstable_time_step = true`` (with it: a warning).
     """
     run = case.run
     ice = min((critical_step(b) for b in bodies), default=math.inf)
     if run.time_step is not None:
         if run.time_step > ice:
+            worst = min(bodies, key=critical_step).name
+            if not run.allow_unstable_time_step:
+                raise InputError(case.file, "run.time_step",
+                                 f"exceeds the stable step {ice:.4e} s of ice body '{worst}' "
+                                 f"({run.time_step / ice:.2f} x), so the run would blow up; "
+                                 f"choose time_step <= {ice:.4e} s, leave it out (automatic "
+                                 "step), or set run.allow_unstable_time_step = true to run "
+                                 "anyway", run.time_step)
             warnings.warn(f"{case.file}: run.time_step = {run.time_step:.3e} s exceeds the stable "
-                          f"ice step {ice:.3e} s; the run may blow up", stacklevel=2)
+                          f"ice step {ice:.3e} s of '{worst}' (allowed by "
+                          "run.allow_unstable_time_step); the run may blow up", stacklevel=2)
         ice = run.time_step
     else:
         ice *= run.safety_factor
@@ -89,6 +114,33 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
     dt, n_ice, n_st = substep_counts(ice, st, run.substeps)
     nsteps = max(1, math.ceil(run.end_time / dt - 1e-9))
     return run.end_time / nsteps, n_ice, n_st
+
+
+def estimate_case(case: Case) -> list[BodyEstimate]:
+    """Particles, pairs and memory of every ice body of a case, before building
+    (:func:`pdfem.estimates.estimate_body`)."""
+    return [estimate_body(c.name, c.shape, c.dx, c.horizon) for c in case.ice]
+
+
+def check_memory(case: Case, estimates: list[BodyEstimate], available: int | None) -> int:
+    """The estimated memory (bytes) of the run; refuse it if it exceeds ``available`` bytes.
+
+    Raises
+    ------
+    InputError
+        Naming the body that needs most, with the estimate and what is available.
+    """
+    need = FIXED_BYTES + sum(e.bytes for e in estimates)
+    if available is not None and estimates and need > available:
+        big = max(range(len(estimates)), key=lambda k: estimates[k].bytes)
+        e = estimates[big]
+        raise InputError(case.file, f"{case.ice[big].field}.dx",
+                         f"the run needs about {format_bytes(need)} of memory but "
+                         f"{format_bytes(available)} is available; ice body '{e.name}' alone has "
+                         f"about {e.particles:,} particles and {e.pairs:,} bonds "
+                         f"({format_bytes(e.bytes)}); choose a larger dx, a smaller body, or a "
+                         "machine with more memory", case.ice[big].dx)
+    return need
 
 
 def _structure_fields(s) -> dict[str, np.ndarray]:
@@ -117,17 +169,6 @@ def _system_energies(structures: list, coupler: Coupler) -> dict[str, float]:
                                     if not isinstance(s, ElasticStructure))}
 
 
-def _check_finite(bodies: list[IceBody], t: float) -> None:
-    for b in bodies:
-        bad = ~np.isfinite(b.y).all(axis=1) | ~np.isfinite(b.v).all(axis=1)
-        if bad.any():
-            i = int(np.flatnonzero(bad)[0])
-            raise InstabilityError(
-                f"the state of ice body '{b.name}' became NaN/Inf at t = {t:.4e} s "
-                f"(first at particle {i}, reference position {b.x0[i].tolist()} m); "
-                "the time step is probably too large: lower run.safety_factor or run.time_step")
-
-
 def _contact_pairs(case: Case, bodies: list[IceBody], structures: list) -> list[ContactPair]:
     by_name = {b.name: b for b in bodies} | {s.name: s for s in structures}
     pairs = []
@@ -152,9 +193,33 @@ def _contact_pairs(case: Case, bodies: list[IceBody], structures: list) -> list[
     return pairs
 
 
+def _check_elements(st, cfg, file: str) -> None:
+    """Refuse inverted or degenerate tetrahedra of an elastic structure's mesh (exit 2)."""
+    if not isinstance(st, ElasticStructure) or st.cell_type != "tetra":
+        return
+    try:
+        check_cells(st.points, st.cells, 3)
+    except MeshQualityError as exc:
+        raise InputError(file, f"{cfg.field}.mesh", f"the mesh of structure '{st.name}' has bad "
+                         f"elements: {exc}; fix or re-mesh it", cfg.mesh) from None
+
+
+def _finite_state(bodies: list, structures: list) -> bool:
+    """Whether every ice position and velocity and every structure displacement is finite."""
+    return (all(np.isfinite(b.y).all() and np.isfinite(b.v).all() for b in bodies)
+            and all(np.isfinite(s.displacement()).all() for s in structures
+                    if isinstance(s, ElasticStructure)))
+
+
 def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: bool | None = None,
-             log=None) -> RunSummary:
+             log=None, restart: str | Path | None = None) -> RunSummary:
     """Run a validated case and write ``results.h5`` (+ ``results.xdmf``) into ``out_dir``.
+
+    Before building anything the particles, bonds and memory of the ice are estimated
+    (:mod:`pdfem.estimates`) and a run that would not fit in the available memory is refused.
+    Checkpoints (:mod:`pdfem.checkpoint`) go to ``out_dir/checkpoint.h5`` every
+    ``run.checkpoint_interval_steps`` steps and every ``run.checkpoint_interval_minutes`` of
+    wall time; blow-ups are detected by :class:`pdfem.blowup.BlowupMonitor`.
 
     Parameters
     ----------
@@ -168,17 +233,43 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         Force the progress line on/off (default: when standard error is a terminal).
     log
         Function taking one string (default: print to standard output).
+    restart
+        A checkpoint of this case to continue from; the run appends to ``out_dir/results.h5``
+        (frames and history rows written after the checkpoint are dropped).
 
     Returns
     -------
     RunSummary
+
+    Raises
+    ------
+    InputError
+        Bad input (including a run too large for the memory, an unstable ``run.time_step``, a
+        checkpoint of another case).
+    InstabilityError
+        The run blew up; the results file holds every frame up to then (and one at the
+        failure when the state is still finite).
     """
     say = (lambda s: None) if quiet else (log or (lambda s: print(s, flush=True)))
     out = Path(out_dir)
+    ckpt = read_checkpoint(restart, case.text, case.file) if restart is not None else None
+    estimates = estimate_case(case)
+    available = available_memory()
+    need = check_memory(case, estimates, available)
+    say(f"pdfem {__version__}: {case.file}{(' - ' + case.run.title) if case.run.title else ''}")
+    for e in estimates:
+        say(f"  estimate for ice '{e.name}': {e.particles:,} particles, {e.pairs:,} bonds "
+            f"({e.pairs_per_interior_particle} per interior particle"
+            f"{'' if e.exact else ', an upper bound'}), {format_bytes(e.bytes)}")
+    if estimates:
+        say(f"  estimated memory {format_bytes(need)} of {format_bytes(available) if available else 'unknown'} "
+            "available")
     out.mkdir(parents=True, exist_ok=True)
     t_setup = time.perf_counter()
     bodies = [build_ice_body(cfg, case.run, case.file) for cfg in case.ice]
     structures = [build_structure(cfg, out, case.file) for cfg in case.structures]
+    for st, cfg in zip(structures, case.structures):
+        _check_elements(st, cfg, case.file)
     pairs = _contact_pairs(case, bodies, structures)
     st_by_name = {s.name: s for s in structures}
     probes = []
@@ -186,15 +277,17 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         st = st_by_name[m.structure]
         probes.append((m, st, st.probe(m.point)))
     dt, n_ice, n_st = choose_time_steps(case, bodies, structures)
+    if ckpt is not None:  # continue with the steps the run was started with
+        dt, n_ice, n_st = (ckpt.driver.time_step, ckpt.driver.ice_substeps,
+                           ckpt.driver.structure_substeps)
     end = case.run.end_time
     nsteps = max(1, round(end / dt))
     n_part = sum(b.n for b in bodies)
     n_bonds = sum(b.n_bonds for b in bodies)
-    mem = sum(b.n * 200 + b.n_bonds * 13 for b in bodies)
-    say(f"pdfem {__version__}: {case.file}{(' - ' + case.run.title) if case.run.title else ''}")
+    stable = {b.name: b.stable_time_step() for b in bodies}
     for b in bodies:
         say(f"  ice '{b.name}': {b.n:,} particles, {b.n_bonds:,} bonds, dx = {b.dx:g} m, "
-            f"horizon = {b.delta:g} m, s0 = {b.s0:.3e}, stable step {b.stable_time_step():.3e} s")
+            f"horizon = {b.delta:g} m, s0 = {b.s0:.3e}, stable step {stable[b.name]:.3e} s")
     for st in structures:
         if isinstance(st, ElasticStructure):
             say(f"  structure '{st.name}': {st.mesh.n_nodes:,} nodes, {st.mesh.n_elements:,} {st.cell_type} "
@@ -209,14 +302,22 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         sub = f" (ice subcycles: {n_ice} steps of {dt / n_ice:.3e} s)"
     elif n_st > 1:
         sub = f" (structures subcycle: {n_st} steps of {dt / n_st:.3e} s)"
-    say(f"  coupling step {dt:.3e} s{sub}, {nsteps:,} steps to {end:g} s; "
-        f"about {mem / 2**20:.0f} MiB of state")
+    say(f"  coupling step {dt:.3e} s{sub}, {nsteps:,} steps to {end:g} s")
 
     path = out / "results.h5"
-    writer = ResultsWriter(path, case.text, {"title": case.run.title, "ranks": 1,
-                                             "time_step": dt, "ice_substeps": n_ice,
-                                             "structure_substeps": n_st,
-                                             "pd_loop": case.run.pd_loop})
+    ckpt_path = out / CHECKPOINT_NAME
+    if ckpt is None:
+        writer = ResultsWriter(path, case.text, {"title": case.run.title, "ranks": 1,
+                                                 "time_step": dt, "ice_substeps": n_ice,
+                                                 "structure_substeps": n_st,
+                                                 "pd_loop": case.run.pd_loop})
+    else:
+        try:
+            writer = ResultsWriter(path, case.text, append=True)
+        except (OSError, ValueError) as exc:
+            raise InputError(str(path), "--restart", f"cannot continue this results file "
+                             f"({exc}); give the output directory of the run that wrote the "
+                             "checkpoint with --out") from None
     for b in bodies:
         writer.add_ice_body(b.name, b.x0, b.vol)
     for st in structures:
@@ -227,9 +328,10 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     short_range = (ShortRangeContact(bodies) if case.run.short_range_contact and bodies
                    else None)
     coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st, short_range)
-    coupler.start()
+    monitor = BlowupMonitor(bodies, dt / n_ice, stable, case.run.stability_check_interval_steps,
+                            energy_check=not any(cfg.loads for cfg in case.structures))
 
-    def frame(t: float) -> None:
+    def frame(t: float) -> dict[str, float]:
         ice = {b.name: {"u": b.displacement(), "v": b.v, "damage": b.damage()} for b in bodies}
         writer.write_frame(t, ice, structures={st.name: _structure_fields(st) for st in structures})
         e = _energies(bodies)
@@ -240,7 +342,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
                     hist[f"reaction_{g}"] = st.reaction(g)
                 writer.append_history(f"structures/{st.name}", t, hist)
         if not bodies:
-            return
+            return {}
         e.update(_system_energies(structures, coupler))
         total = e["kinetic"] + e["strain"] + e["gravity_potential"] + e["structure_kinetic"] \
             + e["structure_strain"] + e["short_range_potential"]
@@ -248,6 +350,8 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         e["contact_dissipated"] = coupler.contact_dissipated
         e["fracture_dissipated"] = e["dissipated"] - e["contact_dissipated"]
         writer.append_history("energy", t, e)
+        e["supplied"] = initial_energy + e["external_work"] + e["rigid_body_work"]
+        return e
 
     def loads(t: float) -> None:
         for st in structures:
@@ -262,30 +366,83 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
             u, vm = st.probe_values(pr)
             writer.append_history(f"monitors/{m.name}", t, {"u": u, "von_mises": vm})
 
-    initial_energy = (sum(_energies(bodies)[k] for k in ("kinetic", "strain", "gravity_potential"))
-                      + sum(_system_energies(structures, coupler)[k]
-                            for k in ("structure_kinetic", "structure_strain",
-                                      "short_range_potential")))
-    frame(0.0)
-    loads(0.0)
-    frames = 1
+    try:
+        if ckpt is None:
+            coupler.start()
+            initial_energy = (sum(_energies(bodies)[k] for k in ("kinetic", "strain",
+                                                                  "gravity_potential"))
+                              + sum(_system_energies(structures, coupler)[k]
+                                    for k in ("structure_kinetic", "structure_strain",
+                                              "short_range_potential")))
+            frame(0.0)
+            loads(0.0)
+            frames, next_out, broken, first = 1, case.run.output_interval, 0, 1
+        else:
+            restore(ckpt, bodies, structures, coupler)
+            d = ckpt.driver
+            try:
+                writer.resume(d.frames, d.history_rows)
+            except ValueError as exc:
+                raise InputError(str(path), "--restart", f"the results file does not hold the "
+                                 f"data up to the checkpoint ({exc})") from None
+            initial_energy = d.initial_energy
+            frames, next_out, broken, first = d.frames, d.next_output, d.broken, d.step + 1
+            say(f"  restarting from {ckpt.path} at t = {d.time:.6e} s (step {d.step:,}), "
+                f"appending to {path}")
+    except BaseException:
+        writer.close()
+        raise
+    every = case.run.checkpoint_interval_steps
+    minutes = case.run.checkpoint_interval_minutes
+    if every or minutes:
+        when = " and ".join(w for w in ((f"every {every:,} steps" if every else ""),
+                                        (f"every {minutes:g} min" if minutes else "")) if w)
+        say(f"  checkpoints {when} to {ckpt_path}")
     say(f"  set-up {time.perf_counter() - t_setup:.1f} s; running")
     bar = Progress(end, enabled=False if quiet else progress)
-    next_out = case.run.output_interval
-    broken = 0
-    step = 0
+    last_checkpoint = time.monotonic()
+    step = first - 1
+    t = step * dt
+    last_frame = t
     try:
-        for step in range(1, nsteps + 1):
-            broken += coupler.step()
+        for step in range(first, nsteps + 1):
             t = step * dt
+            try:
+                broken += coupler.step()
+            except FloatingPointError as exc:
+                monitor.check_motion(t, step, force=True)
+                raise InstabilityError(f"at t = {t:.6e} s (step {step:,}): {exc}") from None
             loads(t)
+            monitor.check_motion(t, step)
             if t >= next_out * (1 - 1e-9) or step == nsteps:
-                _check_finite(bodies, t)
-                frame(t)
+                monitor.check_motion(t, step, force=True)
+                e = frame(t)
+                last_frame = t
                 frames += 1
                 while next_out <= t * (1 + 1e-9):
                     next_out += case.run.output_interval
+                if e:
+                    monitor.check_energy(t, step, -e["dissipated"], e["supplied"])
+            if step < nsteps and ((every and step % every == 0) or
+                                  (minutes and time.monotonic() - last_checkpoint >= 60 * minutes)):
+                writer.flush()
+                write_checkpoint(ckpt_path, case.text,
+                                 DriverState(step, t, dt, n_ice, n_st, next_out, frames, broken,
+                                             initial_energy, writer.history_rows()),
+                                 bodies, structures, coupler)
+                last_checkpoint = time.monotonic()
             bar.update(t, step)
+    except InstabilityError as exc:
+        note = ""
+        if t > last_frame and _finite_state(bodies, structures):
+            try:
+                frame(t)
+                note = f", the last at the failure, t = {t:.6e} s"
+            except Exception:  # the diagnosis matters more than this last frame
+                note = ""
+        writer.close()
+        raise InstabilityError(f"{exc}. The results so far are kept: {path} "
+                               f"({writer.n_frames} frames{note})") from None
     finally:
         wall = bar.finish()
         writer.close()

@@ -61,6 +61,12 @@ protects against the death of the process, not of the machine. While it is writt
 holds HDF5's lock, and a second :class:`ResultsWriter` on it is refused (HDF5 itself would
 truncate it first); to read it during a run, start the reader (e.g. ParaView) with
 ``HDF5_USE_FILE_LOCKING=FALSE`` (:func:`read_results` does this itself).
+
+Restart: ``ResultsWriter(path, case_text, append=True)`` reopens the file of a run (killed or
+not) of the same case; after the bodies are registered again, :meth:`ResultsWriter.resume`
+cuts every frame dataset and history back to the counts a checkpoint recorded (frames and
+rows written after it are dropped, as are their XDMF views), rewrites the XDMF file, and the
+run continues appending as before.
 """
 
 from __future__ import annotations
@@ -204,6 +210,29 @@ class _FrameSeries:
                     self._create_view(k, j, a.shape)
             self._views = index + VIEW_BATCH
 
+    def resume(self, n_frames: int) -> None:
+        """Take over the datasets of an existing file (append mode), cut to ``n_frames`` frames;
+        views of later frames are deleted (they are made again as frames are added)."""
+        group = self.file[self.path]
+        names = [k for k, ds in group.items()
+                 if isinstance(ds, h5py.Dataset) and ds.maxshape[0] is None]
+        if not names:
+            return
+        self.fields = {}
+        for k in names:
+            ds = group[k]
+            if ds.shape[0] < n_frames:
+                raise ValueError(f"{self.path}/{k} has {ds.shape[0]} frames, fewer than the "
+                                 f"{n_frames} to resume from")
+            self.fields[k] = (self._centre(k, ds.shape[1:]), ds.shape[2:])
+            ds.resize(n_frames, axis=0)
+            self._datasets[k] = ds
+            views = self.file.require_group(f"/xdmf{self.path}/{k}")
+            for v in [v for v in views if int(v) >= n_frames]:
+                del views[v]
+            self._view_groups[k] = views
+        self._views = n_frames
+
     def drop_unused_views(self, n_frames: int) -> None:
         """Delete the views made ahead for frames that were never written."""
         for group in self._view_groups.values():
@@ -292,6 +321,26 @@ class _History:
                                          chunks=(HISTORY_BLOCK,), dtype=np.float64,
                                          fillvalue=np.nan)
 
+    @classmethod
+    def resume(cls, file: h5py.File, path: str, rows: int) -> "_History":
+        """Take over an existing history group (append mode), cut to its first ``rows`` rows."""
+        group = file[path]
+        h = cls.__new__(cls)
+        h.file, h.path = file, path
+        h.time = group["time"]
+        if h.time.shape[0] < rows or np.isnan(h.time[:rows]).any():
+            raise ValueError(f"history {path!r} holds fewer than the {rows} committed rows to "
+                             "resume from")
+        h.datasets = {k: ds for k, ds in group.items() if k != "time"}
+        for ds in (*h.datasets.values(), h.time):
+            ds.resize(rows, axis=0)
+        h.shapes = {k: ds.shape[1:] for k, ds in h.datasets.items()}
+        h.buffers = {k: np.empty((HISTORY_BLOCK,) + s) for k, s in h.shapes.items()}
+        h.times = np.empty(HISTORY_BLOCK)
+        h.count = 0
+        h.written = rows
+        return h
+
     def append(self, time: float, values: Mapping[str, Any]) -> None:
         if values.keys() != self.shapes.keys():
             raise ValueError(f"history {self.path!r}: keys are fixed by the first row "
@@ -357,9 +406,16 @@ class ResultsWriter:
         The case file (TOML text), stored as ``/meta`` attribute ``case``.
     meta
         Further ``/meta`` attributes (e.g. ranks, threads, title): strings, numbers or arrays.
+        Ignored with ``append``.
+    append
+        Reopen an existing results file of the same case (``/meta`` case equal to
+        ``case_text``) to continue a run from a checkpoint: register the same bodies again,
+        then call :meth:`resume` before writing.
 
     Raises
     ------
+    ValueError
+        With ``append``, if the file holds another case.
     FileExistsError
         If another process is writing ``path`` (it holds the HDF5 file lock).
 
@@ -371,7 +427,7 @@ class ResultsWriter:
     """
 
     def __init__(self, path: str | os.PathLike, case_text: str = "",
-                 meta: dict | None = None) -> None:
+                 meta: dict | None = None, *, append: bool = False) -> None:
         self.path = Path(path)
         if self.path.suffix.lower() == ".xdmf":
             raise ValueError(f"results path {str(self.path)!r} must be the HDF5 file, "
@@ -386,8 +442,18 @@ class ResultsWriter:
         self._frames = 0
         self._xdmf_frames = -1
         self._last_time = -np.inf
+        self._append = append
+        self._resumed = not append
         _refuse_if_being_written(self.path)
-        self._file: h5py.File | None = h5py.File(self.path, "w")
+        if append:
+            self._file: h5py.File | None = h5py.File(self.path, "r+")
+            stored = _attr(self._file["meta"].attrs.get("case", ""))
+            if stored != case_text:
+                self._file.close()
+                raise ValueError(f"results file {str(self.path)!r} was written by another case "
+                                 "(its /meta case text differs); cannot append to it")
+            return
+        self._file = h5py.File(self.path, "w")
         m = self._file.create_group("meta")
         m.attrs["version"] = pdfem.__version__
         m.attrs["units"] = "SI"
@@ -420,6 +486,8 @@ class ResultsWriter:
             raise ValueError(f"{group} {name!r} added after the first frame; add all bodies first")
         if f"{group}/{name}" in self._meshes:
             raise ValueError(f"{group} {name!r} is already registered")
+        if self._append and f"/{group}/{name}" not in self._h5:
+            raise ValueError(f"{group} {name!r} is not in the results file being appended to")
         return f"/{group}/{name}"
 
     def _points(self, what: str, x: np.ndarray) -> np.ndarray:
@@ -453,13 +521,20 @@ class ResultsWriter:
             if volume.shape != (n,):
                 raise ValueError(f"volume of ice body {name!r} has shape {volume.shape}, "
                                  f"expected ({n},)")
-        g = f.create_group(path)
-        g.attrs["kind"] = "ice_body"
-        g.create_dataset("x0", data=x0)
-        f.create_dataset(f"/xdmf{path}/vertices", data=np.arange(n, dtype=np.int32).reshape(n, 1))
+        if self._append:
+            if f[path]["x0"].shape != x0.shape:
+                raise ValueError(f"ice body {name!r} has {n} particles, the results file "
+                                 f"{f[path]['x0'].shape[0]}")
+        else:
+            g = f.create_group(path)
+            g.attrs["kind"] = "ice_body"
+            g.create_dataset("x0", data=x0)
+            f.create_dataset(f"/xdmf{path}/vertices",
+                             data=np.arange(n, dtype=np.int32).reshape(n, 1))
+            if volume is not None:
+                g.create_dataset("volume", data=volume)
         constant = ""
         if volume is not None:
-            g.create_dataset("volume", data=volume)
             constant = ('<Attribute Name="volume" AttributeType="Scalar" Center="Node">'
                         f'{_data_item(self._h5name, f"{path}/volume", (n,))}</Attribute>')
         vertices = _data_item(self._h5name, f"/xdmf{path}/vertices", (n, 1), "Int", 4)
@@ -498,16 +573,73 @@ class ResultsWriter:
         nn, ne = points.shape[0], cells.shape[0]
         if cells.min() < 0 or cells.max() >= nn:
             raise ValueError(f"cells of structure {name!r} index nodes outside 0..{nn - 1}")
-        g = f.require_group("structure").create_group(name)
-        g.attrs["kind"] = "structure"
-        g.create_dataset("points", data=points)
-        g.create_dataset("cells", data=cells).attrs["cell_type"] = cell_type
+        if self._append:
+            if f[path]["points"].shape != points.shape or f[path]["cells"].shape != cells.shape:
+                raise ValueError(f"structure {name!r} differs from the one in the results file")
+        else:
+            g = f.require_group("structure").create_group(name)
+            g.attrs["kind"] = "structure"
+            g.create_dataset("points", data=points)
+            g.create_dataset("cells", data=cells).attrs["cell_type"] = cell_type
         topology = (f'<Topology TopologyType="{topology_type}" NumberOfElements="{ne}">'
                     f'{_data_item(self._h5name, f"{path}/cells", (ne, k), "Int", 4)}</Topology>')
         series = _FrameSeries(f, path, {"Node": nn, "Cell": ne}, ((), (3,)),
                               REQUIRED_STRUCTURE_FIELDS, CELL_FIELDS)
         self._meshes[f"structure/{name}"] = _Mesh(f"structure/{name}", topology,
                                                   self._geometry(f"{path}/points", nn), "", series)
+
+    def resume(self, frames: int, history_rows: Mapping[str, int]) -> None:
+        """Continue an appended file after its first ``frames`` frames (append mode only).
+
+        Drops the frames after them and, of every history, the rows after its count in
+        ``history_rows`` (histories not named there are deleted), rebuilds the XDMF file, and
+        lets the run continue with :meth:`write_frame` and :meth:`append_history`. Call it
+        once, after registering every body of the file again.
+
+        Parameters
+        ----------
+        frames
+            Frames to keep (>= 1).
+        history_rows
+            ``{history group: rows to keep}``, e.g. ``{"energy": 120, "loads/panel": 1200}``.
+        """
+        if not self._append or self._resumed:
+            raise ValueError("resume() is for a writer opened with append=True, once")
+        f = self._h5
+        registered = {f"{g}/{n}" for g in ("ice", "structure") for n in f.get(g, {})}
+        if registered != set(self._meshes):
+            raise ValueError(f"register every body of the results file first: the file has "
+                             f"{sorted(registered)}, registered {sorted(self._meshes)}")
+        times = f["time"]
+        if frames < 1 or times.shape[0] < frames or np.isnan(times[:frames]).any():
+            raise ValueError(f"the results file holds fewer than the {frames} frames to "
+                             "resume from")
+        times.resize(frames, axis=0)
+        kept = times[:frames]
+        for mesh in self._meshes.values():
+            mesh.series.resume(frames)
+            if mesh.series.fields is not None:
+                for i, t in enumerate(kept):
+                    mesh.add_frame_xml(self._h5name, i, float(t))
+        stack = [(k, g) for k, g in f.items() if k not in _RESERVED and isinstance(g, h5py.Group)]
+        while stack:
+            name, g = stack.pop()
+            if _attr(g.attrs.get("kind")) == "history":
+                if name in history_rows:
+                    self._histories[name] = _History.resume(f, "/" + name, int(history_rows[name]))
+                else:
+                    del f[name]
+            else:
+                stack.extend((f"{name}/{k}", s) for k, s in g.items() if isinstance(s, h5py.Group))
+        self._frames = frames
+        self._last_time = float(kept[-1])
+        self._resumed = True
+        self._xdmf_frames = -1
+        self.flush()
+
+    def history_rows(self) -> dict[str, int]:
+        """``{history group: rows appended so far}`` (committed or buffered), for a checkpoint."""
+        return {g: h.written + h.count for g, h in self._histories.items()}
 
     # -- per output time -----------------------------------------------------------------
 
@@ -534,6 +666,8 @@ class ResultsWriter:
             The index of the frame written.
         """
         self._h5  # raises if the file is closed
+        if not self._resumed:
+            raise ValueError("a writer opened with append=True needs resume() before writing")
         time = float(time)
         if not np.isfinite(time) or time <= self._last_time:
             raise ValueError(f"frame time {time!r} must be finite and greater than the "
@@ -568,6 +702,8 @@ class ResultsWriter:
             Scalars or arrays (e.g. ``force`` (3,) in N); keys and shapes fixed by the first row.
         """
         f = self._h5
+        if not self._resumed:
+            raise ValueError("a writer opened with append=True needs resume() before writing")
         h = self._histories.get(group)
         if h is None:
             parts = group.split("/") if isinstance(group, str) else [group]

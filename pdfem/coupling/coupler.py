@@ -133,7 +133,7 @@ class Coupler:
         return sum((self._load[id(s)].sum(axis=0) * self.dt for s in self.structures),
                    np.zeros(3))
 
-    def state(self) -> dict[str, np.ndarray | float]:
+    def checkpoint_state(self) -> dict[str, np.ndarray | float]:
         """The coupler's own state, for a checkpoint: ``time`` (s), per structure (in order)
         ``load_<k>`` (the pending contact load, N per surface node) and ``contact_work_<k>``
         (J), ``contact_work_on_ice`` (J), and per pair (in order) ``force_<k>`` (N),
@@ -150,8 +150,8 @@ class Coupler:
             out[f"total_impulse_{k}"] = p.contact.total_impulse.copy()
         return out
 
-    def set_state(self, state: dict) -> None:
-        """Restore a state from :meth:`state` exactly (same structures and pairs, same order)."""
+    def restore_state(self, state: dict) -> None:
+        """Restore a state from :meth:`checkpoint_state` exactly (same structures and pairs, same order)."""
         self.time = float(state["time"])
         self.contact_work_on_ice = float(state["contact_work_on_ice"])
         for k, s in enumerate(self.structures):

@@ -277,6 +277,26 @@ class CentralDifference:
         self.f_ext = f
         self.time = t_new
 
+    STATE_ARRAYS = ("u", "v", "a", "v_half", "f_ext", "f_damp")
+    """Names of the DOF vectors that, with ``time``, make up the state (:meth:`checkpoint_state`)."""
+
+    def checkpoint_state(self) -> dict[str, np.ndarray | float]:
+        """Copies of the state arrays (:data:`STATE_ARRAYS`) and ``time`` (s), for a checkpoint."""
+        out: dict[str, np.ndarray | float] = {k: getattr(self, k).copy() for k in self.STATE_ARRAYS}
+        out["time"] = self.time
+        return out
+
+    def restore_state(self, state: dict) -> None:
+        """Restore a state from :meth:`checkpoint_state` exactly (a restarted run continues bit for bit)."""
+        for k in self.STATE_ARRAYS:
+            a = np.array(state[k], dtype=np.float64)
+            if a.shape != (self.n,):
+                raise ValueError(f"state {k!r} has shape {a.shape}, expected ({self.n},)")
+            setattr(self, k, a)
+        if not (self.alpha or self.beta):
+            self.f_damp = self._zero  # as _damping_force gives it, so step() skips it
+        self.time = float(state["time"])
+
     def residual_force(self) -> np.ndarray:
         """``K u + C v_half + M a - f_ext`` (N) per DOF: zero on free DOFs, the support reaction
         (the force the support exerts on the body) on Dirichlet DOFs."""

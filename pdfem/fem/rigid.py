@@ -157,6 +157,22 @@ class RigidBody(SurfaceBody):
         self.time = t
         self._update_pose()
 
+    def checkpoint_state(self) -> dict[str, np.ndarray | float]:
+        """Time (s), its summation carry and the contact forces (N), for a checkpoint."""
+        return {"time": self.time, "time_carry": self._time_carry,
+                "surface_forces": self._surface_forces.copy()}
+
+    def restore_state(self, state: dict) -> None:
+        """Restore a state from :meth:`checkpoint_state` exactly (the pose follows from the time)."""
+        forces = np.asarray(state["surface_forces"], dtype=np.float64)
+        if forces.shape != self._surface_forces.shape:
+            raise ValueError(f"surface_forces has shape {forces.shape}, expected "
+                             f"{self._surface_forces.shape}")
+        self.time = float(state["time"])
+        self._time_carry = float(state["time_carry"])
+        self._surface_forces[:] = forces
+        self._update_pose()
+
     def stable_time_step(self) -> float:
         """A rigid body imposes no step limit: ``inf``."""
         return math.inf

@@ -263,6 +263,23 @@ class ElasticStructure(SurfaceBody):
         self.solver.a += change / self.solver.m
         self.solver.f_ext = self.solver.f_ext + change
 
+    # ------------------------------------------------------------------ checkpoint state
+    def checkpoint_state(self) -> dict[str, np.ndarray | float]:
+        """The solver state (:meth:`pdfem.fem.explicit.CentralDifference.checkpoint_state`) and the contact
+        forces on the surface nodes (``surface_forces``, N), for a checkpoint."""
+        out = self.solver.checkpoint_state()
+        out["surface_forces"] = self._surface_forces.copy()
+        return out
+
+    def restore_state(self, state: dict) -> None:
+        """Restore a state from :meth:`checkpoint_state` exactly."""
+        forces = np.asarray(state["surface_forces"], dtype=np.float64)
+        if forces.shape != self._surface_forces.shape:
+            raise ValueError(f"surface_forces has shape {forces.shape}, expected "
+                             f"{self._surface_forces.shape}")
+        self.solver.restore_state(state)
+        self._surface_forces[:] = forces
+
     # ------------------------------------------------------------------ surface interface
     def surface_points(self) -> np.ndarray:
         """(Ns, 3) current positions of the contact-surface nodes (m)."""
