@@ -130,10 +130,15 @@ def _cmd_run(args) -> int:
     else:
         out = Path("results") / stem
     demo = args.case is None
+    from .parallel.comm import run_guarded, world
+    comm = world()  # under mpiexec: every rank runs, rank 0 writes and reports
     if args.json:
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
-            summary = run_case(case, out, quiet=True, restart=args.restart)
+            summary = run_guarded(run_case, case, out, quiet=True, restart=args.restart,
+                                  comm=comm)
+        if comm.rank != 0:
+            return EXIT_OK
         report = {"results": str(summary.results), "steps": summary.steps,
                   "time_step": summary.time_step, "end_time": summary.end_time,
                   "wall_seconds": summary.wall_seconds, "particles": summary.particles,
@@ -146,8 +151,9 @@ def _cmd_run(args) -> int:
             report["post"] = summarize(load_results(summary.results))
         print(json.dumps(report))
     else:
-        summary = run_case(case, out, quiet=args.quiet, restart=args.restart)
-        if not args.quiet:
+        summary = run_guarded(run_case, case, out, quiet=args.quiet, restart=args.restart,
+                              comm=comm)
+        if not args.quiet and comm.rank == 0:
             print(summary.text())
             if demo:
                 from .post import format_summary, load_results, summarize

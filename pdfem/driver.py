@@ -29,6 +29,8 @@ from .config import Case
 from .coupling.contact import SurfaceContact, overlapping
 from .coupling.coupler import ContactPair, Coupler, substep_counts
 from .coupling.ice_contact import ShortRangeContact
+from .parallel.comm import world
+from .parallel.run import build_structures, distribute, gather_frame
 from .blowup import BlowupMonitor
 from .checkpoint import CHECKPOINT_NAME, DriverState, read_checkpoint, restore, write_checkpoint
 from .errors import InputError, InstabilityError
@@ -211,6 +213,27 @@ def _finite_state(bodies: list, structures: list) -> bool:
                     if isinstance(s, ElasticStructure)))
 
 
+class NullWriter:
+    """The results writer of MPI ranks other than 0: rank 0 writes the file."""
+
+    n_frames = 0
+
+    def __getattr__(self, name):
+        return lambda *args, **kwargs: None
+
+
+def _check_parallel_case(case: Case, restart) -> None:
+    """Refuse what does not run on several ranks yet, naming the field."""
+    if case.run.short_range_contact:
+        raise InputError(case.file, "run.short_range_contact", "short-range contact between ice "
+                         "particles does not run on several MPI ranks yet; run on one rank or "
+                         "set it to false", True)
+    if restart is not None or case.run.checkpoint_interval_steps:
+        raise InputError(case.file, "run.checkpoint_interval_steps", "checkpoints and --restart "
+                         "do not run on several MPI ranks yet; run on one rank or set the "
+                         "checkpoint intervals to 0", case.run.checkpoint_interval_steps)
+
+
 def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: bool | None = None,
              log=None, restart: str | Path | None = None) -> RunSummary:
     """Run a validated case and write ``results.h5`` (+ ``results.xdmf``) into ``out_dir``.
@@ -250,8 +273,12 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         The run blew up; the results file holds every frame up to then (and one at the
         failure when the state is still finite).
     """
+    comm = world()
+    quiet = quiet or comm.rank != 0  # one rank speaks for all
     say = (lambda s: None) if quiet else (log or (lambda s: print(s, flush=True)))
     out = Path(out_dir)
+    if comm.size > 1:
+        _check_parallel_case(case, restart)
     ckpt = read_checkpoint(restart, case.text, case.file) if restart is not None else None
     estimates = estimate_case(case)
     available = available_memory()
@@ -267,27 +294,30 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     out.mkdir(parents=True, exist_ok=True)
     t_setup = time.perf_counter()
     bodies = [build_ice_body(cfg, case.run, case.file) for cfg in case.ice]
-    structures = [build_structure(cfg, out, case.file) for cfg in case.structures]
+    structures = build_structures(case.structures, out, case.file, comm)
     for st, cfg in zip(structures, case.structures):
         _check_elements(st, cfg, case.file)
-    pairs = _contact_pairs(case, bodies, structures)
     st_by_name = {s.name: s for s in structures}
     probes = []
     for m in case.monitors:
         st = st_by_name[m.structure]
         probes.append((m, st, st.probe(m.point)))
     dt, n_ice, n_st = choose_time_steps(case, bodies, structures)
+    stable = {b.name: b.stable_time_step() for b in bodies}
+    n_part = sum(b.n for b in bodies)
+    n_bonds = sum(b.n_bonds for b in bodies)
+    for b in bodies:
+        say(f"  ice '{b.name}': {b.n:,} particles, {b.n_bonds:,} bonds, dx = {b.dx:g} m, "
+            f"horizon = {b.delta:g} m, s0 = {b.s0:.3e}, stable step {stable[b.name]:.3e} s")
+    reference = {b.name: (b.x0, b.vol) for b in bodies}
+    cut = sum(int(b.broken.sum()) for b in bodies)  # bonds broken before the run (pre-cracks)
+    bodies = distribute(bodies, comm, say)
+    pairs = _contact_pairs(case, bodies, structures)
     if ckpt is not None:  # continue with the steps the run was started with
         dt, n_ice, n_st = (ckpt.driver.time_step, ckpt.driver.ice_substeps,
                            ckpt.driver.structure_substeps)
     end = case.run.end_time
     nsteps = max(1, round(end / dt))
-    n_part = sum(b.n for b in bodies)
-    n_bonds = sum(b.n_bonds for b in bodies)
-    stable = {b.name: b.stable_time_step() for b in bodies}
-    for b in bodies:
-        say(f"  ice '{b.name}': {b.n:,} particles, {b.n_bonds:,} bonds, dx = {b.dx:g} m, "
-            f"horizon = {b.delta:g} m, s0 = {b.s0:.3e}, stable step {stable[b.name]:.3e} s")
     for st in structures:
         if isinstance(st, ElasticStructure):
             say(f"  structure '{st.name}': {st.mesh.n_nodes:,} nodes, {st.mesh.n_elements:,} {st.cell_type} "
@@ -306,8 +336,10 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
 
     path = out / "results.h5"
     ckpt_path = out / CHECKPOINT_NAME
-    if ckpt is None:
-        writer = ResultsWriter(path, case.text, {"title": case.run.title, "ranks": 1,
+    if comm.rank != 0:
+        writer = NullWriter()
+    elif ckpt is None:
+        writer = ResultsWriter(path, case.text, {"title": case.run.title, "ranks": comm.size,
                                                  "time_step": dt, "ice_substeps": n_ice,
                                                  "structure_substeps": n_st,
                                                  "pd_loop": case.run.pd_loop})
@@ -319,7 +351,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
                              f"({exc}); give the output directory of the run that wrote the "
                              "checkpoint with --out") from None
     for b in bodies:
-        writer.add_ice_body(b.name, b.x0, b.vol)
+        writer.add_ice_body(b.name, *reference[b.name])
     for st in structures:
         if isinstance(st, ElasticStructure):
             writer.add_structure(st.name, st.points, st.cells, st.cell_type)
@@ -327,12 +359,13 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
             writer.add_structure(st.name, st.x0, st.surface_triangles, "triangle")
     short_range = (ShortRangeContact(bodies) if case.run.short_range_contact and bodies
                    else None)
-    coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st, short_range)
+    coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st, short_range,
+                      comm if comm.size > 1 else None)
     monitor = BlowupMonitor(bodies, dt / n_ice, stable, case.run.stability_check_interval_steps,
                             energy_check=not any(cfg.loads for cfg in case.structures))
 
     def frame(t: float) -> dict[str, float]:
-        ice = {b.name: {"u": b.displacement(), "v": b.v, "damage": b.damage()} for b in bodies}
+        ice = {b.name: gather_frame(b) for b in bodies}  # collective under MPI
         writer.write_frame(t, ice, structures={st.name: _structure_fields(st) for st in structures})
         e = _energies(bodies)
         for st, cfg in zip(structures, case.structures):
@@ -393,7 +426,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         writer.close()
         raise
     every = case.run.checkpoint_interval_steps
-    minutes = case.run.checkpoint_interval_minutes
+    minutes = case.run.checkpoint_interval_minutes if comm.size == 1 else 0.0
     if every or minutes:
         when = " and ".join(w for w in ((f"every {every:,} steps" if every else ""),
                                         (f"every {minutes:g} min" if minutes else "")) if w)
@@ -434,7 +467,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
             bar.update(t, step)
     except InstabilityError as exc:
         note = ""
-        if t > last_frame and _finite_state(bodies, structures):
+        if comm.size == 1 and t > last_frame and _finite_state(bodies, structures):
             try:
                 frame(t)
                 note = f", the last at the failure, t = {t:.6e} s"
@@ -446,5 +479,4 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     finally:
         wall = bar.finish()
         writer.close()
-    return RunSummary(path, step, dt, nsteps * dt, wall, n_part, n_bonds,
-                      sum(int(b.broken.sum()) for b in bodies), frames)
+    return RunSummary(path, step, dt, nsteps * dt, wall, n_part, n_bonds, cut + broken, frames)

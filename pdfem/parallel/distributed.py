@@ -172,6 +172,7 @@ class DistributedIce:
     f = property(lambda self: self.body.f)
     broken = property(lambda self: self.body.broken)
     time = property(lambda self: self.body.time)
+    n = property(lambda self: self.body.n, doc="Number of local (owned and halo) particles.")
 
     @property
     def owned(self) -> np.ndarray:
@@ -182,8 +183,8 @@ class DistributedIce:
         return self.body.begin_step(dt, keep_old)
 
     def compute_forces(self) -> int:
-        """Forces at the current positions (two exchanges); bonds broken on this rank."""
-        return self._compute_forces()
+        """Forces at the current positions (two exchanges); bonds broken on all ranks."""
+        return int(self.comm.allreduce_sum(self._compute_forces()))
 
     def end_step(self, dt: float) -> None:
         self.body.end_step(dt)

@@ -45,12 +45,6 @@ def distribute(bodies: list, comm, say=lambda s: None) -> list:
     return out
 
 
-def global_reference(body):
-    """(x0, vol) of a body in global order, for the results file."""
-    g = getattr(body, "global_body", body)
-    return g.x0, g.vol
-
-
 def gather_frame(body) -> dict | None:
     """``{"u", "v", "damage"}`` of a body in global order on rank 0 (``None`` elsewhere)."""
     if not isinstance(body, DistributedIce):

@@ -1,0 +1,107 @@
+"""`mpiexec -n K pdfem run CASE` gives the serial answer, for K = 2 and 3 (3: an uneven split).
+
+Reference: the serial run of the same case. Two coupled cases: the seed's rigid cylinder
+striking an ice plate that breaks (coarsened), and ice pushed against the elastic hull panel
+(the structure subcycling, replicated on every rank). Particle displacements and the load
+histories agree with the serial run to 1e-10 relative, damage fields are identical. Run as
+subprocesses with a timeout from the ordinary suite.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pdfem.io import read_results
+
+CYLINDER = """
+[run]
+end_time = 1.2e-3
+output_interval = 4.0e-4
+[[ice]]
+name = "plate"
+dx = 0.02
+shape = { box = { min = [0.0, 0.0, 0.0], max = [1.0, 0.5, 0.04] } }
+material = { density = 900.0, youngs_modulus = 4.1e9, poisson_ratio = 0.3, fracture_energy = 3.0 }
+[[structure]]
+name = "cylinder"
+kind = "rigid"
+mesh = "indenters"
+params = { shape = "cylinder", radius = 0.1, length = 0.1, axis = "z", center_x = 0.5, center_y = 0.5905, center_z = 0.02, element_size = 0.02 }
+motion = { velocity = [0.0, -4.0, 0.0] }
+"""
+
+PANEL = """
+[run]
+end_time = 1.0e-3
+output_interval = 5.0e-4
+[[ice]]
+name = "floe"
+dx = 0.04
+shape = { box = { min = [0.8, 0.4, -0.019999], max = [1.2, 0.8, 0.140001] } }
+material = { fracture_energy = 10.0 }
+prescribed_velocity = [ { region = { box = { min = [0.7, 0.3, 0.09], max = [1.3, 0.9, 0.2] } }, velocity = [0.0, 0.0, -1.0], ramp_time = 2.0e-4 } ]
+[[structure]]
+name = "panel"
+mesh = "hull_panel"
+params = { element_size = 0.12 }
+fixed_groups = ["fixed"]
+[[monitor]]
+name = "centre"
+structure = "panel"
+point = [1.0, 0.6, 0.0]
+"""
+
+
+def _command(ranks: int) -> list[str]:
+    bindir = Path(sys.executable).parent
+    pdfem = str(bindir / "pdfem") if (bindir / "pdfem").exists() else shutil.which("pdfem")
+    if ranks == 1:
+        return [pdfem]
+    mpiexec = str(bindir / "mpiexec") if (bindir / "mpiexec").exists() else shutil.which("mpiexec")
+    return [mpiexec, "-n", str(ranks), pdfem]
+
+
+@pytest.mark.parametrize("text, body, structure", [(CYLINDER, "plate", "cylinder"),
+                                                   (PANEL, "floe", "panel")],
+                         ids=["cylinder_plate", "hull_panel"])
+def test_one_two_and_three_ranks_agree(tmp_path, text, body, structure):
+    case = tmp_path / "case.toml"
+    case.write_text(text)
+    results = {}
+    for ranks in (1, 2, 3):
+        r = subprocess.run(_command(ranks) + ["run", str(case), "--out", str(tmp_path / f"r{ranks}"),
+                                              "--quiet"], capture_output=True, text=True,
+                           timeout=600)
+        assert r.returncode == 0, r.stderr[-2000:]
+        results[ranks] = read_results(tmp_path / f"r{ranks}" / "results.h5")
+    ref = results[1]
+    u_ref = ref["ice"][body]["u"]
+    f_ref = ref["histories"][f"loads/{structure}"]["force"]
+    assert np.abs(f_ref).max() > 1e3  # N: there was contact
+    for ranks in (2, 3):
+        r = results[ranks]
+        assert r["meta"]["ranks"] == ranks
+        np.testing.assert_allclose(r["ice"][body]["u"], u_ref, rtol=0,
+                                   atol=1e-10 * np.abs(u_ref).max())
+        np.testing.assert_array_equal(r["ice"][body]["damage"], ref["ice"][body]["damage"])
+        np.testing.assert_allclose(r["histories"][f"loads/{structure}"]["force"], f_ref, rtol=0,
+                                   atol=1e-10 * np.abs(f_ref).max())
+        np.testing.assert_allclose(r["structure"][structure]["u"], ref["structure"][structure]["u"],
+                                   rtol=0, atol=1e-10 * np.abs(ref["structure"][structure]["u"]).max())
+
+
+def test_what_does_not_run_in_parallel_yet_is_refused(tmp_path):
+    """Short-range ice contact on several ranks: exit 2 naming the field, on every rank."""
+    case = tmp_path / "sr.toml"
+    case.write_text(CYLINDER.replace("output_interval = 4.0e-4",
+                                     "output_interval = 4.0e-4\nshort_range_contact = true"))
+    r = subprocess.run(_command(2) + ["run", str(case), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2
+    assert "run.short_range_contact" in r.stderr and "Traceback" not in r.stderr
