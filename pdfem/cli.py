@@ -132,6 +132,9 @@ def _cmd_run(args) -> int:
     demo = args.case is None
     from .parallel.comm import run_guarded, world
     comm = world()  # under mpiexec: every rank runs, rank 0 writes and reports
+    if comm.size > 1:
+        from .parallel.warm import warm_before_ranks
+        run_guarded(warm_before_ranks, comm, comm=comm)  # one rank fills numba's cache first
     if args.json:
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
