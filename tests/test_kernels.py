@@ -398,6 +398,63 @@ def test_fused_step_equals_dilatation_then_forces():
         assert np.array_equal(b.broken, br1)
 
 
+@pytest.mark.parametrize("chunks", [1, 3])
+def test_signed_weights_equal_broken_flags(chunks):
+    """Reference: the same kernels with a uint8 broken array. Storing a broken bond as a
+    negative weight (broken=SIGNED, how IceBody stores its bonds in 16 bytes per pair) gives
+    bit-identical theta, forces, count, energy and damage, breaks the same bonds (by negating
+    their weights), in the fused step with and without the bond-length scratch, and in the
+    full-family loop."""
+    b = Body((9, 9, 9), n_chunks=chunks)
+    rng = np.random.default_rng(3)
+    y = random_state(b, 2e-3, 10)
+    b.broken[rng.random(len(b.nbr)) < 0.05] = 1
+    b.nofail[rng.random(b.n) < 0.05] = 1
+    br0 = b.broken.copy()
+    th = b.theta(y)
+    W = kn.strain_energy(y, b.row_ptr, b.nbr, b.xi, b.wt, b.broken, b.vol, b.m, th, K, MU, b.ws)
+    dmg = kn.damage(b.row_ptr, b.nbr, b.broken, b.n, b.ws)
+    f, nb = b.forces(y, th, s0=1e-3)
+    assert nb > 0
+    w_signed = kn.signed_weights(b.wt, br0)
+    assert np.array_equal(kn.broken_flags(w_signed), br0)
+    args = (b.row_ptr, b.nbr, b.xi)
+    th_s, f_s = np.empty(b.n), np.empty((b.n, 3))
+    kn.dilatation(y, *args, w_signed, kn.SIGNED, b.vol, b.m, th_s, b.ws)
+    assert np.array_equal(th_s, th)
+    W_s = kn.strain_energy(y, *args, w_signed, kn.SIGNED, b.vol, b.m, th_s, K, MU, b.ws)
+    assert np.array_equal(W_s, W)
+    assert np.array_equal(kn.damage(b.row_ptr, b.nbr, kn.SIGNED, b.n, b.ws, w_signed), dmg)
+    ws = kn.PairWorkspace(b.row_ptr, b.nbr, n_chunks=chunks)
+    ws_lean = kn.PairWorkspace(b.row_ptr, b.nbr, n_chunks=chunks, keep_bond_length=False)
+    fam = build_family(b.row_ptr, b.nbr, b.n)
+    runs = {
+        "forces": lambda w: kn.forces(y, *args, w, kn.SIGNED, b.vol, b.m, th, K, MU, 1e-3,
+                                      b.nofail, f_s, ws),
+        "fused": lambda w: kn.dilatation_and_forces(y, *args, w, kn.SIGNED, b.vol, b.m, K, MU,
+                                                    1e-3, b.nofail, th_s, f_s, ws),
+        "fused, no scratch": lambda w: kn.dilatation_and_forces(
+            y, *args, w, kn.SIGNED, b.vol, b.m, K, MU, 1e-3, b.nofail, th_s, f_s, ws_lean),
+        "full family": lambda w: kn.forces_family(y, *fam, b.xi, w, kn.SIGNED, b.vol, b.m, th, K,
+                                                  MU, 1e-3, b.nofail, f_s),
+    }
+    for name, run in runs.items():
+        w = w_signed.copy()
+        f_s[:] = np.nan
+        assert run(w) == nb, name
+        assert np.array_equal(kn.broken_flags(w), b.broken), name
+        assert np.array_equal(np.abs(w), b.wt), name
+        if name == "full family":
+            np.testing.assert_allclose(f_s, f, rtol=0, atol=1e-12 * np.abs(f).max())
+        else:
+            assert np.array_equal(f_s, f), name
+    assert ws_lean.bond_length is None
+    # weighted volume and stable step count all initial bonds, broken or not
+    assert np.array_equal(kn.weighted_volume(*args, w_signed, b.vol, b.ws), b.m)
+    with pytest.raises(ValueError, match="one flag per pair"):
+        kn.dilatation(y, *args, b.wt, np.zeros(3, np.uint8), b.vol, b.m, th_s, b.ws)
+
+
 def test_workspace_rejects_backward_pairs():
     """Reference: the chunked loops rely on j > i; a pair list violating it must be refused."""
     with pytest.raises(ValueError, match="i < j"):

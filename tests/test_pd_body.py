@@ -91,6 +91,26 @@ def test_surface_correction_makes_face_families_isotropic():
     assert err[0] > 0.2 and err[1] < 0.015
 
 
+def test_surface_correction_threaded_and_in_place_match_serial():
+    """Reference: the serial surface correction (one chunk). The chunked, threaded pass over the
+    pairs sums the moments in another order, so the weights agree to float32 round-off; the
+    result does not depend on timing (two runs are bit-identical); correcting the weight array
+    in place (out=weight) gives the same weights as a separate output."""
+    from pdfem.pd.surface import surface_corrected_weights
+
+    b = block(10, 9, 8, surface_correction=False)
+    args = (b.x0, b.row_ptr, b.nbr, b.xi_len, b.weight, b.vol)
+    serial = surface_corrected_weights(*args, ws=kn.PairWorkspace(b.row_ptr, b.nbr, n_chunks=1))
+    ws3 = kn.PairWorkspace(b.row_ptr, b.nbr, n_chunks=3)
+    chunked = surface_corrected_weights(*args, ws=ws3)
+    assert not np.array_equal(serial, b.weight)  # the correction did something
+    np.testing.assert_allclose(chunked, serial, rtol=1e-6)
+    assert np.array_equal(surface_corrected_weights(*args, ws=ws3), chunked)
+    w = b.weight.copy()
+    surface_corrected_weights(b.x0, b.row_ptr, b.nbr, b.xi_len, w, b.vol, ws=ws3, out=w)
+    assert np.array_equal(w, chunked)
+
+
 def test_body_step_uses_the_fused_kernel_bit_identical_to_two_passes():
     """Reference: kernels.dilatation then kernels.forces (the two-pass step). IceBody's force
     evaluation uses the fused kernel, which only reuses the bond lengths: theta, forces, broken
@@ -104,14 +124,16 @@ def test_body_step_uses_the_fused_kernel_bit_identical_to_two_passes():
         b.y[:] = b.x0 + 2e-3 * DX * rng.standard_normal(b.x0.shape)
         b.nofail[rng.random(b.n) < 0.05] = 1
         broken0 = b.broken.copy()
+        w0 = b.weight.copy()  # the body negates the weights of bonds that break (SIGNED)
         nb = b.compute_forces()
         th, f = np.empty(b.n), np.empty((b.n, 3))
-        kn.dilatation(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, broken0, b.vol, b.m, th, b._ws)
-        nb2 = kn.forces(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, broken0, b.vol, b.m, th, mat.K,
+        kn.dilatation(b.y, b.row_ptr, b.nbr, b.xi_len, w0, broken0, b.vol, b.m, th, b._ws)
+        nb2 = kn.forces(b.y, b.row_ptr, b.nbr, b.xi_len, w0, broken0, b.vol, b.m, th, mat.K,
                         mat.mu, b.s0, b.nofail, f, b._ws)
         assert nb == nb2 > 0
         assert np.array_equal(b.theta, th) and np.array_equal(b.f, f)
         assert np.array_equal(b.broken, broken0)
+        assert np.array_equal(np.abs(b.weight), w0)  # only the signs changed
 
 
 @pytest.mark.parametrize("shape", [(20, 20, 2), (8, 8, 8)])

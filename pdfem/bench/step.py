@@ -3,7 +3,10 @@
 A cubic lattice of about ``n`` sea-ice particles (dx = 1 cm) with small random displacements;
 a step is the dilatation followed by the forces with the bond-break check, as the time loop
 runs them (:func:`pdfem.pd.kernels.dilatation_and_forces`, which keeps the bond lengths of the
-dilatation pass for the force pass; the two separate calls are timed as well). The figure of
+dilatation pass for the force pass; the two separate calls and the fused call without the
+bond-length scratch are timed as well). Bonds are stored as an ice body stores them: int32
+partner, float64 length and a float32 weight whose sign marks a broken bond (16 bytes per pair,
+:data:`pdfem.pd.kernels.SIGNED`). The figure of
 merit is unique pair-steps per second (pairs P times steps over the seconds), the same numerator
 for both loops, so the full-family loop (which visits every bond twice, the "original PD" of
 Zhang et al. 2023) is charged for the work it actually has to do.
@@ -70,18 +73,19 @@ def _warm_up(horizon_factor: float) -> None:
     m = kn.weighted_volume(row_ptr, nbr, xi, wt, vol, ws)
     th, f = np.empty(n), np.empty((n, 3))
     br, nf = np.zeros(len(nbr), np.uint8), np.zeros(n, np.uint8)
-    kn.dilatation(x, row_ptr, nbr, xi, wt, br, vol, m, th, ws)
-    kn.forces(x, row_ptr, nbr, xi, wt, br, vol, m, th, 1.0, 1.0, 1.0, nf, f, ws)
-    kn.dilatation_and_forces(x, row_ptr, nbr, xi, wt, br, vol, m, 1.0, 1.0, 1.0, nf, th, f, ws)
-    fam = build_family(row_ptr, nbr, n)
-    kn.dilatation_family(x, *fam, xi, wt, br, vol, m, th)
-    kn.forces_family(x, *fam, xi, wt, br, vol, m, th, 1.0, 1.0, 1.0, nf, f)
+    for b in (br, kn.SIGNED):
+        kn.dilatation(x, row_ptr, nbr, xi, wt, b, vol, m, th, ws)
+        kn.forces(x, row_ptr, nbr, xi, wt, b, vol, m, th, 1.0, 1.0, 1.0, nf, f, ws)
+        kn.dilatation_and_forces(x, row_ptr, nbr, xi, wt, b, vol, m, 1.0, 1.0, 1.0, nf, th, f, ws)
+        fam = build_family(row_ptr, nbr, n)
+        kn.dilatation_family(x, *fam, xi, wt, b, vol, m, th)
+        kn.forces_family(x, *fam, xi, wt, b, vol, m, th, 1.0, 1.0, 1.0, nf, f)
 
 
 def _timed(step, broken, steps: int) -> tuple[float, float, int]:
     """Total and fastest seconds of ``steps`` calls of ``step(broken)`` after one untimed call
     (which touches the scratch memory and breaks the bonds the displacements break), and the
-    bonds broken in all calls."""
+    bonds broken in all calls; ``broken`` is the signed weight array the step updates."""
     nbroken = step(broken)
     total, best = 0.0, math.inf
     for _ in range(steps):
@@ -120,7 +124,11 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
         :func:`~pdfem.pd.kernels.dilatation` then :func:`~pdfem.pd.kernels.forces`),
         ``full_family_step_s``, ``full_family_pair_steps_per_s`` (same numerator),
         ``speedup_pairs_vs_full_family``, ``pair_steps_per_s_best`` and
-        ``full_family_pair_steps_per_s_best`` (from the fastest single step), ``bonds_broken``, ``max_force_difference`` (relative,
+        ``full_family_pair_steps_per_s_best`` (from the fastest single step),
+        ``lean_pair_steps_per_s`` and ``lean_pair_steps_per_s_best`` (fused step without the
+        bond-length scratch), ``bytes_per_pair`` (stored per unique pair: partner, length,
+        signed weight), ``scratch_bytes_per_pair`` (the bond-length scratch of the fused step),
+        ``bonds_broken``, ``max_force_difference`` (relative,
         pair vs full family after the last step), ``search`` (how the pairs were built),
         ``load_average`` and ``load_average_after`` (1-minute load before and after the
         timing: other work on the machine skews the figures), plus the inputs.
@@ -151,31 +159,38 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
     f_fam = np.empty((npart, 3))
     load = os.getloadavg()[0]
 
-    def pair_step(broken):
-        return kn.dilatation_and_forces(y, row_ptr, nbr, xi, wt, broken, vol, m, K, mu, s0,
+    ws_lean = kn.PairWorkspace(row_ptr, nbr, keep_bond_length=False)
+
+    def pair_step(w):
+        return kn.dilatation_and_forces(y, row_ptr, nbr, xi, w, kn.SIGNED, vol, m, K, mu, s0,
                                         nofail, theta, f_pair, ws)
 
-    def separate_step(broken):
-        kn.dilatation(y, row_ptr, nbr, xi, wt, broken, vol, m, theta, ws)
-        return kn.forces(y, row_ptr, nbr, xi, wt, broken, vol, m, theta, K, mu, s0, nofail,
+    def lean_step(w):
+        return kn.dilatation_and_forces(y, row_ptr, nbr, xi, w, kn.SIGNED, vol, m, K, mu, s0,
+                                        nofail, theta, f_fam, ws_lean)
+
+    def separate_step(w):
+        kn.dilatation(y, row_ptr, nbr, xi, w, kn.SIGNED, vol, m, theta, ws)
+        return kn.forces(y, row_ptr, nbr, xi, w, kn.SIGNED, vol, m, theta, K, mu, s0, nofail,
                          f_fam, ws)
 
-    broken = np.zeros(npairs, np.uint8)
-    t_pair, best_pair, nbroken = _timed(pair_step, broken, steps)
-    t_sep, _, _ = _timed(separate_step, np.zeros(npairs, np.uint8), steps)
-    del ws
+    w_pair = wt.copy()
+    t_pair, best_pair, nbroken = _timed(pair_step, w_pair, steps)
+    t_lean, best_lean, _ = _timed(lean_step, wt.copy(), steps)
+    t_sep, _, _ = _timed(separate_step, wt.copy(), steps)
+    del ws, ws_lean
 
     fam_ptr, fam_nbr, fam_bond = build_family(row_ptr, nbr, npart)
     coef = np.empty((npart, 2))
 
-    def family_step(broken):
-        kn.dilatation_family(y, fam_ptr, fam_nbr, fam_bond, xi, wt, broken, vol, m, theta)
-        return kn.forces_family(y, fam_ptr, fam_nbr, fam_bond, xi, wt, broken, vol, m, theta, K,
+    def family_step(w):
+        kn.dilatation_family(y, fam_ptr, fam_nbr, fam_bond, xi, w, kn.SIGNED, vol, m, theta)
+        return kn.forces_family(y, fam_ptr, fam_nbr, fam_bond, xi, w, kn.SIGNED, vol, m, theta, K,
                                 mu, s0, nofail, f_fam, coef)
 
-    broken_fam = np.zeros(npairs, np.uint8)
-    t_fam, best_fam, nbroken_fam = _timed(family_step, broken_fam, steps)
-    if nbroken_fam != nbroken or not np.array_equal(broken, broken_fam):
+    w_fam = wt.copy()
+    t_fam, best_fam, nbroken_fam = _timed(family_step, w_fam, steps)
+    if nbroken_fam != nbroken or not np.array_equal(w_pair < 0, w_fam < 0):
         raise RuntimeError("pair loop and full-family loop broke different bonds (a bug)")
     scale = float(np.abs(f_pair).max()) or 1.0
     return {
@@ -193,6 +208,10 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
         "full_family_step_s": t_fam / steps,
         "full_family_pair_steps_per_s": npairs * steps / t_fam,
         "speedup_pairs_vs_full_family": t_fam / t_pair,
+        "lean_pair_steps_per_s": npairs * steps / t_lean,
+        "lean_pair_steps_per_s_best": npairs / best_lean,
+        "bytes_per_pair": int(nbr.itemsize + xi.itemsize + wt.itemsize),
+        "scratch_bytes_per_pair": 8,
         "separate_step_s": t_sep / steps,
         "separate_pair_steps_per_s": npairs * steps / t_sep,
         "bonds_broken": int(nbroken),

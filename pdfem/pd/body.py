@@ -11,6 +11,10 @@ axes), and correct the weights near free surfaces (:mod:`pdfem.pd.surface`), whi
 stiff surface layers of the LPS; bodies from arbitrary point clouds
 (:meth:`IceBody.from_points`) use w = 1 and no correction unless asked.
 
+Bonds cost 16 bytes each: int32 partner (``nbr``), float64 reference length (``xi_len``) and a
+float32 weight (``weight``) whose sign marks a broken bond (:data:`pdfem.pd.kernels.SIGNED`);
+``broken`` gives the flags as a uint8 copy.
+
 One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (kg/m^3)::
 
     v += dt/2 (f/rho + g)        kick
@@ -23,7 +27,7 @@ One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (k
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 
@@ -34,6 +38,7 @@ from .influence import bond_weights, isotropy_gain
 from .surface import surface_corrected_weights
 from .lattice import fill
 from .material import IceMaterial
+from .pair_kernels import SIGNED
 from .search import cell_pairs
 
 
@@ -71,14 +76,13 @@ class IceBody:
     row_ptr: np.ndarray       # (N+1,) int64
     nbr: np.ndarray           # (P,) int32, unique pairs i < nbr
     xi_len: np.ndarray        # (P,) reference bond lengths, m
-    broken: np.ndarray        # (P,) uint8
     nofail: np.ndarray        # (N,) uint8
     y: np.ndarray = None      # (N,3) positions, m
     v: np.ndarray = None      # (N,3) velocities, m/s
     f: np.ndarray = None      # (N,3) force density, N/m^3
     m: np.ndarray = None      # (N,) weighted volume, m^5
     theta: np.ndarray = None  # (N,) dilatation
-    weight: np.ndarray = None  # (P,) float32 bond weights omega = w beta
+    weight: np.ndarray = None  # (P,) float32 bond weights omega = w beta, negative = broken
     influence_gain: float = 0.0  # gain g of the cubic influence function (0: w = 1)
     loop: str = "pairs"
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -86,6 +90,15 @@ class IceBody:
     constraints: list = field(default_factory=list)
     external_work: float = 0.0
     time: float = 0.0
+    # Optional (P,) uint8 broken flags. Without them (how the builders make bodies) a broken
+    # bond is a negative weight. Given (e.g. by dataclasses.replace(body, broken=...)), the body
+    # keeps them as a separate array that the kernels update in place, and ``broken`` is it.
+    broken: InitVar[np.ndarray | None] = None
+    _flags: np.ndarray | None = field(default=None, init=False, repr=False, compare=False)
+
+    def __post_init__(self, broken):
+        if isinstance(broken, np.ndarray):
+            self._flags = broken
 
     @classmethod
     def from_points(cls, name: str, x: np.ndarray, material: IceMaterial, dx: float, delta: float,
@@ -134,8 +147,7 @@ class IceBody:
                else np.ascontiguousarray(np.asarray(volume, dtype=np.float64)[perm]))
         body = cls(name=name, x0=x0, vol=vol, material=material, dx=float(dx), delta=float(delta),
                    row_ptr=row_ptr, nbr=nbr, xi_len=bond_lengths(x0, row_ptr, nbr),
-                   broken=np.zeros(nbr.shape[0], dtype=np.uint8), nofail=np.zeros(n, dtype=np.uint8),
-                   loop=loop)
+                   nofail=np.zeros(n, dtype=np.uint8), loop=loop)
         body.y = x0.copy()
         body.v = np.zeros_like(x0)
         body.f = np.zeros_like(x0)
@@ -143,9 +155,10 @@ class IceBody:
         body.fixed = np.zeros(n, dtype=bool)
         body.influence_gain = gain
         body.weight = bond_weights(x0, row_ptr, nbr, body.xi_len, body.delta, body.dx, gain)
-        if surface_correction:
-            body.weight = surface_corrected_weights(x0, row_ptr, nbr, body.xi_len, body.weight, vol)
         body._ws = kernels.PairWorkspace(row_ptr, nbr)
+        if surface_correction:
+            surface_corrected_weights(x0, row_ptr, nbr, body.xi_len, body.weight, vol, ws=body._ws,
+                                      out=body.weight)
         body.m = kernels.weighted_volume(row_ptr, nbr, body.xi_len, body.weight, vol, body._ws)
         if loop == "full_family":
             body._family = build_family(row_ptr, nbr, n)
@@ -175,6 +188,10 @@ class IceBody:
         """Number of unique bonds (pairs)."""
         return self.nbr.shape[0]
 
+    def _broken_arg(self) -> np.ndarray:
+        """What the kernels get as ``broken``: the flag array, or SIGNED (negative weights)."""
+        return SIGNED if self._flags is None else self._flags
+
     @property
     def s0(self) -> float:
         """Critical stretch (inf when the material cannot break)."""
@@ -184,8 +201,11 @@ class IceBody:
         """Break the bonds crossing a planar pre-crack (see :func:`pdfem.pd.bonds.cut_crack`)."""
         nrm = np.asarray(normal, dtype=np.float64)
         nrm = nrm / np.linalg.norm(nrm)
-        return cut_crack(self.x0, self.row_ptr, self.nbr, self.broken, np.asarray(point, np.float64),
-                         nrm, np.asarray(lo, np.float64), np.asarray(hi, np.float64))
+        flags = self.broken
+        count = cut_crack(self.x0, self.row_ptr, self.nbr, flags, np.asarray(point, np.float64),
+                          nrm, np.asarray(lo, np.float64), np.asarray(hi, np.float64))
+        self.broken = flags
+        return count
 
     def add_velocity_constraint(self, mask: np.ndarray, velocity, ramp_time: float = 0.0) -> None:
         """Prescribe the velocity (m/s) of the particles in ``mask`` (ramped over ``ramp_time`` s)."""
@@ -206,16 +226,17 @@ class IceBody:
         Returns the number of bonds that broke.
         """
         mat = self.material
+        br = self._broken_arg()
         if self.loop == "pairs":
             return kernels.dilatation_and_forces(self.y, self.row_ptr, self.nbr, self.xi_len,
-                                                 self.weight, self.broken, self.vol, self.m, mat.K,
+                                                 self.weight, br, self.vol, self.m, mat.K,
                                                  mat.mu, self.s0, self.nofail, self.theta, self.f,
                                                  self._ws)
         fam_ptr, fam_nbr, fam_bond = self._family
         kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.weight,
-                                  self.broken, self.vol, self.m, self.theta)
+                                  br, self.vol, self.m, self.theta)
         return kernels.forces_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.weight,
-                                     self.broken, self.vol, self.m, self.theta, mat.K, mat.mu,
+                                     br, self.vol, self.m, self.theta, mat.K, mat.mu,
                                      self.s0, self.nofail, self.f)
 
     def _apply_constraints(self, t: float) -> None:
@@ -301,7 +322,8 @@ class IceBody:
 
     def damage(self) -> np.ndarray:
         """(N,) broken fraction of each particle's initial bonds."""
-        return kernels.damage(self.row_ptr, self.nbr, self.broken, self.n, self._ws)
+        return kernels.damage(self.row_ptr, self.nbr, self._broken_arg(), self.n, self._ws,
+                              self.weight)
 
     def kinetic_energy(self) -> float:
         """Kinetic energy, J."""
@@ -311,10 +333,11 @@ class IceBody:
         """Elastic energy of the unbroken bonds at the current positions, J."""
         mat = self.material
         theta = np.empty(self.n)  # of the current bond set (bonds broken this step excluded)
-        kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight, self.broken,
+        br = self._broken_arg()
+        kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight, br,
                            self.vol, self.m, theta, self._ws)
         W = kernels.strain_energy(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight,
-                                  self.broken, self.vol, self.m, theta, mat.K, mat.mu, self._ws)
+                                  br, self.vol, self.m, theta, mat.K, mat.mu, self._ws)
         return float(np.dot(W, self.vol))
 
     def gravity_potential(self) -> float:
@@ -327,3 +350,21 @@ class IceBody:
     def momentum(self) -> np.ndarray:
         """Linear momentum (3,), kg m/s."""
         return self.material.density * (self.vol @ self.v)
+
+
+def _get_broken(self: IceBody) -> np.ndarray:
+    """(P,) uint8 broken flags, 1 = broken. For a body that stores broken bonds as negative
+    weights (16 bytes per pair) this is a copy; assign a flag array to change the flags."""
+    return kernels.broken_flags(self.weight) if self._flags is None else self._flags
+
+
+def _set_broken(self: IceBody, flags: np.ndarray) -> None:
+    if self._flags is None:
+        self.weight[:] = kernels.signed_weights(self.weight, flags)
+    else:
+        self._flags[:] = flags
+
+
+# set after the dataclass is made, so that ``broken`` is both an optional constructor argument
+# (an InitVar with default None) and a property
+IceBody.broken = property(_get_broken, _set_broken)

@@ -14,11 +14,11 @@ import numba
 import numpy as np
 from numba import prange
 
-from .pair_kernels import check_weight, force_coefficients
+from .pair_kernels import check_broken, check_weight, force_coefficients
 from .workspace import FASTMATH, U64, c_contiguous
 
 @numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
-def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, m, wt, theta):
+def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, m, wt, theta):
     y = y2.reshape(y2.size)
     for i in prange(fam_ptr.shape[0] - 1):
         yi0 = y[3 * i]
@@ -27,7 +27,11 @@ def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, m, w
         acc = 0.0
         for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
             k = U64(fam_bond[q])
-            if broken[k] != 0:
+            w = wt[k]
+            if signed:
+                if w < 0.0:
+                    continue
+            elif broken[k] != 0:
                 continue
             j = U64(fam_nbr[q])
             j3 = U64(3) * j
@@ -36,12 +40,12 @@ def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, m, w
             d1 = y[j3 + U64(1)] - yi1
             d2 = y[j3 + U64(2)] - yi2
             r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            acc += wt[k] * l * (r - l) * vol[j]
+            acc += w * l * (r - l) * vol[j]
         theta[i] = 3.0 * acc / m[i] if m[i] > 0.0 else 0.0
 
 
 @numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
-def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, coef2, wt, s0,
+def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, coef2, wt, s0,
                    nofail, fout):
     y = y2.reshape(y2.size)
     coef = coef2.reshape(coef2.size)
@@ -60,7 +64,11 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, coef2, w
         fz = 0.0
         for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
             k = U64(fam_bond[q])
-            if broken[k] != 0:
+            w = wt[k]
+            if signed:
+                if w < 0.0:
+                    continue
+            elif broken[k] != 0:
                 continue
             j = U64(fam_nbr[q])
             j3 = U64(3) * j
@@ -75,11 +83,14 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, coef2, w
                 # index marks and counts the bond, so the count is exact. (The larger end may
                 # read the flag before or after that write: it skips the bond either way.)
                 if iu < j:
-                    broken[k] = 1
+                    if signed:
+                        wt[k] = -w
+                    else:
+                        broken[k] = 1
                     nb += 1
                 continue
             j2 = U64(2) * j
-            g = ((ai + coef[j2]) * l + (bi + coef[j2 + U64(1)]) * e) * wt[k] / r
+            g = ((ai + coef[j2]) * l + (bi + coef[j2 + U64(1)]) * e) * w / r
             g *= vol[j]
             fx += g * d0
             fy += g * d1
@@ -107,8 +118,8 @@ def dilatation_family(
     ``fam_ptr``, ``fam_nbr``, ``fam_bond`` come from :func:`pdfem.pd.family.build_family`; the
     other parameters are as in :func:`pdfem.pd.pair_kernels.dilatation`.
     """
-    _dilatation_family(c_contiguous(y, "y"), fam_ptr, fam_nbr, fam_bond, xi_len, broken, vol, m,
-                       check_weight(weight, xi_len), theta_out)
+    _dilatation_family(c_contiguous(y, "y"), fam_ptr, fam_nbr, fam_bond, xi_len, broken,
+                       check_broken(broken, xi_len), vol, m, check_weight(weight, xi_len), theta_out)
 
 
 def forces_family(
@@ -154,7 +165,8 @@ def forces_family(
         coef = np.empty((n, 2))
     force_coefficients(True, m, theta, K, mu, coef)
     return int(_forces_family(c_contiguous(y, "y"), fam_ptr, fam_nbr, fam_bond, xi_len, broken,
-                              vol, c_contiguous(coef, "coef"), check_weight(weight, xi_len),
+                              check_broken(broken, xi_len), vol, c_contiguous(coef, "coef"),
+                              check_weight(weight, xi_len),
                               float(s0), nofail, c_contiguous(f_out, "f_out")))
 
 

@@ -21,11 +21,14 @@ from .family_kernels import dilatation_family, forces_family
 from .influence import bond_weights, isotropy_gain
 from .integrate import verlet_drift, verlet_kick
 from .pair_kernels import (
+    SIGNED,
+    broken_flags,
     damage,
     dilatation,
     dilatation_and_forces,
     family_sum,
     forces,
+    signed_weights,
     strain_energy,
     weighted_volume,
 )
@@ -35,7 +38,9 @@ from .workspace import SERIAL_BELOW_PAIRS, SERIAL_BELOW_PARTICLES, PairWorkspace
 __all__ = [
     "SERIAL_BELOW_PAIRS",
     "SERIAL_BELOW_PARTICLES",
+    "SIGNED",
     "PairWorkspace",
+    "broken_flags",
     "bond_weights",
     "damage",
     "dilatation",
@@ -46,6 +51,7 @@ __all__ = [
     "forces_family",
     "isotropy_gain",
     "max_eigenvalue_time_step",
+    "signed_weights",
     "stable_time_step",
     "strain_energy",
     "verlet_drift",

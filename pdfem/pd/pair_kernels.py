@@ -8,8 +8,11 @@ Data layout (shared with the rest of pdfem):
 - ``xi_len`` (P,) float64 reference bond lengths (m);
 - ``weight`` (P,) float32 bond weights omega = w beta, the influence function times the
   partial-volume factor (:mod:`pdfem.pd.influence`);
-- ``broken`` (P,) uint8, 1 = broken for good; ``nofail`` (N,) uint8, 1 = bonds touching this
-  particle never break.
+- ``broken`` (P,) uint8, 1 = broken for good; or :data:`SIGNED` (an empty array), which says
+  that a bond is broken when its weight is negative (the bond-break check then negates the
+  weight): that is how :class:`pdfem.pd.body.IceBody` stores its bonds, 16 bytes per pair
+  (int32 partner, float64 length, float32 signed weight) instead of 17;
+- ``nofail`` (N,) uint8, 1 = bonds touching this particle never break.
 
 Per particle i with family j (e = |y_j - y_i| - |xi|, every family sum weighs member j by
 ``omega V_j``)::
@@ -56,6 +59,34 @@ from .workspace import (
 
 _NO_R = np.zeros(0)  # stands for "no bond-length buffer" (read-only by convention)
 
+#: Pass as ``broken`` to mean "bond k is broken iff weight[k] < 0" (read-only by convention).
+SIGNED = np.zeros(0, dtype=np.uint8)
+
+
+def check_broken(broken: np.ndarray, per_pair: np.ndarray) -> bool:
+    """True if ``broken`` is :data:`SIGNED` (broken = negative weight); False for a (P,) uint8
+    flag array shaped like ``per_pair``; ValueError otherwise."""
+    if not isinstance(broken, np.ndarray) or broken.dtype != np.uint8:
+        raise ValueError("broken must be a uint8 array (or pdfem.pd.pair_kernels.SIGNED)")
+    if broken.shape[0] == 0 and per_pair.shape[0] != 0:
+        return True
+    if broken.shape != per_pair.shape:
+        raise ValueError(f"broken must have one flag per pair (shape {per_pair.shape}), "
+                         f"got {broken.shape}")
+    return False
+
+
+def signed_weights(weight: np.ndarray, broken: np.ndarray) -> np.ndarray:
+    """float32 weights with the broken bonds (``broken`` != 0) negated: the :data:`SIGNED` form."""
+    out = np.abs(np.asarray(weight, dtype=np.float32))
+    np.negative(out, out=out, where=np.asarray(broken) != 0)
+    return out
+
+
+def broken_flags(weight: np.ndarray) -> np.ndarray:
+    """(P,) uint8 broken flags (1 where the weight is negative) of :data:`SIGNED` weights."""
+    return (np.asarray(weight) < 0).view(np.uint8)
+
 
 def check_weight(weight: np.ndarray, per_pair: np.ndarray) -> np.ndarray:
     """``weight`` itself if it is a C-contiguous float32 array shaped like ``per_pair`` (P,)."""
@@ -94,7 +125,7 @@ def _family_sum_pairs(row_ptr, nbr, xi_len, vol, wt, mode, cb, ov_ptr, ov, out):
                     g = l
                 else:
                     g = 1.0
-                g *= wt[k]
+                g *= abs(wt[k])  # all initial bonds (a negative weight marks a broken one)
                 acc += g * vol[j]
                 if j < r1:
                     out[j] += g * vi
@@ -106,7 +137,7 @@ def _family_sum_pairs(row_ptr, nbr, xi_len, vol, wt, mode, cb, ov_ptr, ov, out):
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, vol, wt, theta, checked, r1, ov,
+def _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, checked, r1, ov,
                     base, rbuf, store_r):
     """Row i of the pair-loop dilatation (``checked``: partners may lie beyond row r1)."""
     yi0 = y[3 * i]
@@ -115,7 +146,11 @@ def _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, vol, wt, theta, checked,
     vi = vol[i]
     acc = 0.0
     for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
-        if broken[k] != 0:
+        w = wt[k]
+        if signed:
+            if w < 0.0:
+                continue
+        elif broken[k] != 0:
             continue
         j = U64(nbr[k])
         j3 = U64(3) * j
@@ -126,7 +161,7 @@ def _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, vol, wt, theta, checked,
         r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         if store_r:
             rbuf[k] = r
-        g = wt[k] * l * (r - l)
+        g = w * l * (r - l)
         acc += g * vol[j]
         if checked and j >= r1:
             ov[base + (j - r1), 0] += g * vi
@@ -136,8 +171,8 @@ def _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, vol, wt, theta, checked,
 
 
 @twin()
-def _dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, vol, m, wt, cb, split, ov_ptr, ov,
-                      theta, rbuf, store_r):
+def _dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, split, ov_ptr,
+                      ov, theta, rbuf, store_r):
     """Pair-loop dilatation; with ``store_r`` also rbuf[k] = |y_j - y_i| of unbroken bonds."""
     y = y2.reshape(y2.size)  # flat view: 3 j + c indexing, no stride multiplications
     C = cb.shape[0] - 1
@@ -150,11 +185,11 @@ def _dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, vol, m, wt, cb, split, o
         for q in range(base, U64(ov_ptr[c + 1])):
             ov[q, 0] = 0.0
         for i in range(r0, split[c]):
-            _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, vol, wt, theta, False, r1,
-                            ov, base, rbuf, store_r)
+            _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, False,
+                            r1, ov, base, rbuf, store_r)
         for i in range(split[c], r1):
-            _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, vol, wt, theta, True, r1,
-                            ov, base, rbuf, store_r)
+            _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, True,
+                            r1, ov, base, rbuf, store_r)
     for t in prange(C):
         add_overflow1(t, cb, ov_ptr, ov, 0, theta)
         for p in range(cb[t], cb[t + 1]):
@@ -177,8 +212,8 @@ def force_coefficients(m, theta, K, mu, coef):
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _forces_row(i, y, row_ptr, nbr, xi_len, broken, vol, coef, wt, s0, nofail, f, checked,
-                r1, ov, base, rbuf, use_r):
+def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail, f,
+                checked, r1, ov, base, rbuf, use_r):
     """Row i of the pair-loop forces; returns the number of bonds it broke."""
     yi0 = y[3 * i]
     yi1 = y[3 * i + 1]
@@ -192,7 +227,11 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, vol, coef, wt, s0, nofail, f
     fz = 0.0
     nb = 0
     for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
-        if broken[k] != 0:
+        w = wt[k]
+        if signed:
+            if w < 0.0:
+                continue
+        elif broken[k] != 0:
             continue
         j = U64(nbr[k])
         j3 = U64(3) * j
@@ -206,11 +245,14 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, vol, coef, wt, s0, nofail, f
             r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         e = r - l
         if e > s0 * l and can_i and nofail[j] == 0:
-            broken[k] = 1
+            if signed:
+                wt[k] = -w
+            else:
+                broken[k] = 1
             nb += 1
             continue
         j2 = U64(2) * j
-        g = ((ai + coef[j2]) * l + (bi + coef[j2 + U64(1)]) * e) * wt[k] / r
+        g = ((ai + coef[j2]) * l + (bi + coef[j2 + U64(1)]) * e) * w / r
         gi = g * vol[j]
         fx += gi * d0
         fy += gi * d1
@@ -232,7 +274,7 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, vol, coef, wt, s0, nofail, f
 
 
 @twin()
-def _forces_pairs(y2, row_ptr, nbr, xi_len, broken, vol, coef2, wt, s0, nofail,
+def _forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, nofail,
                   cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
     """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf."""
     y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
@@ -250,10 +292,10 @@ def _forces_pairs(y2, row_ptr, nbr, xi_len, broken, vol, coef2, wt, s0, nofail,
             ov[q] = 0.0
         nb = 0
         for i in range(r0, split[c]):
-            nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, vol, coef, wt, s0,
+            nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
                               nofail, f, False, r1, ov, base, rbuf, use_r)
         for i in range(split[c], r1):
-            nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, vol, coef, wt, s0,
+            nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
                               nofail, f, True, r1, ov, base, rbuf, use_r)
         counts[c] = nb
     for t in prange(C):
@@ -265,7 +307,7 @@ def _forces_pairs(y2, row_ptr, nbr, xi_len, broken, vol, coef2, wt, s0, nofail,
 
 
 @twin()
-def _energy_pairs(y, row_ptr, nbr, xi_len, broken, vol, m, theta, K, mu, wt,
+def _energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, vol, m, theta, K, mu, wt,
                   cb, ov_ptr, ov, W):
     C = cb.shape[0] - 1
     for c in prange(C):
@@ -281,7 +323,11 @@ def _energy_pairs(y, row_ptr, nbr, xi_len, broken, vol, m, theta, K, mu, wt,
             vi = vol[i]
             acc = 0.0
             for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
-                if broken[k] != 0:
+                b = wt[k]
+                if signed:
+                    if b < 0.0:
+                        continue
+                elif broken[k] != 0:
                     continue
                 j = U64(nbr[k])
                 l = xi_len[k]
@@ -289,7 +335,6 @@ def _energy_pairs(y, row_ptr, nbr, xi_len, broken, vol, m, theta, K, mu, wt,
                 d1 = y[j, 1] - y[i, 1]
                 d2 = y[j, 2] - y[i, 2]
                 e = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - l
-                b = wt[k]
                 edi = e - ti * l
                 edj = e - theta[j] / 3.0 * l
                 acc += edi * edi * b * vol[j]
@@ -307,7 +352,7 @@ def _energy_pairs(y, row_ptr, nbr, xi_len, broken, vol, m, theta, K, mu, wt,
 
 
 @twin(fastmath=False)
-def _damage_pairs(row_ptr, nbr, broken, cb, ov_ptr, ov, nb, deg):
+def _damage_pairs(row_ptr, nbr, broken, signed, wt, cb, ov_ptr, ov, nb, deg):
     C = cb.shape[0] - 1
     for c in prange(C):
         r0 = cb[c]
@@ -323,7 +368,10 @@ def _damage_pairs(row_ptr, nbr, broken, cb, ov_ptr, ov, nb, deg):
             cnt = 0.0
             for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
                 j = U64(nbr[k])
-                b = 1.0 if broken[k] != 0 else 0.0
+                if signed:
+                    b = 1.0 if wt[k] < 0.0 else 0.0
+                else:
+                    b = 1.0 if broken[k] != 0 else 0.0
                 cnt += b
                 if j < r1:
                     nb[j] += b
@@ -427,7 +475,8 @@ def dilatation(
     y
         (N, 3) current positions (m).
     row_ptr, nbr, xi_len, weight, broken
-        Pair list, reference lengths (m), bond weights (float32) and broken flags (uint8).
+        Pair list, reference lengths (m), bond weights (float32) and broken flags (uint8, or
+        :data:`SIGNED`: broken = negative weight).
     vol, m
         (N,) volumes (m^3) and weighted volumes (m^5, :func:`weighted_volume`).
     theta_out
@@ -436,8 +485,9 @@ def dilatation(
         Optional :class:`PairWorkspace` for this pair list.
     """
     ws = workspace_for(ws, row_ptr, nbr)
-    _dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, vol, m,
-                      check_weight(weight, nbr), ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
+    _dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
+                      check_broken(broken, nbr), vol, m, check_weight(weight, nbr), ws.chunk_ptr,
+                      ws.split, ws.ov_ptr, ws.ov,
                       theta_out, _NO_R, False)
 
 
@@ -470,7 +520,8 @@ def forces(
     row_ptr, nbr, xi_len, weight
         Pair list, reference bond lengths (m) and bond weights (float32).
     broken
-        (P,) uint8, updated in place.
+        (P,) uint8, updated in place; or :data:`SIGNED`, and then a bond that breaks gets its
+        ``weight`` negated in place.
     vol, m, theta
         (N,) volumes (m^3), weighted volumes (m^5) and dilatations of this step.
     K, mu
@@ -491,7 +542,8 @@ def forces(
     """
     ws = workspace_for(ws, row_ptr, nbr)
     force_coefficients(ws.parallel, m, theta, K, mu, ws.coef)
-    return int(_forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, vol,
+    return int(_forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
+                             check_broken(broken, nbr), vol,
                              ws.coef, check_weight(weight, nbr), float(s0), nofail, ws.chunk_ptr,
                              ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
                              _NO_R, False))
@@ -518,7 +570,9 @@ def dilatation_and_forces(
 
     Bit-identical to the two calls, but faster: the dilatation pass stores every unbroken
     bond's current length in the workspace (``ws.bond_length``, float64 (P,), allocated on first
-    use: 8 bytes per pair) and the force pass reads it instead of taking a second square root.
+    use: 8 bytes per pair) and the force pass reads it instead of taking a second square root
+    (about 30 % of the force pass). A workspace built with ``keep_bond_length=False`` skips that
+    buffer (for the largest bodies, where memory counts more) and takes the square root twice.
 
     Parameters are those of :func:`dilatation` and :func:`forces`; ``theta_out`` (N,) and
     ``f_out`` (N, 3) are overwritten; ``ws`` is required.
@@ -529,14 +583,16 @@ def dilatation_and_forces(
         Number of bonds broken in this call.
     """
     ws.check(row_ptr, nbr)
-    rbuf = ws.bond_length_buffer()
+    rbuf = ws.bond_length_buffer() if ws.keep_bond_length else _NO_R
+    keep = rbuf.shape[0] > 0
     wt = check_weight(weight, nbr)
-    _dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, vol, m, wt,
-                      ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, True)
+    signed = check_broken(broken, nbr)
+    _dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, signed, vol,
+                      m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     force_coefficients(ws.parallel, m, theta_out, K, mu, ws.coef)
-    return int(_forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, vol, ws.coef, wt,
+    return int(_forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
                              float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
-                             ws.counts, c_contiguous(f_out, "f_out"), rbuf, True))
+                             ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep))
 
 
 def strain_energy(
@@ -564,7 +620,8 @@ def strain_energy(
     """
     ws = workspace_for(ws, row_ptr, nbr)
     W = np.empty(ws.n)
-    _energy_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, vol, m, theta,
+    _energy_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
+                  check_broken(broken, nbr), vol, m, theta,
                   float(K), float(mu), check_weight(weight, nbr), ws.chunk_ptr, ws.ov_ptr, ws.ov,
                   W)
     return W
@@ -576,17 +633,20 @@ def damage(
     broken: np.ndarray,
     n: int,
     ws: PairWorkspace | None = None,
+    weight: np.ndarray | None = None,
 ) -> np.ndarray:
     """Damage: the broken fraction of each particle's initial bonds (0 for a particle without).
 
     Parameters
     ----------
     row_ptr, nbr, broken
-        Pair list and broken flags; every pair counts for both its ends.
+        Pair list and broken flags (or :data:`SIGNED`); every pair counts for both its ends.
     n
         Number of particles N.
     ws
         Optional :class:`PairWorkspace` for this pair list.
+    weight
+        The signed float32 bond weights; required (and only read) with ``broken=SIGNED``.
 
     Returns
     -------
@@ -598,7 +658,13 @@ def damage(
     ws = workspace_for(ws, row_ptr, nbr)
     out = np.empty(n)
     deg = np.empty(n)
-    _damage_pairs(ws.parallel, row_ptr, nbr, broken, ws.chunk_ptr, ws.ov_ptr, ws.ov, out, deg)
+    if weight is None:
+        weight = np.zeros(0, dtype=np.float32)
+    signed = check_broken(broken, nbr)
+    if signed:
+        check_weight(weight, nbr)
+    _damage_pairs(ws.parallel, row_ptr, nbr, broken, signed, weight, ws.chunk_ptr, ws.ov_ptr,
+                  ws.ov, out, deg)
     return out
 
 

@@ -34,7 +34,8 @@ The idea is that of the position-aware LPS (Mitchell, Silling & Littlewood 2015,
 position-aware linear solid constitutive model for peridynamics", J. Mech. Mater. Struct. 10),
 which makes the moments isotropic with per-particle influence functions; here the correction
 is symmetrised so that it fits the one-weight-per-bond storage and costs nothing per step.
-The setup cost is a serial pass over the pairs per iteration (``iterations + 1`` passes).
+The setup cost is a pass over the pairs per iteration (``iterations + 1`` passes), threaded
+with the chunked, deterministic pair loop of :mod:`pdfem.pd.workspace`.
 """
 
 from __future__ import annotations
@@ -42,67 +43,87 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .workspace import FASTMATH
+from .workspace import FASTMATH, PairWorkspace
 
 
-@numba.njit(cache=True, fastmath=FASTMATH)
-def _corrected(x, row_ptr, nbr, xi_len, w0, vol, iterations, lo, hi, out):
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _add_moments(M, p, g, aa, bb, cc, ab, ac, bc):
+    M[p, 0] += g * aa
+    M[p, 1] += g * bb
+    M[p, 2] += g * cc
+    M[p, 3] += g * ab
+    M[p, 4] += g * ac
+    M[p, 5] += g * bc
+
+
+@numba.njit(cache=True, parallel=True, fastmath=FASTMATH)
+def _corrected(x, row_ptr, nbr, xi_len, w0, vol, iterations, lo, hi, cb, ov_ptr, out):
+    """The fixed-point iteration, as a race-free chunked pair loop (:mod:`pdfem.pd.workspace`):
+    chunk c sums the moments of its rows, the j side of bonds leaving the chunk into its own
+    overflow rows, which are added in chunk order, so the result does not depend on timing."""
     n = row_ptr.shape[0] - 1
+    nc = cb.shape[0] - 1
     C = np.zeros((n, 6))  # xx, yy, zz, 2 xy, 2 xz, 2 yz
     M = np.empty((n, 6))  # sum omega d d V (d = x_j - x_i): xx, yy, zz, xy, xz, yz
+    ov = np.empty((ov_ptr[nc], 6))
     for it in range(iterations + 1):
         last = it == iterations
-        M[:] = 0.0
-        for i in range(n):
-            xi0 = x[i, 0]
-            xi1 = x[i, 1]
-            xi2 = x[i, 2]
-            for k in range(row_ptr[i], row_ptr[i + 1]):
-                j = nbr[k]
-                a = x[j, 0] - xi0
-                b = x[j, 1] - xi1
-                c = x[j, 2] - xi2
-                aa = a * a
-                bb = b * b
-                cc = c * c
-                ab = a * b
-                ac = a * c
-                bc = b * c
-                q = ((C[i, 0] + C[j, 0]) * aa + (C[i, 1] + C[j, 1]) * bb
-                     + (C[i, 2] + C[j, 2]) * cc + (C[i, 3] + C[j, 3]) * ab
-                     + (C[i, 4] + C[j, 4]) * ac + (C[i, 5] + C[j, 5]) * bc)
-                ln = xi_len[k]
-                f = min(hi, max(lo, 1.0 + 0.5 * q / (ln * ln)))
-                g = w0[k] * f
-                if last:
-                    out[k] = g
-                    continue
-                gi = g * vol[j]
-                gj = g * vol[i]
-                M[i, 0] += gi * aa
-                M[i, 1] += gi * bb
-                M[i, 2] += gi * cc
-                M[i, 3] += gi * ab
-                M[i, 4] += gi * ac
-                M[i, 5] += gi * bc
-                M[j, 0] += gj * aa
-                M[j, 1] += gj * bb
-                M[j, 2] += gj * cc
-                M[j, 3] += gj * ab
-                M[j, 4] += gj * ac
-                M[j, 5] += gj * bc
+        for c in numba.prange(nc):
+            r0 = cb[c]
+            r1 = cb[c + 1]
+            base = ov_ptr[c]
+            M[r0:r1] = 0.0
+            ov[base:ov_ptr[c + 1]] = 0.0
+            for i in range(r0, r1):
+                xi0 = x[i, 0]
+                xi1 = x[i, 1]
+                xi2 = x[i, 2]
+                for k in range(row_ptr[i], row_ptr[i + 1]):
+                    j = nbr[k]
+                    a = x[j, 0] - xi0
+                    b = x[j, 1] - xi1
+                    cz = x[j, 2] - xi2
+                    aa = a * a
+                    bb = b * b
+                    cc = cz * cz
+                    ab = a * b
+                    ac = a * cz
+                    bc = b * cz
+                    q = ((C[i, 0] + C[j, 0]) * aa + (C[i, 1] + C[j, 1]) * bb
+                         + (C[i, 2] + C[j, 2]) * cc + (C[i, 3] + C[j, 3]) * ab
+                         + (C[i, 4] + C[j, 4]) * ac + (C[i, 5] + C[j, 5]) * bc)
+                    ln = xi_len[k]
+                    f = min(hi, max(lo, 1.0 + 0.5 * q / (ln * ln)))
+                    g = w0[k] * f
+                    if last:  # w0[k] is read for the last time here, so out may be w0
+                        out[k] = g
+                        continue
+                    _add_moments(M, i, g * vol[j], aa, bb, cc, ab, ac, bc)
+                    if j < r1:
+                        _add_moments(M, j, g * vol[i], aa, bb, cc, ab, ac, bc)
+                    else:
+                        _add_moments(ov, base + j - r1, g * vol[i], aa, bb, cc, ab, ac, bc)
         if last:
             break
-        for i in range(n):
-            m = M[i, 0] + M[i, 1] + M[i, 2]
-            if m > 0.0:
-                s = 7.5 / m  # (5/2) * 3 / m
-                C[i, 0] -= s * M[i, 0] - 2.5
-                C[i, 1] -= s * M[i, 1] - 2.5
-                C[i, 2] -= s * M[i, 2] - 2.5
-                C[i, 3] -= 2.0 * s * M[i, 3]
-                C[i, 4] -= 2.0 * s * M[i, 4]
-                C[i, 5] -= 2.0 * s * M[i, 5]
+        for t in numba.prange(nc):
+            r0 = cb[t]
+            r1 = cb[t + 1]
+            for c in range(t):
+                s = cb[c + 1]
+                e = s + (ov_ptr[c + 1] - ov_ptr[c])
+                for p in range(max(s, r0), min(e, r1)):
+                    for col in range(6):
+                        M[p, col] += ov[ov_ptr[c] + p - s, col]
+            for i in range(r0, r1):
+                m = M[i, 0] + M[i, 1] + M[i, 2]
+                if m > 0.0:
+                    s7 = 7.5 / m  # (5/2) * 3 / m
+                    C[i, 0] -= s7 * M[i, 0] - 2.5
+                    C[i, 1] -= s7 * M[i, 1] - 2.5
+                    C[i, 2] -= s7 * M[i, 2] - 2.5
+                    C[i, 3] -= 2.0 * s7 * M[i, 3]
+                    C[i, 4] -= 2.0 * s7 * M[i, 4]
+                    C[i, 5] -= 2.0 * s7 * M[i, 5]
 
 
 def surface_corrected_weights(
@@ -114,6 +135,8 @@ def surface_corrected_weights(
     vol: np.ndarray,
     iterations: int = 20,
     bounds: tuple[float, float] = (0.5, 2.0),
+    ws: PairWorkspace | None = None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Bond weights with the surface correction: every family's second moment made isotropic.
 
@@ -133,14 +156,26 @@ def surface_corrected_weights(
         Fixed-point iterations (20 bring the second moments of faces to 3e-3 of isotropy).
     bounds
         Smallest and largest correction factor of a bond.
+    ws
+        Optional :class:`~pdfem.pd.workspace.PairWorkspace` of the pair list (its chunks thread
+        the loop; the result depends on the chunk count only at round-off).
+    out
+        Optional (P,) float32 array for the result; it may be ``weight`` itself (corrected in
+        place, which saves 4 bytes per pair of set-up memory).
 
     Returns
     -------
     ndarray
         (P,) float32 corrected bond weights.
     """
-    out = np.empty(np.asarray(nbr).shape[0], dtype=np.float32)
+    if out is None:
+        out = np.empty(np.asarray(nbr).shape[0], dtype=np.float32)
+    elif (out.dtype != np.float32 or out.shape != np.asarray(nbr).shape
+          or not out.flags.c_contiguous):
+        raise ValueError("out must be a C-contiguous float32 array with one entry per pair")
+    ws = PairWorkspace(row_ptr, nbr) if ws is None else ws
+    ws.check(row_ptr, nbr)
     _corrected(np.ascontiguousarray(x, dtype=np.float64), row_ptr, nbr, xi_len,
                np.ascontiguousarray(weight, dtype=np.float32), np.asarray(vol, dtype=np.float64),
-               int(iterations), float(bounds[0]), float(bounds[1]), out)
+               int(iterations), float(bounds[0]), float(bounds[1]), ws.chunk_ptr, ws.ov_ptr, out)
     return out

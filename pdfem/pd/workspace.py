@@ -125,6 +125,10 @@ class PairWorkspace:
         Number of chunks C; default ``numba.get_num_threads()``, or 1 for fewer than
         ``SERIAL_BELOW_PAIRS`` pairs. With C = 1 the kernels run their serial build. Results are
         bit-identical run to run for the same C.
+    keep_bond_length
+        Let :func:`pdfem.pd.pair_kernels.dilatation_and_forces` keep the current bond lengths
+        between its two passes (8 bytes per pair of scratch, saves a square root per bond);
+        False: no per-pair scratch at all.
 
     Attributes
     ----------
@@ -142,10 +146,12 @@ class PairWorkspace:
         float64 (N, 2) per-particle force coefficients (theta (3K - 5mu) / m, 15 mu / m).
     bond_length
         float64 (P,) current bond lengths kept by
-        :func:`pdfem.pd.pair_kernels.dilatation_and_forces` (None until that is first called).
+        :func:`pdfem.pd.pair_kernels.dilatation_and_forces` (None until that is first called,
+        and always None without ``keep_bond_length``).
     """
 
-    def __init__(self, row_ptr: np.ndarray, nbr: np.ndarray, n_chunks: int | None = None):
+    def __init__(self, row_ptr: np.ndarray, nbr: np.ndarray, n_chunks: int | None = None,
+                 keep_bond_length: bool = True):
         row_ptr = np.asarray(row_ptr)
         nbr = np.asarray(nbr)
         n = row_ptr.shape[0] - 1
@@ -183,6 +189,7 @@ class PairWorkspace:
         self.counts = np.zeros(C, dtype=np.int64)
         self.parallel = C > 1
         self.bond_length: np.ndarray | None = None
+        self.keep_bond_length = bool(keep_bond_length)
 
     def bond_length_buffer(self) -> np.ndarray:
         """The (P,) float64 bond-length scratch of the fused step (allocated on first use)."""
