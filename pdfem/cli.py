@@ -3,7 +3,7 @@
     pdfem run [CASE.toml] [--out DIR] [--restart CHECKPOINT] [--quiet] [--json]
     pdfem post RESULTS.h5 [--plots DIR] [--csv FILE] [--json]
     pdfem mesh MODEL [--set key=value ...] [-o FILE.msh] [--json]
-    pdfem bench {search,step} [--n N] [--json]
+    pdfem bench {search,step,mpi,partition} [--n N] [--json]
     pdfem info [--json]
     pdfem --version
 
@@ -74,7 +74,9 @@ def _parser() -> argparse.ArgumentParser:
     m.add_argument("--json", action="store_true", help="print the mesh report as one JSON object")
 
     b = sub.add_parser("bench", help="performance measurements (not tests)")
-    b.add_argument("what", choices=["search", "step"])
+    b.add_argument("what", choices=["search", "step", "mpi", "partition"],
+                   help="search, step, mpi (strong scaling on 1 and 2 ranks), partition (the "
+                        "partition model of the 1.44M-particle plate, 2-64 ranks)")
     b.add_argument("--n", type=int, default=1_000_000, help="number of particles (default 1,000,000)")
     b.add_argument("--json", action="store_true", help="print one JSON object")
 
@@ -210,8 +212,15 @@ def _cmd_bench(args) -> int:
         raise InputError(None, "--n", "the benchmark needs at least 8 particles", args.n)
     if args.what == "search":
         from .bench.search import bench_search as fn
-    else:
+    elif args.what == "step":
         from .bench.step import bench_step as fn
+    elif args.what == "mpi":
+        from .parallel.bench import bench_mpi as fn
+    else:
+        from .parallel.model import partition_model
+
+        def fn(n):  # the seed's plate; n is not used
+            return partition_model()
     res = fn(n=args.n)
     if args.json:
         print(json.dumps(res))

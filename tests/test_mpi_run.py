@@ -105,3 +105,20 @@ def test_what_does_not_run_in_parallel_yet_is_refused(tmp_path):
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2
     assert "run.short_range_contact" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_bench_mpi_reports_both_runs(tmp_path):
+    """`pdfem bench mpi` (strong scaling of the distributed step) runs 1 and 2 ranks on the
+    same plate and reports both, the partition of the 2-rank run with a halo (no timing is
+    asserted: timings belong to BENCHMARKS.md)."""
+    import json
+
+    bindir = Path(sys.executable).parent
+    r = subprocess.run([str(bindir / "pdfem"), "bench", "mpi", "--n", "4000", "--json"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    res = json.loads(r.stdout)
+    one, two = res["runs"]
+    assert (one["ranks"], two["ranks"]) == (1, 2)
+    assert one["n_pairs"] == two["n_pairs"] == res["n_pairs"] > 0
+    assert one["halo_max"] == 0 and two["halo_max"] > 0

@@ -66,5 +66,32 @@ def main(argv=None) -> None:
                           "partition": stats.name, "halo_max": int(stats.halo.max())}))
 
 
+def bench_mpi(n: int = 1_000_000, ranks=(1, 2), steps: int = 10) -> dict:
+    """Run :func:`main` under ``mpiexec -n K`` for each K (one numba thread per rank) and
+    collect the figures, with the speed-up of each K over one rank (``pdfem bench mpi``)."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    here = Path(sys.executable).parent / "mpiexec"
+    mpiexec = str(here) if here.exists() else shutil.which("mpiexec")
+    if mpiexec is None:
+        raise RuntimeError("no mpiexec found (pip install mpich)")
+    env = dict(os.environ, NUMBA_NUM_THREADS="1")
+    runs = []
+    for k in ranks:
+        out = subprocess.run([mpiexec, "-n", str(k), sys.executable, "-m", "pdfem.parallel.bench",
+                              "--n", str(n), "--steps", str(steps)], env=env, check=True,
+                             capture_output=True, text=True)
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    base = runs[0]["step_s"]
+    for r in runs:
+        r["speedup"] = base / r["step_s"]
+    return {"n_particles": runs[0]["n_particles"], "n_pairs": runs[0]["n_pairs"],
+            "load_average": os.getloadavg()[0], "runs": runs}
+
+
 if __name__ == "__main__":
     main()
