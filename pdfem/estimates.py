@@ -8,11 +8,11 @@ mesh at most the lattice points of its bounding box. Pairs (bonds, i < j): the l
 is exact: ``sum over half the offsets of prod_k max(0, n_k - |o_k|)``; otherwise it is the
 interior figure times the particles (an upper bound: surface particles have fewer partners).
 
-Memory: ``BYTES_PER_PARTICLE`` and ``BYTES_PER_PAIR`` come from a measurement (a box of
-216,000 particles and 12.4 million pairs, set up and stepped: peak resident set 320 MB above
-that of a box of 8,000; its arrays, per particle x0, y, v, f, vol, m, theta, flags and per
-pair nbr int32, xi_len float64, broken uint8, weight float32 plus the pair-loop workspace,
-sum to 342 MB, about 200 B per particle and 25 B per pair), with a margin. A case whose estimate exceeds the memory available (``MemAvailable`` of
+Memory: ``BYTES_PER_PARTICLE`` and ``BYTES_PER_PAIR`` come from measurements with a margin.
+Per pair a body holds nbr (int32), xi_len (float64), the weight (float32, negative when the
+bond is broken) and the pair loop's bond-length buffer (float64): 24 B. A 10-million-particle
+body (597 million pairs) set up and stepped peaked at 16.4 GB, 24 B per pair and 213 B per
+particle (benchmarks/memory_10m.py). A case whose estimate exceeds the memory available (``MemAvailable`` of
 /proc/meminfo, else physical pages x page size) is refused before allocating anything.
 """
 
