@@ -38,7 +38,6 @@ from .estimates import (FIXED_BYTES, BodyEstimate, available_memory, estimate_bo
                         format_bytes)
 from .io import ResultsWriter
 from .mesh_quality import MeshQualityError, check_cells
-from .fem.build import build_structure
 from .fem.structure import ElasticStructure
 from .pd.body import IceBody
 from .pd.build import build_ice_body

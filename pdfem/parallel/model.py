@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 
-import numpy as np
 
 from ..pd.lattice import fill
 from ..pd.search import cell_pairs
