@@ -172,7 +172,8 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_post(args) -> int:
-    from .post import format_summary, load_results, summarize, write_csv, write_plots
+    from .post import format_summary, load_results, summarize, write_csv
+    from .post_plots import write_plots
     results = load_results(args.results)
     summary = summarize(results)
     written: list[str] = []

@@ -1,0 +1,221 @@
+"""Report plots of a results file (PNG, matplotlib without a screen) and the load spectrum.
+
+:func:`write_plots` writes the load history, the load spectrum (:func:`amplitude_spectrum`),
+the structural response, an ice damage snapshot and the energy history of a file read by
+:func:`pdfem.post.load_results`. SI units on every axis: N, Pa, m, s, Hz, J.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+_AXES = ("x", "y", "z")
+
+
+# -- spectrum -----------------------------------------------------------------------------
+
+
+def amplitude_spectrum(time: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One-sided amplitude spectrum of a sampled signal.
+
+    Parameters
+    ----------
+    time
+        (K,) sample times, s, increasing; meant to be uniform (the coupling step). If the
+        spacing varies by more than 1e-6 of the mean step, the signal is first interpolated
+        linearly onto K uniform samples over the same span.
+    values
+        (K,) the signal (e.g. the force magnitude in N).
+
+    Returns
+    -------
+    frequency : numpy.ndarray
+        (K // 2 + 1,) frequencies, Hz, spaced 1 / (K dt).
+    amplitude : numpy.ndarray
+        Same shape: the amplitude of the cosine at each frequency, in the signal's unit
+        (``2 |X_k| / K``; the mean ``|X_0| / K`` at 0 Hz, and ``|X_k| / K`` at the Nyquist
+        frequency for even K), so a sine of amplitude A at a bin frequency reads A.
+        Empty arrays for fewer than 2 samples.
+    """
+    t = np.asarray(time, dtype=np.float64)
+    y = np.asarray(values, dtype=np.float64)
+    k = t.size
+    if k < 2 or t[-1] <= t[0]:
+        return np.zeros(0), np.zeros(0)
+    dt = (t[-1] - t[0]) / (k - 1)
+    if np.max(np.abs(np.diff(t) - dt)) > 1e-6 * dt:
+        tu = t[0] + dt * np.arange(k)
+        y = np.interp(tu, t, y)
+    amp = np.abs(np.fft.rfft(y)) / k
+    amp[1:] *= 2.0
+    if k % 2 == 0:
+        amp[-1] /= 2.0
+    return np.fft.rfftfreq(k, dt), amp
+
+
+# -- plots --------------------------------------------------------------------------------
+
+
+def _figure(rows: int, height: float = 3.0):
+    from matplotlib.figure import Figure  # no pyplot: no global figure state, Agg canvas
+    fig = Figure(figsize=(8.0, height * rows + 0.6), layout="constrained")
+    axes = fig.subplots(rows, 1, squeeze=False)[:, 0]
+    return fig, axes
+
+
+def _save(fig, path: Path, written: list[Path]) -> None:
+    fig.savefig(path, dpi=150, format="png")
+    written.append(path)
+
+
+def _plot_loads(hist: dict, groups: list[str], path: Path, written: list[Path]) -> None:
+    fig, axes = _figure(len(groups))
+    for ax, g in zip(axes, groups):
+        h = hist[g]
+        for a, c in enumerate(_AXES):
+            ax.plot(h["time"], h["force"][:, a], lw=0.9, label=f"$F_{c}$")
+        ax.plot(h["time"], np.linalg.norm(h["force"], axis=1), "k", lw=1.2, label="$|F|$")
+        ax.set_title(f"Ice force on '{g[len('loads/'):]}'")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("force [N]")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="best", fontsize="small")
+    _save(fig, path, written)
+
+
+def _plot_spectrum(hist: dict, groups: list[str], path: Path, written: list[Path]) -> None:
+    fig, axes = _figure(len(groups))
+    for ax, g in zip(axes, groups):
+        h = hist[g]
+        f, amp = amplitude_spectrum(h["time"], np.linalg.norm(h["force"], axis=1))
+        ax.loglog(f[1:], amp[1:], "k", lw=1.0)
+        ax.set_title(f"Spectrum of the ice force magnitude on '{g[len('loads/'):]}' "
+                     f"(mean {amp[0]:.4g} N not shown)")
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_ylabel("amplitude of |F| [N]")
+        ax.set_xlim(f[1], f[-1])
+        ax.grid(alpha=0.3, which="both")
+    _save(fig, path, written)
+
+
+def _plot_response(results: dict, path: Path, written: list[Path]) -> None:
+    t = results["time"]
+    hist = results["histories"]
+    elastic = {n: s for n, s in sorted(results["structure"].items()) if "von_mises" in s}
+    monitors = {g[len("monitors/"):]: h for g, h in sorted(hist.items())
+                if g.startswith("monitors/") and "u" in h}
+    show_vm = bool(elastic) or any("von_mises" in h for h in monitors.values())
+    fig, axes = _figure(2 if show_vm else 1)
+    if show_vm:
+        ax = axes[0]
+        for n, s in elastic.items():
+            ax.plot(t, s["von_mises"].max(axis=1), "o-", ms=3, label=f"max over '{n}' (frames)")
+        for n, h in monitors.items():
+            if "von_mises" in h:
+                ax.plot(h["time"], h["von_mises"], lw=0.9, label=f"monitor '{n}'")
+        ax.set_title("Structural response: von Mises stress")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("von Mises stress [Pa]")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="best", fontsize="small")
+    ax = axes[-1]
+    for n, s in sorted(results["structure"].items()):
+        ax.plot(t, np.linalg.norm(s["u"], axis=2).max(axis=1), "o-", ms=3,
+                label=f"max over '{n}' (frames)")
+    for n, h in monitors.items():
+        ax.plot(h["time"], np.linalg.norm(h["u"], axis=1), lw=0.9, label=f"monitor '{n}'")
+    ax.set_title("Structural response: displacement magnitude")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("|u| [m]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize="small")
+    _save(fig, path, written)
+
+
+def projection_axes(points: np.ndarray) -> tuple[int, int]:
+    """The two axes (0 = x, 1 = y, 2 = z) of the largest extents of ``points``, in order."""
+    ext = points.max(axis=0) - points.min(axis=0)
+    a, b = np.argsort(-ext, kind="stable")[:2]
+    return (int(a), int(b)) if a < b else (int(b), int(a))
+
+
+def _plot_damage(results: dict, path: Path, written: list[Path]) -> None:
+    ice = results["ice"]
+    t = results["time"]
+    x0 = np.concatenate([b["x0"] for b in ice.values()])
+    i, j = projection_axes(x0)
+    n = x0.shape[0]
+    fig, axes = _figure(1, height=5.0)
+    ax = axes[0]
+    sc = None
+    for b in ice.values():
+        x = b["x0"] + b["u"][-1]
+        sc = ax.scatter(x[:, i], x[:, j], c=b["damage"][-1], s=max(0.5, min(20.0, 2.0e4 / n)),
+                        cmap="viridis", vmin=0.0, vmax=1.0, linewidths=0)
+    fig.colorbar(sc, ax=ax, label="damage [-] (broken fraction of bonds)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"{_AXES[i]} [m]")
+    ax.set_ylabel(f"{_AXES[j]} [m]")
+    ax.set_title(f"Ice damage at t = {t[-1]:.4g} s (deformed positions, {_AXES[i]}{_AXES[j]} "
+                 "projection)")
+    _save(fig, path, written)
+
+
+def _plot_energy(h: dict, path: Path, written: list[Path]) -> None:
+    fig, axes = _figure(1, height=4.0)
+    ax = axes[0]
+    for k in sorted(k for k in h if k != "time"):
+        ax.plot(h["time"], h[k], "o-", ms=2, lw=0.9, label=k)
+    ax.set_title("Energies of the ice and the structures")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("energy [J]")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize="small", ncol=2)
+    _save(fig, path, written)
+
+
+def write_plots(results: dict, out_dir: str | os.PathLike) -> list[Path]:
+    """Write the report plots (PNG, 150 dpi) of a results file into a directory.
+
+    Parameters
+    ----------
+    results
+        :func:`load_results` of a file.
+    out_dir
+        Directory for the plots (created).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, among (each only when the file has the data):
+        ``load_history.png`` (force components and magnitude vs time, one panel per loaded
+        structure; needs a load history), ``load_spectrum.png`` (one-sided amplitude spectrum
+        of the force magnitude on log-log axes, Hz, the mean left out; needs 4 or more load
+        samples), ``structure_response.png``
+        (max von Mises and max displacement over the structure vs time from the frames, and
+        the monitors; needs a structure and a frame), ``damage.png`` (ice particles at the
+        last frame coloured by damage, projected on the plane of the two largest extents;
+        needs ice and a frame), ``energy.png`` (the energy history; needs 1 or more rows).
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    hist = results["histories"]
+    written: list[Path] = []
+    loads = [g for g in sorted(hist) if g.startswith("loads/") and "force" in hist[g]
+             and hist[g]["time"].size]
+    if loads:
+        _plot_loads(hist, loads, out / "load_history.png", written)
+    spectra = [g for g in loads if hist[g]["time"].size >= 4]
+    if spectra:
+        _plot_spectrum(hist, spectra, out / "load_spectrum.png", written)
+    if results["structure"] and results["time"].size:
+        _plot_response(results, out / "structure_response.png", written)
+    if results["ice"] and results["time"].size:
+        _plot_damage(results, out / "damage.png", written)
+    e = hist.get("energy")
+    if e is not None and e["time"].size:
+        _plot_energy(e, out / "energy.png", written)
+    return written
