@@ -183,11 +183,10 @@ class Coupler:
             s.set_surface_forces(self._load[id(s)])
             h = D / self.structure_substeps
             for _ in range(self.structure_substeps):
-                before = s.surface_points()
                 s.step(h)
-                after = s.surface_points()
-                self.contact_work[id(s)] += float(np.sum(self._load[id(s)] * (after - before)))
             p1[id(s)] = s.surface_points().copy()
+            # the load is held over the substeps, so its work is load . (p1 - p0)
+            self.contact_work[id(s)] += float(np.sum(self._load[id(s)] * (p1[id(s)] - p0[id(s)])))
         for p in self.pairs:
             p.contacts = 0
         broken = 0
