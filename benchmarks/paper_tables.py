@@ -94,7 +94,7 @@ def plate(n: int, layers: int = 6) -> np.ndarray:
 
 
 def warm_up() -> None:
-    from pdfem.bench.step import _warm_up
+    from pdfem.benchmarks.step import _warm_up
     from pdfem.pd.search import brute_pairs, cell_pairs
 
     x = cube(300)
@@ -134,7 +134,7 @@ def table2(repeat: int, brute_budget: float) -> list[dict]:
 
 def step_times(x: np.ndarray, steps: int, family: bool = True) -> dict:
     """Search time, pair-loop and full-family step times (s, best of ``steps``) on ``x``."""
-    from pdfem.bench.step import _timed
+    from pdfem.benchmarks.step import _timed
     from pdfem.pd import kernels as kn
     from pdfem.pd.bonds import bond_lengths
     from pdfem.pd.family import build_family

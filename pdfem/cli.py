@@ -132,10 +132,10 @@ def _cmd_run(args) -> int:
     else:
         out = Path("results") / stem
     demo = args.case is None
-    from .parallel.comm import run_guarded, world
+    from .comm import run_guarded, world
     comm = world()  # under mpiexec: every rank runs, rank 0 writes and reports
     if comm.size > 1:
-        from .parallel.warm import warm_before_ranks
+        from .parallel import warm_before_ranks
         run_guarded(warm_before_ranks, comm, comm=comm)  # one rank fills numba's cache first
     if args.json:
         buf = io.StringIO()
@@ -212,13 +212,13 @@ def _cmd_bench(args) -> int:
     if args.n < 8:
         raise InputError(None, "--n", "the benchmark needs at least 8 particles", args.n)
     if args.what == "search":
-        from .bench.search import bench_search as fn
+        from .benchmarks.search import bench_search as fn
     elif args.what == "step":
-        from .bench.step import bench_step as fn
+        from .benchmarks.step import bench_step as fn
     elif args.what == "mpi":
-        from .parallel.bench import bench_mpi as fn
+        from .benchmarks.mpi import bench_mpi as fn
     else:
-        from .parallel.model import partition_model
+        from .benchmarks.partition_model import partition_model
 
         def fn(n):  # the seed's plate; n is not used
             return partition_model()

@@ -29,8 +29,8 @@ from .config import Case
 from .coupling.contact import SurfaceContact, overlapping
 from .coupling.coupler import ContactPair, Coupler, substep_counts
 from .coupling.ice_contact import ShortRangeContact
-from .parallel.comm import world
-from .parallel.run import build_structures, distribute, gather_frame
+from .comm import world
+from .parallel import build_structures, distribute, gather_frame
 from .blowup import BlowupMonitor
 from .checkpoint import CHECKPOINT_NAME, DriverState, read_checkpoint, restore, write_checkpoint
 from .errors import InputError, InstabilityError

@@ -1,4 +1,4 @@
-"""An ice body split over MPI ranks gives the serial answer (pdfem.parallel.distributed).
+"""An ice body split over MPI ranks gives the serial answer (pdfem.pd.distributed).
 
 Reference: the serial run of the same body in the same process. A notched bar is pulled apart
 (bonds break) on 1, 2 and 3 ranks (3: an uneven split); positions agree with the serial run to
@@ -18,9 +18,9 @@ import pytest
 
 SCRIPT = textwrap.dedent('''
     import numpy as np
-    from pdfem.parallel.comm import world
-    from pdfem.parallel.distributed import DistributedIce
-    from pdfem.parallel.partition import choose_partition
+    from pdfem.comm import world
+    from pdfem.pd.distributed import DistributedIce
+    from pdfem.pd.partition import choose_partition
     from pdfem.pd.body import IceBody
     from pdfem.pd.material import IceMaterial
     from pdfem.shapes import Box
@@ -63,9 +63,9 @@ COUPLED = textwrap.dedent('''
     from pdfem.coupling.contact import SurfaceContact
     from pdfem.coupling.coupler import ContactPair, Coupler
     from pdfem.fem.rigid import RigidBody
-    from pdfem.parallel.comm import world
-    from pdfem.parallel.distributed import DistributedIce
-    from pdfem.parallel.partition import choose_partition
+    from pdfem.comm import world
+    from pdfem.pd.distributed import DistributedIce
+    from pdfem.pd.partition import choose_partition
     from pdfem.pd.body import IceBody
     from pdfem.pd.material import IceMaterial
     from pdfem.shapes import Box
@@ -152,7 +152,7 @@ def test_coupled_contact_split_matches_serial(tmp_path, ranks):
 FAULT = textwrap.dedent('''
     import time
     from pdfem.errors import InstabilityError
-    from pdfem.parallel.comm import run_guarded, world
+    from pdfem.comm import run_guarded, world
 
     def work():
         comm = world()

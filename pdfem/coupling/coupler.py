@@ -90,7 +90,7 @@ class Coupler:
         adds force density to the bodies' ``f`` at their current positions, e.g.
         :class:`pdfem.coupling.ice_contact.ShortRangeContact`).
     comm
-        With ice bodies split over MPI ranks (:class:`pdfem.parallel.distributed.DistributedIce`,
+        With ice bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`,
         whose ``owned`` particles are the ones each rank resolves contact for): the
         communicator over which the contact impulses are summed (one sum per structure and
         coupling step), so every rank advances the replicated structures identically.

@@ -1,8 +1,8 @@
-"""Strong scaling of the distributed PD step: ``mpiexec -n K python -m pdfem.parallel.bench``.
+"""Strong scaling of the distributed PD step: ``mpiexec -n K python -m pdfem.benchmarks.mpi``.
 
 A plate of about ``n`` particles (a cubic lattice 4 : 2 : 1 in x, y, z, horizon 3.015 dx, the
 isotropic bond weights, no surface correction to keep the set-up short) is split over the ranks
-by :func:`pdfem.parallel.partition.choose_partition`; every rank times ``steps`` steps (damage
+by :func:`pdfem.pd.partition.choose_partition`; every rank times ``steps`` steps (damage
 on, nothing breaking) and the time spent in the two halo exchanges. Rank 0 prints one JSON
 object: ranks, numba threads per rank, particles, unique pairs, seconds per step (the slowest
 rank), exchange seconds per step, unique pair-steps per second, and the partition's largest halo.
@@ -18,12 +18,12 @@ import time
 import numba
 import numpy as np
 
-from ..pd.body import IceBody
-from ..pd.material import IceMaterial
-from ..shapes import Box
-from .comm import world
-from .distributed import DistributedIce
-from .partition import choose_partition
+from pdfem.pd.body import IceBody
+from pdfem.pd.material import IceMaterial
+from pdfem.shapes import Box
+from pdfem.comm import world
+from pdfem.pd.distributed import DistributedIce
+from pdfem.pd.partition import choose_partition
 
 
 def plate_body(n: int) -> IceBody:
@@ -82,7 +82,7 @@ def bench_mpi(n: int = 1_000_000, ranks=(1, 2), steps: int = 10) -> dict:
     env = dict(os.environ, NUMBA_NUM_THREADS="1")
     runs = []
     for k in ranks:
-        out = subprocess.run([mpiexec, "-n", str(k), sys.executable, "-m", "pdfem.parallel.bench",
+        out = subprocess.run([mpiexec, "-n", str(k), sys.executable, "-m", "pdfem.benchmarks.mpi",
                               "--n", str(n), "--steps", str(steps)], env=env, check=True,
                              capture_output=True, text=True)
         runs.append(json.loads(out.stdout.strip().splitlines()[-1]))

@@ -13,9 +13,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fem.build import build_structure
-from .distributed import DistributedIce
-from .partition import choose_partition
+from .comm import SerialComm
+from .coupling.contact import SurfaceContact
+from .coupling.coupler import ContactPair, Coupler
+from .fem.build import build_structure
+from .fem.rigid import RigidBody
+from .pd.body import IceBody
+from .pd.material import IceMaterial
+from .shapes import Box
+from .pd.distributed import DistributedIce
+from .pd.partition import choose_partition
 
 
 def build_structures(configs, out: Path, file: str, comm) -> list:
@@ -31,7 +38,7 @@ def build_structures(configs, out: Path, file: str, comm) -> list:
 
 
 def distribute(bodies: list, comm, say=lambda s: None) -> list:
-    """Each body split over the ranks by :func:`~pdfem.parallel.partition.choose_partition`
+    """Each body split over the ranks by :func:`~pdfem.pd.partition.choose_partition`
     (the bodies themselves when there is one rank); the partition is reported with ``say``."""
     if comm.size == 1:
         return bodies
@@ -58,3 +65,30 @@ def gather_frame(body) -> dict | None:
 def any_rank(flag: bool, comm) -> bool:
     """True on every rank if ``flag`` is true on any."""
     return bool(comm.allreduce_sum(np.int64(bool(flag))))
+
+def warm_up() -> None:
+    """Run two steps of a tiny ice cube pressed by a rigid plate, split over one 'rank'."""
+    mat = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3, fracture_energy=1.0)
+    body = IceBody.from_shape("warm", Box((0, 0, 0), (0.05, 0.05, 0.05)), mat, 0.01, 0.03015)
+    owner, _ = choose_partition(body.x0, body.row_ptr, body.nbr, 1)
+    ice = DistributedIce(body, owner, SerialComm())
+    plate = RigidBody(np.array([[-1, -1, 0.0501], [1, -1, 0.0501], [1, 1, 0.0501],
+                                [-1, 1, 0.0501]]), np.array([[0, 1, 2], [0, 2, 3]]),
+                      velocity=(0, 0, -1.0))
+    pair = ContactPair("warm", ice, plate, SurfaceContact(plate, 0.005))
+    c = Coupler([ice], [plate], [pair], 1e-6, comm=SerialComm())
+    c.start()
+    for _ in range(2):
+        c.step()
+    ice.kinetic_energy()
+    ice.strain_energy()
+    ice.gather(ice.damage())
+
+
+def warm_before_ranks(comm) -> None:
+    """Under MPI: rank 0 warms the kernel cache while the others wait."""
+    if comm.size == 1:
+        return
+    if comm.rank == 0:
+        warm_up()
+    comm.bcast(True)

@@ -21,9 +21,9 @@ import time
 import numba
 import numpy as np
 
-from ..pd import kernels as kn
-from ..pd.family import build_family
-from ..pd.material import SEA_ICE_DEFAULTS, IceMaterial
+from pdfem.pd import kernels as kn
+from pdfem.pd.family import build_family
+from pdfem.pd.material import SEA_ICE_DEFAULTS, IceMaterial
 
 
 def _lattice(side: int, dx: float) -> np.ndarray:
@@ -34,7 +34,7 @@ def _lattice(side: int, dx: float) -> np.ndarray:
 def _pairs(x: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
     """Cell-sorted positions and their CSR pairs (pdfem's cell search, else scipy's cKDTree)."""
     try:
-        from ..pd.search import cell_pairs
+        from pdfem.pd.search import cell_pairs
     except ImportError:
         cell_pairs = None
     if cell_pairs is not None:
@@ -53,7 +53,7 @@ def _pairs(x: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 def _bond_lengths(x, row_ptr, nbr):
     try:
-        from ..pd.bonds import bond_lengths
+        from pdfem.pd.bonds import bond_lengths
     except ImportError:
         i = np.repeat(np.arange(x.shape[0]), np.diff(row_ptr))
         return np.linalg.norm(x[nbr] - x[i], axis=1)

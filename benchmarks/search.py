@@ -9,7 +9,7 @@ lattice that compiles (or loads) the numba kernels. The pair sets are checked to
 number of pairs and the same family size for every particle.
 
 Run it with ``pdfem bench search`` or
-``python -c "from pdfem.bench.search import bench_search; print(bench_search())"``.
+``python -c "from pdfem.benchmarks.search import bench_search; print(bench_search())"``.
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ import time
 import numba
 import numpy as np
 
-from ..pd.lattice import lattice_points
-from ..pd.search import brute_pairs, cell_pairs, ckdtree_pairs
+from pdfem.pd.lattice import lattice_points
+from pdfem.pd.search import brute_pairs, cell_pairs, ckdtree_pairs
 
 
 def _best_of(repeat: int, fn, *args):

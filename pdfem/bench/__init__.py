@@ -1,1 +1,0 @@
-"""Performance measurements behind ``pdfem bench`` (figures, not tests)."""

@@ -1,1 +1,0 @@
-"""Distributed-memory parallelism: static domain partitions of the ice and their halos."""
