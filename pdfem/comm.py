@@ -112,7 +112,7 @@ def run_guarded(fn, *args, comm=None, **kwargs):
     except BaseException as exc:  # noqa: BLE001 - any failure must end every rank
         import sys
 
-        from ..errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError, InstabilityError
+        from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError, InstabilityError
 
         code = (EXIT_BAD_INPUT if isinstance(exc, InputError) else
                 EXIT_INSTABILITY if isinstance(exc, InstabilityError) else EXIT_FAILURE)
