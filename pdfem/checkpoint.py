@@ -6,15 +6,21 @@ of a coupling step:
 - ``/driver`` attrs: the clock and output counters (:class:`DriverState`: step, time, coupling
   step and substep counts, next output time, frames written, broken bonds, the initial energy
   of the energy balance) and, in ``/driver/history_rows``, the rows of every results history;
-- ``/ice/<body>``: the state of each ice body: datasets ``y`` (m), ``v`` (m/s), ``f`` (N/m^3),
-  ``broken`` (uint8 per bond), ``theta``; attrs ``time`` (s), ``external_work`` (J, the work of
-  the velocity constraints);
+- ``/ice/<body>``: the state of each ice body, in global particle and bond order whatever the
+  number of MPI ranks: datasets ``y`` (m), ``v`` (m/s), ``f`` (N/m^3), ``broken`` (uint8 per
+  bond), ``theta``; attrs ``time`` (s), ``external_work`` (J, the work of the velocity
+  constraints) and, from a run on several ranks, ``external_work_ranks`` (each rank's part);
 - ``/structure/<name>``: the ``checkpoint_state()`` of each structure (elastic: u, v, a, v_half, f_ext,
   f_damp, time, surface_forces; rigid: time, time_carry, surface_forces);
 - ``/coupler``: :meth:`pdfem.coupling.coupler.Coupler.checkpoint_state` (time, pending contact loads,
   contact work counters, last pair loads);
 - root attrs ``format``, ``pdfem_version``, ``case_sha256`` (SHA-256 of the case text: a
   checkpoint refuses to restart another case).
+
+A run on several ranks gathers the state to rank 0, which writes the file; counters that each
+rank keeps for its own particles are stored as totals and per rank (``<key>_ranks``). A restart
+on as many ranks continues bit for bit; on another rank count (or serially) it continues with
+the totals on rank 0, which changes only the rounding of those counters' sums.
 
 Scalars are attributes, arrays datasets, all float64 except ``broken``. The file is written to
 ``<name>.tmp``, fsync'ed, then moved over the old one with ``os.replace``: a run killed at any
@@ -37,12 +43,6 @@ from .errors import InputError
 
 FORMAT = 1
 """Checkpoint format version; a checkpoint of another version is refused."""
-
-ICE_ARRAYS = ("y", "v", "f", "broken", "theta")
-"""Per-particle (and per-bond: ``broken``) state arrays of an ice body."""
-
-ICE_SCALARS = ("time", "external_work")
-"""Scalar state of an ice body (s, J)."""
 
 CHECKPOINT_NAME = "checkpoint.h5"
 """File name of the checkpoint in the output directory."""
@@ -94,32 +94,13 @@ def _get(group: h5py.Group) -> dict:
     return out
 
 
-def ice_state(body) -> dict:
-    """Copies of an ice body's state (:data:`ICE_ARRAYS`, :data:`ICE_SCALARS`)."""
-    out = {k: np.array(getattr(body, k)) for k in ICE_ARRAYS}
-    out.update({k: float(getattr(body, k)) for k in ICE_SCALARS})
-    return out
-
-
-def set_ice_state(body, state: dict) -> None:
-    """Put a state from :func:`ice_state` back into an ice body, in place and bit for bit."""
-    for k in ICE_ARRAYS:
-        target = getattr(body, k)
-        value = np.asarray(state[k])
-        if value.shape != target.shape:
-            raise ValueError(f"ice body '{body.name}': {k} has shape {value.shape} in the "
-                             f"checkpoint, {target.shape} in the case")
-        if isinstance(getattr(type(body), k, None), property):
-            setattr(body, k, value.astype(target.dtype))  # e.g. broken flags kept in the weights
-        else:
-            target[...] = value
-    for k in ICE_SCALARS:
-        setattr(body, k, float(state[k]))
-
-
 def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverState, bodies: list,
-                     structures: list, coupler) -> Path:
+                     structures: list, coupler, rank: int = 0) -> Path | None:
     """Write a checkpoint atomically (temporary file, fsync, ``os.replace``).
+
+    With ice bodies split over MPI ranks every rank calls this: each body's and the coupler's
+    ``checkpoint_state()`` gathers the whole state (in global particle and bond order, the same
+    file a serial run writes) on rank 0, which writes the file.
 
     Parameters
     ----------
@@ -133,12 +114,18 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         The ice bodies and the structures (with ``checkpoint_state()``).
     coupler
         The :class:`pdfem.coupling.coupler.Coupler`.
+    rank
+        This process's MPI rank (only rank 0 writes).
 
     Returns
     -------
-    Path
-        ``path``.
+    Path or None
+        ``path`` (``None`` on ranks other than 0).
     """
+    ice = [(b.name, b.checkpoint_state()) for b in bodies]  # collective under MPI
+    coupler_state = coupler.checkpoint_state()  # collective under MPI
+    if rank != 0:
+        return None
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
     with h5py.File(tmp, "w") as f:
@@ -152,11 +139,11 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         h = d.create_group("history_rows")
         for k, n in rows.items():
             h.attrs[k] = int(n)
-        for b in bodies:
-            _put(f.create_group(f"ice/{b.name}"), ice_state(b))
+        for name, state in ice:
+            _put(f.create_group(f"ice/{name}"), state)
         for s in structures:
             _put(f.create_group(f"structure/{s.name}"), s.checkpoint_state())
-        _put(f.create_group("coupler"), coupler.checkpoint_state())
+        _put(f.create_group("coupler"), coupler_state)
     with open(tmp, "rb+") as fh:
         os.fsync(fh.fileno())
     os.replace(tmp, path)
@@ -228,7 +215,7 @@ def restore(checkpoint: Checkpoint, bodies: list, structures: list, coupler) -> 
                          f"{sorted(checkpoint.structures)}, the case {names[0]} and {names[1]}")
     try:
         for b in bodies:
-            set_ice_state(b, checkpoint.ice[b.name])
+            b.restore_state(checkpoint.ice[b.name])
         for s in structures:
             s.restore_state(checkpoint.structures[s.name])
         coupler.restore_state(checkpoint.coupler)

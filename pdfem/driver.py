@@ -227,10 +227,6 @@ def _check_parallel_case(case: Case, restart) -> None:
         raise InputError(case.file, "run.short_range_contact", "short-range contact between ice "
                          "particles does not run on several MPI ranks yet; run on one rank or "
                          "set it to false", True)
-    if restart is not None or case.run.checkpoint_interval_steps:
-        raise InputError(case.file, "run.checkpoint_interval_steps", "checkpoints and --restart "
-                         "do not run on several MPI ranks yet; run on one rank or set the "
-                         "checkpoint intervals to 0", case.run.checkpoint_interval_steps)
 
 
 def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: bool | None = None,
@@ -425,7 +421,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         writer.close()
         raise
     every = case.run.checkpoint_interval_steps
-    minutes = case.run.checkpoint_interval_minutes if comm.size == 1 else 0.0
+    minutes = case.run.checkpoint_interval_minutes
     if every or minutes:
         when = " and ".join(w for w in ((f"every {every:,} steps" if every else ""),
                                         (f"every {minutes:g} min" if minutes else "")) if w)
@@ -455,13 +451,15 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
                     next_out += case.run.output_interval
                 if e:
                     monitor.check_energy(t, step, -e["dissipated"], e["supplied"])
-            if step < nsteps and ((every and step % every == 0) or
-                                  (minutes and time.monotonic() - last_checkpoint >= 60 * minutes)):
+            due = bool(every) and step % every == 0
+            if minutes and not due:  # rank 0's clock decides for all ranks
+                due = comm.bcast(time.monotonic() - last_checkpoint >= 60 * minutes)
+            if step < nsteps and due:
                 writer.flush()
                 write_checkpoint(ckpt_path, case.text,
                                  DriverState(step, t, dt, n_ice, n_st, next_out, frames, broken,
                                              initial_energy, writer.history_rows()),
-                                 bodies, structures, coupler)
+                                 bodies, structures, coupler, comm.rank)
                 last_checkpoint = time.monotonic()
             bar.update(t, step)
     except InstabilityError as exc:

@@ -10,6 +10,7 @@ state, structure state, pending contact loads and contact work counters must all
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -133,6 +134,75 @@ def test_killed_run_restarts_bit_identical(case_dir):
     # the XDMF file names every frame once
     xdmf = (killed / "results.xdmf").read_text()
     assert xdmf.count('<Time Value=') == 2 * len(a["time"])
+
+
+def _mpiexec() -> str:
+    here = Path(sys.executable).parent / "mpiexec"
+    return str(here) if here.exists() else shutil.which("mpiexec")
+
+
+def _assert_same_run(a: dict, b: dict, exact: bool = True) -> None:
+    """Every frame and history of two results files equal (bit for bit, or to 1e-10)."""
+    same = (np.testing.assert_array_equal if exact else
+            lambda x, y, err_msg="": np.testing.assert_allclose(
+                x, y, rtol=1e-10, atol=1e-10 * max(np.abs(x).max(initial=0.0), 1e-300),
+                err_msg=err_msg))
+    np.testing.assert_array_equal(a["time"], b["time"])
+    for k in ("u", "v"):
+        same(a["ice"]["cube"][k], b["ice"]["cube"][k], err_msg=k)
+    np.testing.assert_array_equal(a["ice"]["cube"]["damage"], b["ice"]["cube"]["damage"])
+    same(a["structure"]["block"]["u"], b["structure"]["block"]["u"], err_msg="block u")
+    for g in ("loads/block", "energy"):
+        for k, v in a["histories"][g].items():
+            same(v, b["histories"][g][k], err_msg=f"{g}/{k}")
+
+
+def test_killed_mpi_run_restarts_bit_identical(case_dir):
+    """On 2 MPI ranks: SIGKILL of the whole job after a checkpoint, then ``mpiexec -n 2 pdfem
+    run --restart``: every frame and history equals the uninterrupted 2-rank run bit for bit.
+    The same checkpoint restarted on 1 rank agrees with it to round-off (1e-10): the checkpoint
+    holds the whole state in global order, whatever the rank count that wrote it."""
+    mpi = [_mpiexec(), "-n", "2", *_command(), "run", str(case_dir / "case_mpi.toml")]
+    (case_dir / "case_mpi.toml").write_text(CASE.replace("short_range_contact = true",
+                                                         "short_range_contact = false"))
+    ref = case_dir / "mpi_ref"
+    r = subprocess.run([*mpi, "--out", str(ref), "--quiet"], capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    killed = case_dir / "mpi_killed"
+    proc = subprocess.Popen([*mpi, "--out", str(killed), "--quiet"], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.monotonic() + 300
+    while _checkpoint_step(killed / CHECKPOINT_NAME) < 80 and proc.poll() is None:
+        assert time.monotonic() < deadline, "no checkpoint appeared"
+        time.sleep(0.02)
+    os.killpg(proc.pid, signal.SIGKILL)  # mpiexec and both ranks at once
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL, "the run finished before it could be killed"
+    ckpt_step = _checkpoint_step(killed / CHECKPOINT_NAME)
+    assert 80 <= ckpt_step < 120
+    assert read_results(killed / "results.h5")["time"].size >= 1  # the killed run's file reads
+    serial = case_dir / "mpi_killed_serial"
+    shutil.copytree(killed, serial)
+
+    r = subprocess.run([*mpi, "--restart", str(killed / CHECKPOINT_NAME), "--quiet"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    a, b = read_results(ref / "results.h5"), read_results(killed / "results.h5")
+    assert a["ice"]["cube"]["damage"][-1].max() > 0  # bonds broke: the broken flags matter
+    assert np.abs(a["histories"]["loads/block"]["force"]).max() > 0
+    _assert_same_run(a, b)
+    assert sorted(a["histories"]) == sorted(b["histories"])
+    sa, sb = _datasets(ref / CHECKPOINT_NAME), _datasets(killed / CHECKPOINT_NAME)
+    assert sorted(sa) == sorted(sb)
+    for k in sa:
+        np.testing.assert_array_equal(sa[k], sb[k], err_msg=k)
+
+    r = subprocess.run([*_command(), "run", str(case_dir / "case_mpi.toml"), "--restart",
+                        str(serial / CHECKPOINT_NAME), "--quiet"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    _assert_same_run(a, read_results(serial / "results.h5"), exact=False)
 
 
 def test_restart_refuses_another_case(case_dir, tmp_path):

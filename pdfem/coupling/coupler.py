@@ -137,7 +137,12 @@ class Coupler:
         """The coupler's own state, for a checkpoint: ``time`` (s), per structure (in order)
         ``load_<k>`` (the pending contact load, N per surface node) and ``contact_work_<k>``
         (J), ``contact_work_on_ice`` (J), and per pair (in order) ``force_<k>`` (N),
-        ``moment_<k>`` (N m), ``contacts_<k>`` and ``total_impulse_<k>`` (N s)."""
+        ``moment_<k>`` (N m), ``contacts_<k>`` and ``total_impulse_<k>`` (N s).
+
+        With a communicator (ice split over ranks) every rank must call it: the counters each
+        rank keeps for its own particles (contact work on the ice, total impulses) are summed
+        over ranks, and each rank's part is kept in ``<key>_ranks`` so that a restart on as
+        many ranks continues bit for bit."""
         out: dict[str, np.ndarray | float] = {"time": self.time,
                                               "contact_work_on_ice": self.contact_work_on_ice}
         for k, s in enumerate(self.structures):
@@ -148,10 +153,29 @@ class Coupler:
             out[f"moment_{k}"] = p.moment.copy()
             out[f"contacts_{k}"] = p.contacts
             out[f"total_impulse_{k}"] = p.contact.total_impulse.copy()
+        if self.comm is not None:
+            for key in self._rank_local_keys():
+                parts = self.comm.gather(out[key])
+                out[key] = self.comm.allreduce_sum(out[key])
+                if parts is not None:
+                    out[f"{key}_ranks"] = np.array(parts)
         return out
 
+    def _rank_local_keys(self) -> list[str]:
+        """State keys whose values each rank keeps for its own ice particles."""
+        return ["contact_work_on_ice"] + [f"total_impulse_{k}" for k in range(len(self.pairs))]
+
     def restore_state(self, state: dict) -> None:
-        """Restore a state from :meth:`checkpoint_state` exactly (same structures and pairs, same order)."""
+        """Restore a state from :meth:`checkpoint_state` exactly (same structures and pairs, same
+        order). A state written on another number of ranks gives rank 0 the totals."""
+        state = dict(state)
+        rank, size = (0, 1) if self.comm is None else (self.comm.rank, self.comm.size)
+        for key in self._rank_local_keys():
+            parts = state.get(f"{key}_ranks")
+            if parts is not None and len(parts) == size:
+                state[key] = parts[rank]
+            elif rank != 0:
+                state[key] = np.zeros_like(np.asarray(state[key], dtype=np.float64))
         self.time = float(state["time"])
         self.contact_work_on_ice = float(state["contact_work_on_ice"])
         for k, s in enumerate(self.structures):

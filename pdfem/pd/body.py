@@ -351,6 +351,43 @@ class IceBody:
         """Linear momentum (3,), kg m/s."""
         return self.material.density * (self.vol @ self.v)
 
+    # -- checkpoints ---------------------------------------------------------------------------
+    def checkpoint_state(self) -> dict:
+        """Copies of the state that a restart needs: arrays :data:`STATE_ARRAYS` (``y`` m,
+        ``v`` m/s, ``f`` N/m^3, ``broken`` uint8 per bond, ``theta``) and scalars
+        :data:`STATE_SCALARS` (``time`` s, ``external_work`` J)."""
+        out = {k: np.array(getattr(self, k)) for k in STATE_ARRAYS}
+        out.update({k: float(getattr(self, k)) for k in STATE_SCALARS})
+        return out
+
+    def restore_state(self, state: dict) -> None:
+        """Put a state from :meth:`checkpoint_state` back, in place and bit for bit.
+
+        Raises
+        ------
+        ValueError
+            If an array's shape differs from the body's.
+        """
+        for k in STATE_ARRAYS:
+            value = np.asarray(state[k])
+            target = getattr(self, k)
+            if value.shape != target.shape:
+                raise ValueError(f"ice body '{self.name}': {k} has shape {value.shape} in the "
+                                 f"checkpoint, {target.shape} in the case")
+            if k == "broken":
+                self.broken = value.astype(np.uint8)  # kept in the signed weights or the flags
+            else:
+                target[...] = value
+        for k in STATE_SCALARS:
+            setattr(self, k, float(state[k]))
+
+
+STATE_ARRAYS = ("y", "v", "f", "broken", "theta")
+"""Per-particle (and per-bond: ``broken``) state arrays of an ice body, for checkpoints."""
+
+STATE_SCALARS = ("time", "external_work")
+"""Scalar state of an ice body (s, J), for checkpoints."""
+
 
 def _get_broken(self: IceBody) -> np.ndarray:
     """(P,) uint8 broken flags, 1 = broken. For a body that stores broken bonds as negative

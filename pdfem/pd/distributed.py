@@ -240,6 +240,53 @@ class DistributedIce:
             out[idx] = vals
         return out
 
+    # -- checkpoints -------------------------------------------------------------------------
+    def checkpoint_state(self) -> dict | None:
+        """The state of the whole body in global order on rank 0, as the serial body's
+        :meth:`~pdfem.pd.body.IceBody.checkpoint_state` (``None`` on the other ranks; every
+        rank must call it). ``external_work`` is the sum over ranks; ``external_work_ranks``
+        keeps each rank's part, so a restart on as many ranks continues bit for bit."""
+        b = self.body
+        arrays = {k: self.gather(getattr(b, k)) for k in ("y", "v", "f", "theta")}
+        counted = self._counted
+        bonds = self.comm.gather((self.plan.pairs[counted], b.broken[counted]))
+        work = self.comm.gather(float(b.external_work))
+        if bonds is None:
+            return None
+        broken = np.zeros(len(self.global_body.nbr), dtype=np.uint8)
+        for idx, flags in bonds:
+            broken[idx] = flags
+        total = 0.0
+        for w in work:  # rank order, as external_work sums
+            total = total + w
+        return {**arrays, "broken": broken, "time": float(b.time), "external_work": total,
+                "external_work_ranks": np.array(work)}
+
+    def restore_state(self, state: dict) -> None:
+        """Take this rank's part of a whole-body state (from a checkpoint written on any number
+        of ranks, or by a serial run).
+
+        Raises
+        ------
+        ValueError
+            If the state's sizes are not those of the body.
+        """
+        n, p = self.global_n, len(self.global_body.nbr)
+        for k, size in (("y", n), ("v", n), ("f", n), ("theta", n), ("broken", p)):
+            if len(state[k]) != size:
+                raise ValueError(f"ice body '{self.name}': {k} has {len(state[k])} entries in "
+                                 f"the checkpoint, {size} in the case")
+        loc, pairs = self.plan.local, self.plan.pairs
+        ranks = state.get("external_work_ranks")
+        if ranks is not None and len(ranks) == self.comm.size:
+            work = float(ranks[self.comm.rank])
+        else:  # another rank count: rank 0 carries the total
+            work = float(state["external_work"]) if self.comm.rank == 0 else 0.0
+        self.body.restore_state({"y": state["y"][loc], "v": state["v"][loc],
+                                 "f": state["f"][loc], "theta": state["theta"][loc],
+                                 "broken": state["broken"][pairs], "time": state["time"],
+                                 "external_work": work})
+
     def damage(self) -> np.ndarray:
         """Local damage (right for owned particles)."""
         b = self.body
