@@ -21,6 +21,7 @@ Shape of a case file::
     checkpoint_interval_steps = 0      # write <out>/checkpoint.h5 every N coupling steps (0 = off)
     checkpoint_interval_minutes = 30.0 # ... and every M minutes of wall time (0 = off)
     stability_check_interval_steps = 10  # coupling steps between blow-up checks (speed, NaN)
+    output_per_rank = false    # MPI: each rank writes its ice particles to results.rank<R>.h5
 
     [[ice]]
     name = "beam"
@@ -193,6 +194,7 @@ class RunConfig:
     checkpoint_interval_steps: int = 0
     checkpoint_interval_minutes: float = 30.0
     stability_check_interval_steps: int = 10
+    output_per_rank: bool = False
 
 
 @dataclass(frozen=True)
@@ -516,8 +518,10 @@ def _run(t: Table) -> RunConfig:
     every = _whole(t, "checkpoint_interval_steps", 0, 0, "(0 = no step-based checkpoints)")
     minutes = t.number("checkpoint_interval_minutes", 30.0, low=0.0, unit="minutes")
     check = _whole(t, "stability_check_interval_steps", 10, 1, "")
+    per_rank = _boolean(t, "output_per_rank")
     t.done()
-    return RunConfig(end, out, dt, sf, loop, g, title, sub, short, unstable, every, minutes, check)
+    return RunConfig(end, out, dt, sf, loop, g, title, sub, short, unstable, every, minutes, check,
+                     per_rank)
 
 
 def _boolean(t: Table, key: str, default: bool = False) -> bool:

@@ -30,13 +30,14 @@ from .coupling.contact import SurfaceContact, overlapping
 from .coupling.coupler import ContactPair, Coupler, substep_counts
 from .coupling.ice_contact import ShortRangeContact
 from .comm import world
-from .parallel import build_structures, distribute, gather_frame
+from .parallel import (build_structures, distribute, gather_frame, owned_frame,
+                       owned_reference)
 from .blowup import BlowupMonitor
 from .checkpoint import CHECKPOINT_NAME, DriverState, read_checkpoint, restore, write_checkpoint
 from .errors import InputError, InstabilityError
 from .estimates import (FIXED_BYTES, BodyEstimate, available_memory, estimate_body,
                         format_bytes)
-from .io import ResultsWriter
+from .io import ResultsWriter, rank_file
 from .mesh_quality import MeshQualityError, check_cells
 from .fem.structure import ElasticStructure
 from .pd.body import IceBody
@@ -221,6 +222,19 @@ class NullWriter:
         return lambda *args, **kwargs: None
 
 
+def _open_results(path: Path, case_text: str, meta: dict, append: bool) -> ResultsWriter:
+    """A new results file, or (``append``, a restart) the existing one reopened."""
+    if not append:
+        return ResultsWriter(path, case_text, meta)
+    try:
+        return ResultsWriter(path, case_text, append=True)
+    except (OSError, ValueError) as exc:
+        raise InputError(str(path), "--restart", f"cannot continue this results file ({exc}); "
+                         "give the output directory of the run that wrote the checkpoint with "
+                         "--out (a run with run.output_per_rank restarts on as many ranks)"
+                         ) from None
+
+
 def _check_parallel_case(case: Case, restart) -> None:
     """Refuse what does not run on several ranks yet, naming the field."""
     if case.run.short_range_contact:
@@ -331,22 +345,30 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
 
     path = out / "results.h5"
     ckpt_path = out / CHECKPOINT_NAME
-    if comm.rank != 0:
-        writer = NullWriter()
-    elif ckpt is None:
-        writer = ResultsWriter(path, case.text, {"title": case.run.title, "ranks": comm.size,
-                                                 "time_step": dt, "ice_substeps": n_ice,
-                                                 "structure_substeps": n_st,
-                                                 "pd_loop": case.run.pd_loop})
-    else:
-        try:
-            writer = ResultsWriter(path, case.text, append=True)
-        except (OSError, ValueError) as exc:
-            raise InputError(str(path), "--restart", f"cannot continue this results file "
-                             f"({exc}); give the output directory of the run that wrote the "
-                             "checkpoint with --out") from None
-    for b in bodies:
-        writer.add_ice_body(b.name, *reference[b.name])
+    # with run.output_per_rank each rank writes its own particles to results.rank<R>.h5 (no
+    # gathering), and rank 0 the rest to results.h5; read_results puts them together
+    per_rank = case.run.output_per_rank and comm.size > 1
+    meta = {"title": case.run.title, "ranks": comm.size, "time_step": dt, "ice_substeps": n_ice,
+            "structure_substeps": n_st, "pd_loop": case.run.pd_loop}
+    if per_rank:
+        meta["ice_per_rank"] = comm.size
+    writer = (_open_results(path, case.text, meta, ckpt is not None) if comm.rank == 0
+              else NullWriter())
+    ice_writer = writer
+    if per_rank:
+        ice_writer = _open_results(rank_file(path, comm.rank), case.text,
+                                   {"rank": comm.rank, "ranks": comm.size}, ckpt is not None)
+    try:
+        for b in bodies:
+            if per_rank:
+                index, x0, vol = owned_reference(b)
+                ice_writer.add_ice_body(b.name, x0, vol, index=index)
+            else:
+                ice_writer.add_ice_body(b.name, *reference[b.name])
+    except ValueError as exc:  # only when appending: the file holds other particles
+        raise InputError(str(ice_writer.path), "--restart", f"the results file does not fit "
+                         f"this run ({exc}); a run with run.output_per_rank restarts on as many "
+                         "ranks as wrote it") from None
     for st in structures:
         if isinstance(st, ElasticStructure):
             writer.add_structure(st.name, st.points, st.cells, st.cell_type)
@@ -360,7 +382,11 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
                             energy_check=not any(cfg.loads for cfg in case.structures))
 
     def frame(t: float) -> dict[str, float]:
-        ice = {b.name: gather_frame(b) for b in bodies}  # collective under MPI
+        if per_rank:
+            ice_writer.write_frame(t, {b.name: owned_frame(b) for b in bodies})
+            ice = {}
+        else:
+            ice = {b.name: gather_frame(b) for b in bodies}  # collective under MPI
         writer.write_frame(t, ice, structures={st.name: _structure_fields(st) for st in structures})
         e = _energies(bodies)
         for st, cfg in zip(structures, case.structures):
@@ -410,6 +436,8 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
             d = ckpt.driver
             try:
                 writer.resume(d.frames, d.history_rows)
+                if per_rank:
+                    ice_writer.resume(d.frames, {})
             except ValueError as exc:
                 raise InputError(str(path), "--restart", f"the results file does not hold the "
                                  f"data up to the checkpoint ({exc})") from None
@@ -419,6 +447,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
                 f"appending to {path}")
     except BaseException:
         writer.close()
+        ice_writer.close()
         raise
     every = case.run.checkpoint_interval_steps
     minutes = case.run.checkpoint_interval_minutes
@@ -456,6 +485,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
                 due = comm.bcast(time.monotonic() - last_checkpoint >= 60 * minutes)
             if step < nsteps and due:
                 writer.flush()
+                ice_writer.flush()
                 write_checkpoint(ckpt_path, case.text,
                                  DriverState(step, t, dt, n_ice, n_st, next_out, frames, broken,
                                              initial_energy, writer.history_rows()),
@@ -471,9 +501,11 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
             except Exception:  # the diagnosis matters more than this last frame
                 note = ""
         writer.close()
+        ice_writer.close()
         raise InstabilityError(f"{exc}. The results so far are kept: {path} "
                                f"({writer.n_frames} frames{note})") from None
     finally:
         wall = bar.finish()
         writer.close()
+        ice_writer.close()
     return RunSummary(path, step, dt, nsteps * dt, wall, n_part, n_bonds, cut + broken, frames)

@@ -12,6 +12,7 @@ Layout of ``<stem>.h5`` (all quantities SI)::
     /time                    (F,)      output time of each frame, s
     /ice/<body>/x0           (N, 3)    reference particle positions, m
     /ice/<body>/volume       (N,)      particle volumes, m^3 (if given)
+    /ice/<body>/index        (N,)      int64 global particle numbers (per-rank files only)
     /ice/<body>/u            (F, N, 3) displacement, m
     /ice/<body>/v            (F, N, 3) velocity, m/s
     /ice/<body>/damage       (F, N)    broken fraction of the initial bonds, dimensionless
@@ -500,7 +501,8 @@ class ResultsWriter:
         return (f'<Geometry GeometryType="XYZ">'
                 f'{_data_item(self._h5name, path, (n, 3))}</Geometry>')
 
-    def add_ice_body(self, name: str, x0: np.ndarray, volume: np.ndarray | None = None) -> None:
+    def add_ice_body(self, name: str, x0: np.ndarray, volume: np.ndarray | None = None,
+                     index: np.ndarray | None = None) -> None:
         """Register an ice body and store its reference configuration.
 
         Parameters
@@ -511,6 +513,9 @@ class ResultsWriter:
             (N, 3) reference particle positions, m.
         volume
             (N,) particle volumes, m^3, optional; shown in ParaView as the field ``volume``.
+        index
+            (N,) global particle numbers, optional: the file then holds part of the body (one
+            MPI rank's particles, :func:`read_results` puts the parts together).
         """
         f = self._h5
         path = self._new_body("ice", name)
@@ -533,6 +538,8 @@ class ResultsWriter:
                              data=np.arange(n, dtype=np.int32).reshape(n, 1))
             if volume is not None:
                 g.create_dataset("volume", data=volume)
+            if index is not None:
+                g.create_dataset("index", data=np.asarray(index, dtype=np.int64))
         constant = ""
         if volume is not None:
             constant = ('<Attribute Name="volume" AttributeType="Scalar" Center="Node">'
@@ -843,7 +850,7 @@ def read_results(path: str | os.PathLike) -> dict:
     """
     out: dict[str, Any] = {"meta": {}, "time": None, "ice": {}, "structure": {},
                            "histories": {}}
-    constant = {"x0", "volume", "points", "cells"}
+    constant = {"x0", "volume", "index", "points", "cells"}
     try:
         f = h5py.File(path, "r")
     except BlockingIOError:
@@ -877,4 +884,48 @@ def read_results(path: str | os.PathLike) -> dict:
                 out["histories"][name] = {k: a[:k_min] for k, a in rows.items()}
             else:
                 stack.extend((f"{name}/{k}", s) for k, s in g.items() if isinstance(s, h5py.Group))
+    ranks = int(out["meta"].get("ice_per_rank", 0))
+    if ranks:
+        _merge_rank_files(out, [rank_file(path, r) for r in range(ranks)])
     return out
+
+
+def rank_file(path: str | os.PathLike, rank: int) -> Path:
+    """The per-rank ice file of MPI rank ``rank`` beside a results file:
+    ``results.h5`` -> ``results.rank<rank>.h5``."""
+    p = Path(path)
+    return p.with_name(f"{p.stem}.rank{rank}{p.suffix}")
+
+
+def _merge_rank_files(out: dict, files: list[Path]) -> None:
+    """Put the ice of per-rank files (``run.output_per_rank``) into ``out`` in global particle
+    order, keeping the frames that every file holds."""
+    parts = []
+    for file in files:
+        if not file.is_file():
+            raise FileNotFoundError(f"{file}: the per-rank ice file of this results file is "
+                                    "missing (keep the results.rank*.h5 files beside it)")
+        parts.append(read_results(file))
+    n = min([out["time"].shape[0]] + [p["time"].shape[0] for p in parts])
+    out["time"] = out["time"][:n]
+    for name in parts[0]["ice"]:
+        pieces = [p["ice"][name] for p in parts]
+        order = np.concatenate([q["index"] for q in pieces])
+        body = {}
+        for k in pieces[0]:
+            if k == "index":
+                continue
+            frame_axis = k not in ("x0", "volume")
+            a = np.concatenate([q[k][:n] if frame_axis else q[k] for q in pieces],
+                               axis=1 if frame_axis else 0)
+            merged = np.empty_like(a)
+            if frame_axis:
+                merged[:, order] = a
+            else:
+                merged[order] = a
+            body[k] = merged
+        out["ice"][name] = body
+    for name, body in out["structure"].items():
+        for k, a in body.items():
+            if k not in ("points", "cells", "cell_type"):
+                body[k] = a[:n]

@@ -4,7 +4,9 @@
   every rank reads the same meshes (the structures are small and replicated on every rank).
 * :func:`distribute`: split each ice body over the ranks (the partition is reported), or leave
   it whole on a single rank.
-* :func:`gather_frame`: the per-particle fields of a frame assembled on rank 0.
+* :func:`gather_frame`: the per-particle fields of a frame assembled on rank 0; or, for runs
+  that write one ice file per rank, :func:`owned_reference` and :func:`owned_frame`: this
+  rank's particles only.
 """
 
 from __future__ import annotations
@@ -60,6 +62,25 @@ def gather_frame(body) -> dict | None:
     v = body.gather(body.body.v)
     d = body.gather(body.damage())
     return None if u is None else {"u": u, "v": v, "damage": d}
+
+
+def owned_reference(body) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Global numbers, reference positions (m) and volumes (m^3) of the particles this rank
+    owns (all of them for a whole body)."""
+    if not isinstance(body, DistributedIce):
+        return np.arange(body.n), body.x0, body.vol
+    own = body.owned
+    return body.plan.local[own], body.x0[own], body.vol[own]
+
+
+def owned_frame(body) -> dict:
+    """``{"u", "v", "damage"}`` of the particles this rank owns, in the order of
+    :func:`owned_reference`."""
+    if not isinstance(body, DistributedIce):
+        return gather_frame(body)
+    own = body.owned
+    return {"u": body.body.displacement()[own], "v": body.body.v[own],
+            "damage": body.damage()[own]}
 
 
 def any_rank(flag: bool, comm) -> bool:

@@ -96,6 +96,38 @@ def test_one_two_and_three_ranks_agree(tmp_path, text, body, structure):
                                    rtol=0, atol=1e-10 * np.abs(ref["structure"][structure]["u"]).max())
 
 
+def test_per_rank_ice_files_read_as_one_run(tmp_path):
+    """``run.output_per_rank``: on 3 ranks each rank writes its own particles to
+    results.rank<R>.h5 (with its XDMF) and rank 0 the rest to results.h5; read_results puts the
+    ice back in global order, equal to the serial run (reference) to 1e-10 with identical
+    damage, and ``pdfem post`` reads it like any results file."""
+    case = tmp_path / "case.toml"
+    case.write_text(CYLINDER.replace("output_interval = 4.0e-4",
+                                     "output_interval = 4.0e-4\noutput_per_rank = true"))
+    for ranks in (1, 3):
+        r = subprocess.run(_command(ranks) + ["run", str(case), "--out", str(tmp_path / f"r{ranks}"),
+                                              "--quiet"], capture_output=True, text=True,
+                           timeout=600)
+        assert r.returncode == 0, r.stderr[-2000:]
+    assert not (tmp_path / "r1" / "results.rank0.h5").exists()  # one rank: one file
+    for k in range(3):
+        assert (tmp_path / "r3" / f"results.rank{k}.h5").is_file()
+        assert (tmp_path / "r3" / f"results.rank{k}.xdmf").is_file()
+    ref = read_results(tmp_path / "r1" / "results.h5")
+    got = read_results(tmp_path / "r3" / "results.h5")
+    assert got["meta"]["ice_per_rank"] == 3
+    np.testing.assert_array_equal(got["time"], ref["time"])
+    a, b = ref["ice"]["plate"], got["ice"]["plate"]
+    assert sorted(a) == sorted(b)
+    np.testing.assert_array_equal(b["x0"], a["x0"])
+    np.testing.assert_allclose(b["u"], a["u"], rtol=0, atol=1e-10 * np.abs(a["u"]).max())
+    np.testing.assert_array_equal(b["damage"], a["damage"])
+    assert a["damage"][-1].max() > 0
+    out = subprocess.run(_command(1) + ["post", str(tmp_path / "r3" / "results.h5"), "--json"],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+
+
 def test_what_does_not_run_in_parallel_yet_is_refused(tmp_path):
     """Short-range ice contact on several ranks: exit 2 naming the field, on every rank."""
     case = tmp_path / "sr.toml"
