@@ -27,6 +27,10 @@ from .pd.distributed import DistributedIce
 from .pd.partition import choose_partition
 
 
+MAX_RANKS_LISTED = 16
+"""Up to this many ranks the start-up report lists every rank's particles, halo and neighbours."""
+
+
 def build_structures(configs, out: Path, file: str, comm) -> list:
     """The case's structures on every rank, meshed once (by rank 0)."""
     if comm.size == 1:
@@ -49,7 +53,12 @@ def distribute(bodies: list, comm, say=lambda s: None) -> list:
         owner, st = choose_partition(b.x0, b.row_ptr, b.nbr, comm.size)
         say(f"  partition of '{b.name}' over {comm.size} ranks: {st.name}; particles per rank "
             f"{int(st.owned.min()):,}-{int(st.owned.max()):,} (imbalance {st.imbalance:.1e}), "
-            f"halo up to {int(st.halo.max()):,}, up to {int(st.neighbours.max())} neighbours")
+            f"halo up to {int(st.halo.max()):,}, up to {int(st.neighbours.max())} neighbours, "
+            f"{st.bytes_per_step / 1e6:.3g} MB exchanged per step")
+        if comm.size <= MAX_RANKS_LISTED:
+            for r in range(comm.size):
+                say(f"    rank {r}: {int(st.owned[r]):,} particles, {int(st.halo[r]):,} halo, "
+                    f"{int(st.neighbours[r])} neighbours")
         out.append(DistributedIce(b, owner, comm))
     return out
 
