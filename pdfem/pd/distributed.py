@@ -14,6 +14,10 @@ velocity-Verlet step on a rank:
    particle is evaluated on both ranks from the same positions, so both decide alike;
 6. half kick.
 
+Steps 3-5 are the serial body's fused kernel (:func:`pdfem.pd.kernels.dilatation_and_forces`,
+which keeps each bond's length from the dilatation pass for the force pass) with the exchange of
+step 4 between its two passes; broken bonds are stored as negative weights, as in the serial body.
+
 The arithmetic per owned particle is the serial code's, on the same values; only the order of
 some sums can differ, so 1 and N ranks agree to round-off. Units: SI.
 """
@@ -107,10 +111,12 @@ class DistributedIce:
         nbr = g2l[body.nbr[pairs]].astype(np.int32)
         local = dataclasses.replace(
             body, x0=body.x0[loc].copy(), vol=body.vol[loc].copy(), row_ptr=row_ptr, nbr=nbr,
-            xi_len=body.xi_len[pairs].copy(), broken=body.broken[pairs].copy(),
+            xi_len=body.xi_len[pairs].copy(),
             nofail=body.nofail[loc].copy(), y=body.y[loc].copy(), v=body.v[loc].copy(),
             f=np.zeros((len(loc), 3)), m=body.m[loc].copy(), theta=np.zeros(len(loc)),
-            weight=body.weight[pairs].copy(), fixed=body.fixed[loc].copy(), constraints=[],
+            weight=kernels.signed_weights(body.weight[pairs], body.broken[pairs]),
+            broken=None,  # broken bonds are negative weights (replace would copy the flags)
+            fixed=body.fixed[loc].copy(), constraints=[],
             loop="pairs", external_work=0.0)
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
         for c in body.constraints:
@@ -120,6 +126,7 @@ class DistributedIce:
         self.exchange_seconds = 0.0  # wall time spent in halo exchanges, s
         # bonds whose lower end is owned here: counted once over all ranks
         self._counted = plan.owned[np.repeat(np.arange(len(loc)), np.diff(row_ptr))]
+        self._counted_broken = self._broken_count()
 
     # -- exchanges ---------------------------------------------------------------------------
     def _exchange(self, values: np.ndarray) -> None:
@@ -132,16 +139,23 @@ class DistributedIce:
             values[p.recv[q]] = got
         self.exchange_seconds += time.perf_counter() - t0
 
+    def _broken_count(self) -> int:
+        """Broken bonds whose lower end this rank owns (each bond counted on one rank)."""
+        return int(self.body.broken[self._counted].sum(dtype=np.int64))
+
     def _compute_forces(self) -> int:
+        """Positions exchanged, then the fused dilatation and force passes with the exchange of
+        the dilatations between them; returns the bonds this rank counts as newly broken."""
         b, mat = self.body, self.body.material
         self._exchange(b.y)
-        kernels.dilatation(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b.broken, b.vol, b.m,
-                           b.theta, b._ws)
-        self._exchange(b.theta)
-        before = b.broken[self._counted].sum(dtype=np.int64)
-        kernels.forces(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b.broken, b.vol, b.m, b.theta,
-                       mat.K, mat.mu, b.s0, b.nofail, b.f, b._ws)
-        return int(b.broken[self._counted].sum(dtype=np.int64) - before)
+        broke = kernels.dilatation_and_forces(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight,
+                                              b._broken_arg(), b.vol, b.m, mat.K, mat.mu, b.s0,
+                                              b.nofail, b.theta, b.f, b._ws,
+                                              between=self._exchange)
+        if broke == 0:  # the usual step: no recount over the bonds
+            return 0
+        before, self._counted_broken = self._counted_broken, self._broken_count()
+        return self._counted_broken - before
 
     # -- stepping ----------------------------------------------------------------------------
     def start(self) -> None:
@@ -207,10 +221,10 @@ class DistributedIce:
     def strain_energy(self) -> float:
         b, mat = self.body, self.body.material
         theta = np.empty(len(b.vol))
-        kernels.dilatation(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b.broken, b.vol, b.m,
+        kernels.dilatation(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b._broken_arg(), b.vol, b.m,
                            theta, b._ws)
         self._exchange(theta)
-        W = kernels.strain_energy(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b.broken, b.vol,
+        W = kernels.strain_energy(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b._broken_arg(), b.vol,
                                   b.m, theta, mat.K, mat.mu, b._ws)
         return float(self._sum(W * b.vol))
 
@@ -286,8 +300,8 @@ class DistributedIce:
                                  "f": state["f"][loc], "theta": state["theta"][loc],
                                  "broken": state["broken"][pairs], "time": state["time"],
                                  "external_work": work})
+        self._counted_broken = self._broken_count()
 
     def damage(self) -> np.ndarray:
         """Local damage (right for owned particles)."""
-        b = self.body
-        return kernels.damage(b.row_ptr, b.nbr, b.broken, b.n, b._ws)
+        return self.body.damage()

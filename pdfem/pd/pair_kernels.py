@@ -565,6 +565,7 @@ def dilatation_and_forces(
     theta_out: np.ndarray,
     f_out: np.ndarray,
     ws: PairWorkspace,
+    between=None,
 ) -> int:
     """One OSB step's internal forces: :func:`dilatation`, then :func:`forces` (pair loops).
 
@@ -575,7 +576,9 @@ def dilatation_and_forces(
     buffer (for the largest bodies, where memory counts more) and takes the square root twice.
 
     Parameters are those of :func:`dilatation` and :func:`forces`; ``theta_out`` (N,) and
-    ``f_out`` (N, 3) are overwritten; ``ws`` is required.
+    ``f_out`` (N, 3) are overwritten; ``ws`` is required. ``between``, if given, is called with
+    ``theta_out`` between the two passes (an MPI rank's body exchanges its halo's dilatations
+    there).
 
     Returns
     -------
@@ -589,6 +592,8 @@ def dilatation_and_forces(
     signed = check_broken(broken, nbr)
     _dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, signed, vol,
                       m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
+    if between is not None:
+        between(theta_out)
     force_coefficients(ws.parallel, m, theta_out, K, mu, ws.coef)
     return int(_forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
                              float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
