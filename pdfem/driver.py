@@ -223,10 +223,6 @@ class NullWriter:
 
 def _check_parallel_case(case: Case, restart) -> None:
     """Refuse what does not run on several ranks yet, naming the field."""
-    if case.run.short_range_contact:
-        raise InputError(case.file, "run.short_range_contact", "short-range contact between ice "
-                         "particles does not run on several MPI ranks yet; run on one rank or "
-                         "set it to false", True)
     if restart is not None or case.run.checkpoint_interval_steps:
         raise InputError(case.file, "run.checkpoint_interval_steps", "checkpoints and --restart "
                          "do not run on several MPI ranks yet; run on one rank or set the "
