@@ -97,14 +97,14 @@ def test_one_two_and_three_ranks_agree(tmp_path, text, body, structure):
 
 
 def test_what_does_not_run_in_parallel_yet_is_refused(tmp_path):
-    """Short-range ice contact on several ranks: exit 2 naming the field, on every rank."""
-    case = tmp_path / "sr.toml"
+    """Checkpoints on several ranks: exit 2 naming the field, on every rank."""
+    case = tmp_path / "ck.toml"
     case.write_text(CYLINDER.replace("output_interval = 4.0e-4",
-                                     "output_interval = 4.0e-4\nshort_range_contact = true"))
+                                     "output_interval = 4.0e-4\ncheckpoint_interval_steps = 10"))
     r = subprocess.run(_command(2) + ["run", str(case), "--out", str(tmp_path / "o")],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2
-    assert "run.short_range_contact" in r.stderr and "Traceback" not in r.stderr
+    assert "run.checkpoint_interval_steps" in r.stderr and "Traceback" not in r.stderr
 
 
 def test_bench_mpi_reports_both_runs(tmp_path):
