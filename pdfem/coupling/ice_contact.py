@@ -59,6 +59,17 @@ from run to run and for any thread or chunk count. Candidates further apart than
 with one squared distance, which is all the work an intact body costs (about 30 candidates per
 particle).
 
+Bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`, which carry the
+communicator) are searched by :class:`_DistributedSearch`: each rank takes the particles of
+other ranks within 1.5 h of the box of its own particles (fragments move, so these partners
+change every step; the static bond halo is not used), orders its own particles and these
+ghosts by global index (body offset + index in the body, the serial order) and runs the
+serial kernels above on them, on the grid the serial run would use (box and dense/folded
+choice from the global extent and particle count). The stable counting sort keeps the local
+particles in the serial sorted order, so every owned particle meets its partners in the
+serial order and its force is the serial one bit for bit; each pair's potential is counted on
+the rank that owns the pair's first particle, and the sums are over ranks.
+
 Units: m, m^3, Pa, N/m^3 (force density), J.
 """
 
@@ -404,7 +415,9 @@ class ShortRangeContact:
     ----------
     bodies
         The ice bodies (:class:`pdfem.pd.body.IceBody`: ``y``, ``x0``, ``vol``, ``dx``,
-        ``delta``, ``material.K``, ``f``); a single body may be passed alone.
+        ``delta``, ``material.K``, ``f``); a single body may be passed alone. Under MPI, all of
+        them :class:`pdfem.pd.distributed.DistributedIce` (every call is then collective, and
+        forces go to the owned particles).
     stiffness_factor
         c_S / c, the short-range constant over the bond-based micromodulus (Silling & Askari: 15).
     distance_factor
@@ -417,7 +430,7 @@ class ShortRangeContact:
     Attributes
     ----------
     n_active
-        Number of interacting pairs found by the last call.
+        Number of interacting pairs found by the last call (over all ranks).
     cell_size
         Side of the search cells, m (the largest critical distance).
     dense, n_buckets
