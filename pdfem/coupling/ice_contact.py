@@ -699,8 +699,9 @@ class _DistributedSearch:
         sends = {}
         sent = np.zeros(P, dtype=np.int64)
         for q in range(P):
-            if q == me or len(y_own) == 0:
-                continue
+            if (q == me or len(y_own) == 0 or np.any(boxes[q, :3] - self.margin > hi)
+                    or np.any(boxes[q, 3:6] + self.margin < lo)):
+                continue  # nothing of ours is near rank q's particles
             inside = np.all((y_own >= boxes[q, :3] - self.margin)
                             & (y_own <= boxes[q, 3:6] + self.margin), axis=1)
             idx = np.flatnonzero(inside)
