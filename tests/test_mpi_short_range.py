@@ -7,7 +7,8 @@ ranks reversed, so facing particles belong to different ranks (pairs across rank
 from the serial run). On 1, 2 and 3 ranks (and 2 on the folded grid) the positions and the
 damage are identical to the serial run, the pair counts per step are equal and the
 short-range potential agrees to round-off (its pairs are summed in another order). The whole
-run: the demo case (ice sheet against the hull panel), shortened, on 1 and 2 ranks. Run as
+runs, on 1 and 2 ranks: the demo case (ice sheet against the hull panel), shortened, and the
+rigid cylinder breaking an ice plate where the partition splits it. Run as
 ``mpiexec -n K`` subprocesses with a timeout, so a broken MPI cannot hang the suite.
 """
 
@@ -131,17 +132,10 @@ def test_blocks_in_contact_across_ranks_match_serial(tmp_path, ranks, fold):
         assert int(fields["cross"]) > 1000 and int(fields["ghosts"]) > 0
 
 
-def test_demo_case_on_two_ranks_matches_one(tmp_path):
-    """The built-in demo (short_range_contact = true), shortened to 0.6 ms with the sheet at
-    20 m/s so that it crushes against the panel within the run: 1 and 2 ranks agree to 1e-10."""
-    demo = Path(__file__).resolve().parents[1] / "models" / "demo_ice_sheet_panel.toml"
-    text = demo.read_text()
-    assert re.search(r"^short_range_contact = true", text, re.M)
-    text = re.sub(r"^end_time = .*$", "end_time = 6.0e-4", text, flags=re.M)
-    text = re.sub(r"^output_interval = .*$", "output_interval = 3.0e-4", text, flags=re.M)
-    text = text.replace("initial_velocity = [0.0, 0.0, -0.5]", "initial_velocity = [0.0, 0.0, -20.0]")
-    assert "-20.0" in text
-    case = tmp_path / "demo.toml"
+def _one_and_two_ranks(tmp_path, text: str, body: str, structure: str) -> tuple[dict, dict]:
+    """Run the case ``text`` on 1 and 2 ranks; check that they agree to 1e-10 (particle
+    displacements, load history, short-range potential) and have the same damage."""
+    case = tmp_path / "case.toml"
     case.write_text(text)
     results = {}
     for ranks in (1, 2):
@@ -152,15 +146,55 @@ def test_demo_case_on_two_ranks_matches_one(tmp_path):
         results[ranks] = read_results(tmp_path / f"r{ranks}" / "results.h5")
     ref, two = results[1], results[2]
     assert two["meta"]["ranks"] == 2
-    u_ref = ref["ice"]["sheet"]["u"]
-    f_ref = ref["histories"]["loads/panel"]["force"]
-    assert np.abs(f_ref).max() > 1e5 and ref["ice"]["sheet"]["damage"].max() > 0
-    np.testing.assert_allclose(two["ice"]["sheet"]["u"], u_ref, rtol=0,
+    u_ref = ref["ice"][body]["u"]
+    f_ref = ref["histories"][f"loads/{structure}"]["force"]
+    assert np.abs(f_ref).max() > 1e4 and ref["ice"][body]["damage"].max() > 0
+    np.testing.assert_allclose(two["ice"][body]["u"], u_ref, rtol=0,
                                atol=1e-10 * np.abs(u_ref).max())
-    np.testing.assert_array_equal(two["ice"]["sheet"]["damage"], ref["ice"]["sheet"]["damage"])
-    np.testing.assert_allclose(two["histories"]["loads/panel"]["force"], f_ref, rtol=0,
+    np.testing.assert_array_equal(two["ice"][body]["damage"], ref["ice"][body]["damage"])
+    np.testing.assert_allclose(two["histories"][f"loads/{structure}"]["force"], f_ref, rtol=0,
                                atol=1e-10 * np.abs(f_ref).max())
     e_ref, e_two = ref["histories"]["energy"], two["histories"]["energy"]
-    scale = np.abs(e_ref["kinetic"]).max()
     np.testing.assert_allclose(e_two["short_range_potential"], e_ref["short_range_potential"],
-                               rtol=0, atol=1e-10 * scale)
+                               rtol=0, atol=1e-10 * np.abs(e_ref["kinetic"]).max())
+    return ref, two
+
+
+def test_demo_case_on_two_ranks_matches_one(tmp_path):
+    """The built-in demo (short_range_contact = true), shortened to 0.6 ms with the sheet at
+    20 m/s so that it crushes against the panel within the run: 1 and 2 ranks agree to 1e-10."""
+    demo = Path(__file__).resolve().parents[1] / "models" / "demo_ice_sheet_panel.toml"
+    text = demo.read_text()
+    assert re.search(r"^short_range_contact = true", text, re.M)
+    text = re.sub(r"^end_time = .*$", "end_time = 6.0e-4", text, flags=re.M)
+    text = re.sub(r"^output_interval = .*$", "output_interval = 3.0e-4", text, flags=re.M)
+    text = text.replace("initial_velocity = [0.0, 0.0, -0.5]", "initial_velocity = [0.0, 0.0, -20.0]")
+    assert "-20.0" in text
+    _one_and_two_ranks(tmp_path, text, "sheet", "panel")
+
+
+CYLINDER = """
+[run]
+end_time = 1.6e-3
+output_interval = 2.0e-4
+short_range_contact = true
+[[ice]]
+name = "plate"
+dx = 0.02
+shape = { box = { min = [0.0, 0.0, 0.0], max = [1.0, 0.5, 0.04] } }
+material = { density = 900.0, youngs_modulus = 4.1e9, poisson_ratio = 0.3, fracture_energy = 3.0 }
+[[structure]]
+name = "cylinder"
+kind = "rigid"
+mesh = "indenters"
+params = { shape = "cylinder", radius = 0.1, length = 0.1, axis = "z", center_x = 0.5, center_y = 0.5905, center_z = 0.02, element_size = 0.02 }
+motion = { velocity = [0.0, -4.0, 0.0] }
+"""
+
+
+def test_cylinder_breaking_plate_on_two_ranks_matches_one(tmp_path):
+    """The rigid cylinder breaking an ice plate at mid-length, where the 2-rank partition
+    splits it (test_mpi_run's case, with short-range contact): crushed pieces press on each
+    other from 1 ms on, and 1 and 2 ranks agree to 1e-10."""
+    ref, _ = _one_and_two_ranks(tmp_path, CYLINDER, "plate", "cylinder")
+    assert ref["histories"]["energy"]["short_range_potential"].max() > 0  # it acted
