@@ -65,7 +65,8 @@ other ranks within 1.5 h of the box of its own particles (fragments move, so the
 change every step; the static bond halo is not used), orders its own particles and these
 ghosts by global index (body offset + index in the body, the serial order) and runs the
 serial kernels above on them, on the grid the serial run would use (box and dense/folded
-choice from the global extent and particle count). The stable counting sort keeps the local
+choice from the global extent and particle count; a dense grid is cut down to the cells of the
+local particles, which keeps their order, so a rank's table scales with its own particles). The stable counting sort keeps the local
 particles in the serial sorted order, so every owned particle meets its partners in the
 serial order and its force is the serial one bit for bit; each pair's potential is counted on
 the rank that owns the pair's first particle, and the sums are over ranks.
@@ -95,6 +96,7 @@ DENSE_CELLS_PER_PARTICLE = 4
 #: cell coordinates are clamped to [0, _AXIS_CELLS) per axis (keys pack 21 bits per axis)
 _AXIS_CELLS = 1 << 20
 _INITIAL_CAPACITY = 1024  # pair slots per chunk before the first growth
+_NO_SHIFT = np.zeros(3, dtype=np.int64)
 _NOT_FINITE = ("ice particle positions are not finite (NaN or Inf): the run has become "
                "unstable")
 
@@ -158,16 +160,17 @@ def _bucket(ix, iy, iz, fold):
 
 
 @numba.njit(cache=True)
-def _cells(y, lo, inv_h, dims, pad, fold, ijk, key, bucket):
-    """Clamped (and padded) cell coordinates, packed cell key and bucket of every particle."""
+def _cells(y, lo, inv_h, dims, pad, fold, ijk, key, bucket, shift):
+    """Clamped (and padded) cell coordinates, packed cell key and bucket of every particle;
+    the grid's cells start at cell ``shift`` (zeros: at ``lo``)."""
     top_x = float(dims[0] - 1)
     top_y = float(dims[1] - 1)
     top_z = float(dims[2] - 1)
     for i in range(y.shape[0]):
         # y >= lo, so the scaled offset is >= 0 and int() floors it; clamp before converting
-        cx = int(min((y[i, 0] - lo[0]) * inv_h, top_x)) + pad
-        cy = int(min((y[i, 1] - lo[1]) * inv_h, top_y)) + pad
-        cz = int(min((y[i, 2] - lo[2]) * inv_h, top_z)) + pad
+        cx = int(min((y[i, 0] - lo[0]) * inv_h, top_x)) - shift[0] + pad
+        cy = int(min((y[i, 1] - lo[1]) * inv_h, top_y)) - shift[1] + pad
+        cz = int(min((y[i, 2] - lo[2]) * inv_h, top_z)) - shift[2] + pad
         ijk[i, 0] = cx
         ijk[i, 1] = cy
         ijk[i, 2] = cz
@@ -540,7 +543,7 @@ class ShortRangeContact:
         return dims, pad, fold, nb
 
     def _scan(self, y, lo, dims, pad, fold, nb, x0, vol, stiffness, radius, body, chunk_ptr,
-              counts):
+              counts, shift=_NO_SHIFT):
         """Sort the particles ``y`` (with their constants) into the grid and find the
         interacting pairs into ``self._pair``, ``self._val``, ``counts`` (per chunk)."""
         n = y.shape[0]
@@ -549,7 +552,7 @@ class ShortRangeContact:
             self._start = np.empty(nb + 1, dtype=np.int64)
         ijk, key, bucket, perm = self._ijk[:n], self._key[:n], self._bucket[:n], self._perm[:n]
         ys, ijks, keys, buckets = self._ys[:n], self._ijks[:n], self._keys[:n], self._buckets[:n]
-        _cells(y, lo, 1.0 / h, dims, pad, fold, ijk, key, bucket)
+        _cells(y, lo, 1.0 / h, dims, pad, fold, ijk, key, bucket, shift)
         _sort(bucket, nb, self._start, perm)
         _gather(perm, y, ijk, key, bucket, ys, ijks, keys, buckets, not self.dense)
         n_chunks = chunk_ptr.shape[0] - 1
@@ -734,11 +737,22 @@ class _DistributedSearch:
         dims, pad, fold, nb = c._grid(glo, ghi, c.n)
         n_pairs, energy = 0, 0.0
         if m >= 2:
+            shift = _NO_SHIFT
+            if c.dense:  # only the cells of the local particles (same cells, same order)
+                llo, lhi, _ = _extent(y)
+                inv_h = 1.0 / c.cell_size
+                first = np.array([int(min((llo[k] - glo[k]) * inv_h, float(dims[k] - 1)))
+                                  for k in range(3)], dtype=np.int64)
+                last = np.array([int(min((lhi[k] - glo[k]) * inv_h, float(dims[k] - 1)))
+                                 for k in range(3)], dtype=np.int64)
+                shift = first
+                fold = last - first + 3
+                nb = int(np.prod(fold))
             n_chunks = max(1, min(c._chunks_wanted, m))
             chunk_ptr = (np.arange(n_chunks + 1, dtype=np.int64) * m) // n_chunks
             counts = np.zeros(n_chunks, dtype=np.int64)
             c._scan(y, glo, dims, pad, fold, nb, c.x0[gid], vol, c.stiffness[gid],
-                    c.radius[gid], c.body[gid], chunk_ptr, counts)
+                    c.radius[gid], c.body[gid], chunk_ptr, counts, shift)
             n_pairs, energy = _counted_pairs(counts, c._cap, c._pair, c._val, owned)
             if counts.sum():
                 nt, _ = _sum_pairs(counts, c._cap, c._pair, c._val, vol, c._acc, c._mark,
