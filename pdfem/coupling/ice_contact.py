@@ -660,8 +660,8 @@ class _DistributedSearch:
        its owned particles within 1.5 h of that rank's box (global id and position): the
        *ghosts*, every partner an owned particle can have, wherever fragments have moved;
     2. searches its owned particles and ghosts, ordered by global id (body offset + index in
-       the body, the serial order), on the serial run's grid (box and bucket table from the
-       global extent and particle count), with the serial kernels. The stable counting sort
+       the body, the serial order), on the serial run's cells (from the global extent and
+       particle count; a dense table only over the local cells), with the serial kernels. The stable counting sort
        keeps the local particles in the serial sorted order, so each owned particle meets its
        partners in the same order and its force is summed exactly as in the serial run;
     3. keeps the forces of its owned particles, and counts a pair (and its potential) on the
