@@ -2,7 +2,7 @@
 
 mpi4py is imported only when the process was started by an MPI launcher (so a serial run needs
 no mpiexec and no MPI library at all). Both communicators offer the few operations pdfem
-needs: rank and size, a sum over ranks, a gather to rank 0, a broadcast, and the point-to-point
+needs: rank and size, a sum over ranks, a gather to rank 0, an all-gather, a broadcast, and the point-to-point
 halo exchange of :mod:`pdfem.pd.distributed`.
 """
 
@@ -26,6 +26,9 @@ class SerialComm:
         return value
 
     def gather(self, value):
+        return [value]
+
+    def allgather(self, value):
         return [value]
 
     def bcast(self, value):
@@ -58,6 +61,10 @@ class MPIComm:
 
     def gather(self, value):
         return self.comm.gather(value, root=0)
+
+    def allgather(self, value):
+        """Every rank's ``value``, in rank order, on every rank."""
+        return self.comm.allgather(value)
 
     def bcast(self, value):
         return self.comm.bcast(value, root=0)

@@ -235,14 +235,6 @@ def _open_results(path: Path, case_text: str, meta: dict, append: bool) -> Resul
                          ) from None
 
 
-def _check_parallel_case(case: Case, restart) -> None:
-    """Refuse what does not run on several ranks yet, naming the field."""
-    if case.run.short_range_contact:
-        raise InputError(case.file, "run.short_range_contact", "short-range contact between ice "
-                         "particles does not run on several MPI ranks yet; run on one rank or "
-                         "set it to false", True)
-
-
 def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: bool | None = None,
              log=None, restart: str | Path | None = None) -> RunSummary:
     """Run a validated case and write ``results.h5`` (+ ``results.xdmf``) into ``out_dir``.
@@ -286,8 +278,6 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     quiet = quiet or comm.rank != 0  # one rank speaks for all
     say = (lambda s: None) if quiet else (log or (lambda s: print(s, flush=True)))
     out = Path(out_dir)
-    if comm.size > 1:
-        _check_parallel_case(case, restart)
     ckpt = read_checkpoint(restart, case.text, case.file) if restart is not None else None
     estimates = estimate_case(case)
     available = available_memory()

@@ -18,6 +18,7 @@ import numpy as np
 from .comm import SerialComm
 from .coupling.contact import SurfaceContact
 from .coupling.coupler import ContactPair, Coupler
+from .coupling.ice_contact import ShortRangeContact
 from .fem.build import build_structure
 from .fem.rigid import RigidBody
 from .pd.body import IceBody
@@ -97,7 +98,8 @@ def any_rank(flag: bool, comm) -> bool:
     return bool(comm.allreduce_sum(np.int64(bool(flag))))
 
 def warm_up() -> None:
-    """Run two steps of a tiny ice cube pressed by a rigid plate, split over one 'rank'."""
+    """Run two steps of a tiny ice cube pressed by a rigid plate (with short-range contact),
+    split over one 'rank'."""
     mat = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3, fracture_energy=1.0)
     body = IceBody.from_shape("warm", Box((0, 0, 0), (0.05, 0.05, 0.05)), mat, 0.01, 0.03015)
     owner, _ = choose_partition(body.x0, body.row_ptr, body.nbr, 1)
@@ -106,7 +108,8 @@ def warm_up() -> None:
                                 [-1, 1, 0.0501]]), np.array([[0, 1, 2], [0, 2, 3]]),
                       velocity=(0, 0, -1.0))
     pair = ContactPair("warm", ice, plate, SurfaceContact(plate, 0.005))
-    c = Coupler([ice], [plate], [pair], 1e-6, comm=SerialComm())
+    c = Coupler([ice], [plate], [pair], 1e-6, short_range=ShortRangeContact([ice]),
+                comm=SerialComm())
     c.start()
     for _ in range(2):
         c.step()

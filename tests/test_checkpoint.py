@@ -158,13 +158,12 @@ def _assert_same_run(a: dict, b: dict, exact: bool = True) -> None:
 
 
 def test_killed_mpi_run_restarts_bit_identical(case_dir):
-    """On 2 MPI ranks: SIGKILL of the whole job after a checkpoint, then ``mpiexec -n 2 pdfem
+    """On 2 MPI ranks (short-range contact across the ranks included): SIGKILL of the whole
+    job after a checkpoint, then ``mpiexec -n 2 pdfem
     run --restart``: every frame and history equals the uninterrupted 2-rank run bit for bit.
     The same checkpoint restarted on 1 rank agrees with it to round-off (1e-10): the checkpoint
     holds the whole state in global order, whatever the rank count that wrote it."""
-    mpi = [_mpiexec(), "-n", "2", *_command(), "run", str(case_dir / "case_mpi.toml")]
-    (case_dir / "case_mpi.toml").write_text(CASE.replace("short_range_contact = true",
-                                                         "short_range_contact = false"))
+    mpi = [_mpiexec(), "-n", "2", *_command(), "run", str(case_dir / "case.toml")]
     ref = case_dir / "mpi_ref"
     r = subprocess.run([*mpi, "--out", str(ref), "--quiet"], capture_output=True, text=True,
                        timeout=600)
@@ -198,7 +197,7 @@ def test_killed_mpi_run_restarts_bit_identical(case_dir):
     for k in sa:
         np.testing.assert_array_equal(sa[k], sb[k], err_msg=k)
 
-    r = subprocess.run([*_command(), "run", str(case_dir / "case_mpi.toml"), "--restart",
+    r = subprocess.run([*_command(), "run", str(case_dir / "case.toml"), "--restart",
                         str(serial / CHECKPOINT_NAME), "--quiet"],
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-3000:]

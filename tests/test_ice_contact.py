@@ -265,3 +265,35 @@ def test_bad_input_is_refused():
     a.y[3, 1] = np.nan
     with pytest.raises(FloatingPointError, match="not finite"):
         ShortRangeContact([a, b]).add_forces()
+
+
+def test_split_bodies_on_one_rank_give_the_same_forces():
+    """Bodies split over one 'rank' (DistributedIce, serial communicator) take the distributed
+    search: the same forces, pair count and potential as the plain bodies, bit for bit; a NaN
+    position is refused; plain and split bodies cannot be mixed."""
+    from pdfem.comm import SerialComm
+    from pdfem.pd.distributed import DistributedIce
+
+    dx = 0.01
+    plain = [IceBody.from_shape(n, Box(lo, hi), ICE, dx, 3.015 * dx)
+             for n, lo, hi in (("a", (0, 0, 0), (0.05, 0.06, 0.04)),
+                               ("b", (0.045, 0.005, 0), (0.1, 0.065, 0.04)))]
+    split = [DistributedIce(IceBody.from_shape(b.name, Box(b.x0.min(0) - dx / 2,
+                                                           b.x0.max(0) + dx / 2), ICE, dx,
+                                               3.015 * dx), np.zeros(b.n, dtype=np.int64),
+                            SerialComm()) for b in plain]
+    rng = np.random.default_rng(3)
+    for p, s in zip(plain, split):
+        assert np.array_equal(p.x0, s.x0)
+        p.y[:] = p.x0 + rng.normal(0.0, 0.1 * dx, p.x0.shape)
+        s.y[:] = p.y
+    ref, dist = ShortRangeContact(plain), ShortRangeContact(split)
+    f_ref, f = ref.forces(), dist.forces()
+    assert ref.n_active == dist.n_active > 0
+    assert all(np.array_equal(a, b) for a, b in zip(f_ref, f))
+    assert ref.potential_energy() == dist.potential_energy() > 0
+    split[1].y[2, 0] = np.inf
+    with pytest.raises(FloatingPointError, match="not finite"):
+        dist.add_forces()
+    with pytest.raises(ValueError, match="all ice bodies"):
+        ShortRangeContact([plain[0], split[1]])

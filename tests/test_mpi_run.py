@@ -128,15 +128,15 @@ def test_per_rank_ice_files_read_as_one_run(tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
 
 
-def test_what_does_not_run_in_parallel_yet_is_refused(tmp_path):
-    """Short-range ice contact on several ranks: exit 2 naming the field, on every rank."""
-    case = tmp_path / "sr.toml"
+def test_bad_input_on_several_ranks_exits_2_without_traceback(tmp_path):
+    """A bad case value under mpiexec: exit 2, the message names the field, no traceback."""
+    case = tmp_path / "bad.toml"
     case.write_text(CYLINDER.replace("output_interval = 4.0e-4",
-                                     "output_interval = 4.0e-4\nshort_range_contact = true"))
+                                     "output_interval = 4.0e-4\noutput_per_rank = \"yes\""))
     r = subprocess.run(_command(2) + ["run", str(case), "--out", str(tmp_path / "o")],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2
-    assert "run.short_range_contact" in r.stderr and "Traceback" not in r.stderr
+    assert "run.output_per_rank" in r.stderr and "Traceback" not in r.stderr
 
 
 def test_bench_mpi_reports_both_runs(tmp_path):

@@ -59,6 +59,18 @@ from run to run and for any thread or chunk count. Candidates further apart than
 with one squared distance, which is all the work an intact body costs (about 30 candidates per
 particle).
 
+Bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`, which carry the
+communicator) are searched by :class:`_DistributedSearch`: each rank takes the particles of
+other ranks within 1.5 h of the box of its own particles (fragments move, so these partners
+change every step; the static bond halo is not used), orders its own particles and these
+ghosts by global index (body offset + index in the body, the serial order) and runs the
+serial kernels above on them, on the grid the serial run would use (box and dense/folded
+choice from the global extent and particle count; a dense grid is cut down to the cells of the
+local particles, which keeps their order, so a rank's table scales with its own particles). The stable counting sort keeps the local
+particles in the serial sorted order, so every owned particle meets its partners in the
+serial order and its force is the serial one bit for bit; each pair's potential is counted on
+the rank that owns the pair's first particle, and the sums are over ranks.
+
 Units: m, m^3, Pa, N/m^3 (force density), J.
 """
 
@@ -71,6 +83,7 @@ import numba
 import numpy as np
 from numba import prange
 
+from ..pd.distributed import DistributedIce
 from ..pd.workspace import SERIAL_BELOW_PARTICLES, twin
 
 if TYPE_CHECKING:
@@ -83,6 +96,9 @@ DENSE_CELLS_PER_PARTICLE = 4
 #: cell coordinates are clamped to [0, _AXIS_CELLS) per axis (keys pack 21 bits per axis)
 _AXIS_CELLS = 1 << 20
 _INITIAL_CAPACITY = 1024  # pair slots per chunk before the first growth
+_NO_SHIFT = np.zeros(3, dtype=np.int64)
+_NOT_FINITE = ("ice particle positions are not finite (NaN or Inf): the run has become "
+               "unstable")
 
 
 def short_range_constant(K: float, delta: float, factor: float = 15.0) -> float:
@@ -144,16 +160,17 @@ def _bucket(ix, iy, iz, fold):
 
 
 @numba.njit(cache=True)
-def _cells(y, lo, inv_h, dims, pad, fold, ijk, key, bucket):
-    """Clamped (and padded) cell coordinates, packed cell key and bucket of every particle."""
+def _cells(y, lo, inv_h, dims, pad, fold, ijk, key, bucket, shift):
+    """Clamped (and padded) cell coordinates, packed cell key and bucket of every particle;
+    the grid's cells start at cell ``shift`` (zeros: at ``lo``)."""
     top_x = float(dims[0] - 1)
     top_y = float(dims[1] - 1)
     top_z = float(dims[2] - 1)
     for i in range(y.shape[0]):
         # y >= lo, so the scaled offset is >= 0 and int() floors it; clamp before converting
-        cx = int(min((y[i, 0] - lo[0]) * inv_h, top_x)) + pad
-        cy = int(min((y[i, 1] - lo[1]) * inv_h, top_y)) + pad
-        cz = int(min((y[i, 2] - lo[2]) * inv_h, top_z)) + pad
+        cx = int(min((y[i, 0] - lo[0]) * inv_h, top_x)) - shift[0] + pad
+        cy = int(min((y[i, 1] - lo[1]) * inv_h, top_y)) - shift[1] + pad
+        cz = int(min((y[i, 2] - lo[2]) * inv_h, top_z)) - shift[2] + pad
         ijk[i, 0] = cx
         ijk[i, 1] = cy
         ijk[i, 2] = cz
@@ -377,6 +394,19 @@ def _add_into(f, offset, touched, nt, acc):
             f[loc, 2] += acc[g, 2]
 
 
+@numba.njit(cache=True)
+def _counted_pairs(counts, cap, pair, val, counted):
+    """Number and potential (J) of the found pairs whose first particle is ``counted``."""
+    n = 0
+    energy = 0.0
+    for c in range(counts.shape[0]):
+        for t in range(c * cap, c * cap + counts[c]):
+            if counted[pair[t, 0]]:
+                n += 1
+                energy += val[t, 3]
+    return n, energy
+
+
 # --------------------------------------------------------------------------------------------
 # the contact object
 
@@ -388,7 +418,9 @@ class ShortRangeContact:
     ----------
     bodies
         The ice bodies (:class:`pdfem.pd.body.IceBody`: ``y``, ``x0``, ``vol``, ``dx``,
-        ``delta``, ``material.K``, ``f``); a single body may be passed alone.
+        ``delta``, ``material.K``, ``f``); a single body may be passed alone. Under MPI, all of
+        them :class:`pdfem.pd.distributed.DistributedIce` (every call is then collective, and
+        forces go to the owned particles).
     stiffness_factor
         c_S / c, the short-range constant over the bond-based micromodulus (Silling & Askari: 15).
     distance_factor
@@ -401,7 +433,7 @@ class ShortRangeContact:
     Attributes
     ----------
     n_active
-        Number of interacting pairs found by the last call.
+        Number of interacting pairs found by the last call (over all ranks).
     cell_size
         Side of the search cells, m (the largest critical distance).
     dense, n_buckets
@@ -421,7 +453,13 @@ class ShortRangeContact:
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"{name} must be a positive finite number, got {v!r}")
         self.bodies: list = list(bodies)
-        sizes = [int(b.x0.shape[0]) for b in self.bodies]
+        distributed = [isinstance(b, DistributedIce) for b in self.bodies]
+        if any(distributed) and not all(distributed):
+            raise ValueError("short-range contact needs all ice bodies split over the ranks "
+                             "(DistributedIce) or none")
+        # the particles of all bodies, numbered body after body (whole bodies under MPI)
+        whole = [b.global_body if d else b for b, d in zip(self.bodies, distributed)]
+        sizes = [int(b.x0.shape[0]) for b in whole]
         self.offsets = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
         n = int(self.offsets[-1])
         if n >= 2 ** 31 - 1:
@@ -429,25 +467,43 @@ class ShortRangeContact:
         self.n = n
         self.distance_factor = float(distance_factor)
         self.radius_factor = float(radius_factor)
-        self.x0 = np.concatenate([b.x0 for b in self.bodies]).astype(np.float64)
-        self.vol = np.concatenate([b.vol for b in self.bodies]).astype(np.float64)
+        self.x0 = np.concatenate([b.x0 for b in whole]).astype(np.float64)
+        self.vol = np.concatenate([b.vol for b in whole]).astype(np.float64)
         self.stiffness = np.concatenate([
             np.full(s, short_range_constant(b.material.K, b.delta, stiffness_factor))
-            for b, s in zip(self.bodies, sizes)])
-        self.radius = np.concatenate([np.full(s, 0.5 * b.dx) for b, s in zip(self.bodies, sizes)])
+            for b, s in zip(whole, sizes)])
+        self.radius = np.concatenate([np.full(s, 0.5 * b.dx) for b, s in zip(whole, sizes)])
         self.body = np.concatenate([np.full(s, k, dtype=np.int32) for k, s in enumerate(sizes)])
-        dx_max = max(float(b.dx) for b in self.bodies)
+        dx_max = max(float(b.dx) for b in whole)
         # a margin of 1e-12 keeps pairs at a critical distance of exactly h from being lost to
         # the rounding of the cell coordinates
         self.cell_size = max(self.radius_factor, self.distance_factor) * dx_max * (1.0 + 1e-12)
         threads = int(numba.get_num_threads())
         C = 4 * threads if n_chunks is None else int(n_chunks)
+        self._chunks_wanted = max(1, C)
         self.n_chunks = max(1, min(C, max(n, 1)))
         self.chunk_ptr = (np.arange(self.n_chunks + 1, dtype=np.int64) * n) // self.n_chunks
         self._cap = _INITIAL_CAPACITY
         self._pair = np.empty((self.n_chunks * self._cap, 2), dtype=np.int32)
         self._val = np.empty((self.n_chunks * self._cap, 4))
         self._counts = np.zeros(self.n_chunks, dtype=np.int64)
+        self._size = -1
+        self._dist = _DistributedSearch(self) if all(distributed) else None
+        self._reserve(0 if self._dist is not None else n)
+        self._n_touched = 0
+        self._start = np.empty(1, dtype=np.int64)
+        self.n_active = 0
+        self.dense = True
+        self.n_buckets = 0
+
+    # -- search ---------------------------------------------------------------------------------
+    def _reserve(self, n: int) -> None:
+        """Per-particle work arrays for at least ``n`` particles (grown by a quarter at least)."""
+        if n <= self._size:
+            return
+        if self._size >= 0:
+            n = max(n, self._size + self._size // 4)
+        self._size = n
         self._ijk = np.empty((n, 3), dtype=np.int64)
         self._key = np.empty(n, dtype=np.int64)
         self._bucket = np.empty(n, dtype=np.int64)
@@ -459,35 +515,19 @@ class ShortRangeContact:
         self._acc = np.zeros((n, 3))
         self._mark = np.zeros(n, dtype=np.uint8)
         self._touched = np.empty(n, dtype=np.int32)
-        self._n_touched = 0
-        self._start = np.empty(1, dtype=np.int64)
-        self.n_active = 0
-        self.dense = True
-        self.n_buckets = 0
 
-    # -- search ---------------------------------------------------------------------------------
     def _positions(self) -> np.ndarray:
         if len(self.bodies) == 1:
             return np.ascontiguousarray(self.bodies[0].y, dtype=np.float64)
         return np.concatenate([b.y for b in self.bodies])
 
-    def _search(self) -> float:
-        """Find the interacting pairs at the current positions; returns their potential (J)."""
-        n = self.n
-        self._n_touched = 0
-        self.n_active = 0
-        if n < 2:
-            return 0.0
-        y = self._positions()
-        lo, hi, finite = _extent(y)
-        if not finite:
-            raise FloatingPointError("ice particle positions are not finite (NaN or Inf): "
-                                     "the run has become unstable")
-        h = self.cell_size
-        inv_h = 1.0 / h
+    def _grid(self, lo, hi, n_total: int):
+        """Cell geometry over the box [lo, hi] for ``n_total`` particles: dims, pad, fold and
+        the number of buckets (sets ``dense`` and ``n_buckets``)."""
+        inv_h = 1.0 / self.cell_size
         dims = np.array([min(int((hi[k] - lo[k]) * inv_h) + 1, _AXIS_CELLS) for k in range(3)],
                         dtype=np.int64)
-        budget = DENSE_CELLS_PER_PARTICLE * max(n, 1024)
+        budget = DENSE_CELLS_PER_PARTICLE * max(n_total, 1024)
         self.dense = float(np.prod(dims + 2)) <= budget
         if self.dense:  # one empty cell around the grid: the stencil needs no bounds checks
             pad = 1
@@ -500,30 +540,59 @@ class ShortRangeContact:
                 fold[k] = (fold[k] + 1) // 2
         nb = int(np.prod(fold))
         self.n_buckets = nb
+        return dims, pad, fold, nb
+
+    def _scan(self, y, lo, dims, pad, fold, nb, x0, vol, stiffness, radius, body, chunk_ptr,
+              counts, shift=_NO_SHIFT):
+        """Sort the particles ``y`` (with their constants) into the grid and find the
+        interacting pairs into ``self._pair``, ``self._val``, ``counts`` (per chunk)."""
+        n = y.shape[0]
+        h = self.cell_size
         if self._start.shape[0] != nb + 1:
             self._start = np.empty(nb + 1, dtype=np.int64)
-        _cells(y, lo, inv_h, dims, pad, fold, self._ijk, self._key, self._bucket)
-        _sort(self._bucket, nb, self._start, self._perm)
-        _gather(self._perm, y, self._ijk, self._key, self._bucket, self._ys, self._ijks,
-                self._keys, self._buckets, not self.dense)
+        ijk, key, bucket, perm = self._ijk[:n], self._key[:n], self._bucket[:n], self._perm[:n]
+        ys, ijks, keys, buckets = self._ys[:n], self._ijks[:n], self._keys[:n], self._buckets[:n]
+        _cells(y, lo, 1.0 / h, dims, pad, fold, ijk, key, bucket, shift)
+        _sort(bucket, nb, self._start, perm)
+        _gather(perm, y, ijk, key, bucket, ys, ijks, keys, buckets, not self.dense)
+        n_chunks = chunk_ptr.shape[0] - 1
+        if self._pair.shape[0] < n_chunks * self._cap:
+            self._pair = np.empty((n_chunks * self._cap, 2), dtype=np.int32)
+            self._val = np.empty((n_chunks * self._cap, 4))
         while True:
             par = n >= SERIAL_BELOW_PARTICLES
             if self.dense:
-                _find_dense(par, self._ys, self._buckets, self._start, self._perm, self.x0,
-                            self.vol, self.stiffness, self.radius, self.body, h, fold,
-                            self.distance_factor, self.radius_factor, self.chunk_ptr, self._cap,
-                            self._pair, self._val, self._counts)
+                _find_dense(par, ys, buckets, self._start, perm, x0, vol, stiffness, radius,
+                            body, h, fold, self.distance_factor, self.radius_factor, chunk_ptr,
+                            self._cap, self._pair, self._val, counts)
             else:
-                _find_folded(par, self._ys, self._ijks, self._keys, self._buckets, self._start,
-                             self._perm, self.x0, self.vol, self.stiffness, self.radius, self.body,
-                             h, dims, fold, self.distance_factor, self.radius_factor,
-                             self.chunk_ptr, self._cap, self._pair, self._val, self._counts)
-            most = int(self._counts.max())
+                _find_folded(par, ys, ijks, keys, buckets, self._start, perm, x0, vol,
+                             stiffness, radius, body, h, dims, fold, self.distance_factor,
+                             self.radius_factor, chunk_ptr, self._cap, self._pair, self._val,
+                             counts)
+            most = int(counts.max())
             if most <= self._cap:
                 break
             self._cap = 2 * most
-            self._pair = np.empty((self.n_chunks * self._cap, 2), dtype=np.int32)
-            self._val = np.empty((self.n_chunks * self._cap, 4))
+            self._pair = np.empty((n_chunks * self._cap, 2), dtype=np.int32)
+            self._val = np.empty((n_chunks * self._cap, 4))
+
+    def _search(self) -> float:
+        """Find the interacting pairs at the current positions; returns their potential (J)."""
+        if self._dist is not None:
+            return self._dist.search()
+        n = self.n
+        self._n_touched = 0
+        self.n_active = 0
+        if n < 2:
+            return 0.0
+        y = self._positions()
+        lo, hi, finite = _extent(y)
+        if not finite:
+            raise FloatingPointError(_NOT_FINITE)
+        dims, pad, fold, nb = self._grid(lo, hi, n)
+        self._scan(y, lo, dims, pad, fold, nb, self.x0, self.vol, self.stiffness, self.radius,
+                   self.body, self.chunk_ptr, self._counts)
         self.n_active = int(self._counts.sum())
         if self.n_active == 0:
             return 0.0
@@ -549,7 +618,9 @@ class ShortRangeContact:
             If a position is NaN or infinite.
         """
         self._search()
-        if self._n_touched:
+        if self._dist is not None:
+            self._dist.add_into([b.f for b in self.bodies])
+        elif self._n_touched:
             for b, off in zip(self.bodies, self.offsets[:-1]):
                 _add_into(b.f, int(off), self._touched, self._n_touched, self._acc)
         return self.n_active
@@ -564,6 +635,9 @@ class ShortRangeContact:
         """
         self._search()
         out = [np.zeros((b.x0.shape[0], 3)) for b in self.bodies]
+        if self._dist is not None:
+            self._dist.add_into(out)
+            return out
         for f, off in zip(out, self.offsets[:-1]):
             _add_into(f, int(off), self._touched, self._n_touched, self._acc)
         return out
@@ -574,3 +648,132 @@ class ShortRangeContact:
         ``sum over interacting pairs of 1/2 k_ij V_i V_j (r_ij - |y_j - y_i|)^2``.
         """
         return self._search()
+
+
+class _DistributedSearch:
+    """The search of a :class:`ShortRangeContact` whose bodies are split over MPI ranks
+    (:class:`pdfem.pd.distributed.DistributedIce`), with the serial run's forces, bit for bit.
+
+    Every call, each rank
+
+    1. shares the box of its owned particles (all bodies) with every rank, and sends each rank
+       its owned particles within 1.5 h of that rank's box (global id and position): the
+       *ghosts*, every partner an owned particle can have, wherever fragments have moved;
+    2. searches its owned particles and ghosts, ordered by global id (body offset + index in
+       the body, the serial order), on the serial run's cells (from the global extent and
+       particle count; a dense table only over the local cells), with the serial kernels. The stable counting sort
+       keeps the local particles in the serial sorted order, so each owned particle meets its
+       partners in the same order and its force is summed exactly as in the serial run;
+    3. keeps the forces of its owned particles, and counts a pair (and its potential) on the
+       rank owning the pair's first particle, summed over ranks.
+    """
+
+    def __init__(self, contact: ShortRangeContact) -> None:
+        self.contact = contact
+        bodies = contact.bodies
+        self.comm = bodies[0].comm
+        self.own = [np.flatnonzero(b.owned) for b in bodies]
+        self.own_gid = np.concatenate(
+            [b.plan.local[o].astype(np.int64) + off
+             for b, o, off in zip(bodies, self.own, contact.offsets[:-1])])
+        self.margin = 1.5 * contact.cell_size
+        self.n_ghosts = 0  # ghosts received by the last search
+        self._own_pos = np.empty(0, dtype=np.int64)
+        self._m = 0
+
+    def search(self) -> float:
+        c, comm = self.contact, self.comm
+        c._n_touched = 0
+        c.n_active = 0
+        if c.n < 2:
+            return 0.0
+        y_own = np.concatenate([b.y[o] for b, o in zip(c.bodies, self.own)])
+        if len(y_own):
+            lo, hi, finite = _extent(y_own)
+        else:
+            lo, hi, finite = np.full(3, np.inf), np.full(3, -np.inf), True
+        boxes = np.array(comm.allgather(np.concatenate([lo, hi, [0.0 if finite else 1.0]])))
+        if boxes[:, 6].any():
+            raise FloatingPointError(_NOT_FINITE)
+        glo = boxes[:, :3].min(axis=0)
+        ghi = boxes[:, 3:6].max(axis=0)
+        # ghosts: what every other rank needs of ours, and what we get
+        P, me = comm.size, comm.rank
+        sends = {}
+        sent = np.zeros(P, dtype=np.int64)
+        for q in range(P):
+            if (q == me or len(y_own) == 0 or np.any(boxes[q, :3] - self.margin > hi)
+                    or np.any(boxes[q, 3:6] + self.margin < lo)):
+                continue  # nothing of ours is near rank q's particles
+            inside = np.all((y_own >= boxes[q, :3] - self.margin)
+                            & (y_own <= boxes[q, 3:6] + self.margin), axis=1)
+            idx = np.flatnonzero(inside)
+            if len(idx):
+                buf = np.empty((len(idx), 4))
+                buf[:, 0] = self.own_gid[idx]
+                buf[:, 1:] = y_own[idx]
+                sends[q] = buf
+                sent[q] = len(idx)
+        table = np.array(comm.allgather(sent)).reshape(P, P)
+        recvs = {p: ((int(table[p, me]), 4), np.float64) for p in range(P)
+                 if p != me and table[p, me] > 0}
+        got = comm.exchange(sends, recvs) if (sends or recvs) else {}
+        self.n_ghosts = int(sum(len(g) for g in got.values()))
+        gid = np.concatenate([self.own_gid] + [got[p][:, 0].astype(np.int64) for p in sorted(got)])
+        y = np.concatenate([y_own] + [got[p][:, 1:] for p in sorted(got)])
+        order = np.argsort(gid, kind="stable")
+        gid = gid[order]
+        y = np.ascontiguousarray(y[order])
+        m = len(gid)
+        where = np.empty(m, dtype=np.int64)
+        where[order] = np.arange(m)
+        self._own_pos = where[:len(self.own_gid)]
+        self._m = m
+        owned = np.zeros(m, dtype=np.bool_)
+        owned[self._own_pos] = True
+        # the serial search on the local particles
+        c._reserve(m)
+        vol = c.vol[gid]
+        dims, pad, fold, nb = c._grid(glo, ghi, c.n)
+        n_pairs, energy = 0, 0.0
+        if m >= 2:
+            shift = _NO_SHIFT
+            if c.dense:  # only the cells of the local particles (same cells, same order)
+                llo, lhi, _ = _extent(y)
+                inv_h = 1.0 / c.cell_size
+                first = np.array([int(min((llo[k] - glo[k]) * inv_h, float(dims[k] - 1)))
+                                  for k in range(3)], dtype=np.int64)
+                last = np.array([int(min((lhi[k] - glo[k]) * inv_h, float(dims[k] - 1)))
+                                 for k in range(3)], dtype=np.int64)
+                shift = first
+                fold = last - first + 3
+                nb = int(np.prod(fold))
+            n_chunks = max(1, min(c._chunks_wanted, m))
+            chunk_ptr = (np.arange(n_chunks + 1, dtype=np.int64) * m) // n_chunks
+            counts = np.zeros(n_chunks, dtype=np.int64)
+            c._scan(y, glo, dims, pad, fold, nb, c.x0[gid], vol, c.stiffness[gid],
+                    c.radius[gid], c.body[gid], chunk_ptr, counts, shift)
+            n_pairs, energy = _counted_pairs(counts, c._cap, c._pair, c._val, owned)
+            if counts.sum():
+                nt, _ = _sum_pairs(counts, c._cap, c._pair, c._val, vol, c._acc, c._mark,
+                                   c._touched)
+                c._n_touched = nt
+        total = comm.allreduce_sum(np.array([float(n_pairs), energy]))
+        c.n_active = int(total[0])
+        return float(total[1])
+
+    def add_into(self, fs: list) -> None:
+        """Add the last search's force density of each owned particle into ``fs`` (one local
+        array per body)."""
+        c = self.contact
+        nt = c._n_touched
+        if nt == 0:
+            return
+        hit = np.zeros(self._m, dtype=np.bool_)
+        hit[c._touched[:nt]] = True
+        k = 0
+        for f, o in zip(fs, self.own):
+            pos = self._own_pos[k:k + len(o)]
+            k += len(o)
+            sel = hit[pos]
+            f[o[sel]] += c._acc[pos[sel]]
