@@ -583,7 +583,7 @@ def forces(
         Number of bonds broken in this call.
     """
     ws = workspace_for(ws, row_ptr, nbr)
-    force_coefficients(ws.parallel, m, theta, K, mu, ws.coef)
+    force_coefficients(ws.parallel_particles, m, theta, K, mu, ws.coef)
     return int(_forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                              check_broken(broken, nbr), vol,
                              ws.coef, check_weight(weight, nbr), float(s0), nofail, ws.chunk_ptr,
@@ -631,7 +631,7 @@ def dilatation_and_forces(
     signed = check_broken(broken, nbr)
     _dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, signed, vol,
                       m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
-    force_coefficients(ws.parallel, m, theta_out, K, mu, ws.coef)
+    force_coefficients(ws.parallel_particles, m, theta_out, K, mu, ws.coef)
     return int(_forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
                              float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
                              ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep))
