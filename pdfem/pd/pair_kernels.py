@@ -170,6 +170,18 @@ def _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, 
     theta[i] += acc
 
 
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _dilatation_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, r1, ov,
+                     base, rbuf, store_r):
+    """Rows r0..r1 of one chunk: unchecked up to ``split``, then checked for overflow."""
+    for i in range(r0, split):
+        _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, False,
+                        r1, ov, base, rbuf, store_r)
+    for i in range(split, r1):
+        _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, True,
+                        r1, ov, base, rbuf, store_r)
+
+
 @twin()
 def _dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, split, ov_ptr,
                       ov, theta, rbuf, store_r):
@@ -184,12 +196,21 @@ def _dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, 
             theta[p] = 0.0
         for q in range(base, U64(ov_ptr[c + 1])):
             ov[q, 0] = 0.0
-        for i in range(r0, split[c]):
-            _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, False,
-                            r1, ov, base, rbuf, store_r)
-        for i in range(split[c], r1):
-            _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, True,
-                            r1, ov, base, rbuf, store_r)
+        # one copy of the row loop per flag combination, so that the flags are constants
+        # inside the hot loop (no per-bond tests of them, fewer live registers)
+        if signed:
+            if store_r:
+                _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, wt,
+                                 theta, r1, ov, base, rbuf, True)
+            else:
+                _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, wt,
+                                 theta, r1, ov, base, rbuf, False)
+        elif store_r:
+            _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, wt,
+                             theta, r1, ov, base, rbuf, True)
+        else:
+            _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, wt,
+                             theta, r1, ov, base, rbuf, False)
     for t in prange(C):
         add_overflow1(t, cb, ov_ptr, ov, 0, theta)
         for p in range(cb[t], cb[t + 1]):
@@ -273,6 +294,20 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, n
     return nb
 
 
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail,
+                 f, r1, ov, base, rbuf, use_r):
+    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken."""
+    nb = 0
+    for i in range(r0, split):
+        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
+                          nofail, f, False, r1, ov, base, rbuf, use_r)
+    for i in range(split, r1):
+        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
+                          nofail, f, True, r1, ov, base, rbuf, use_r)
+    return nb
+
+
 @twin()
 def _forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, nofail,
                   cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
@@ -290,13 +325,20 @@ def _forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, 
             f[p] = 0.0
         for q in range(U64(3) * base, U64(3) * U64(ov_ptr[c + 1])):
             ov[q] = 0.0
-        nb = 0
-        for i in range(r0, split[c]):
-            nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
-                              nofail, f, False, r1, ov, base, rbuf, use_r)
-        for i in range(split[c], r1):
-            nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
-                              nofail, f, True, r1, ov, base, rbuf, use_r)
+        # one copy of the row loop per flag combination (constants inside the hot loop)
+        if signed:
+            if use_r:
+                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, s0, nofail, f, r1, ov, base, rbuf, True)
+            else:
+                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, s0, nofail, f, r1, ov, base, rbuf, False)
+        elif use_r:
+            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, s0, nofail, f, r1, ov, base, rbuf, True)
+        else:
+            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, s0, nofail, f, r1, ov, base, rbuf, False)
         counts[c] = nb
     for t in prange(C):
         add_overflow3(t, cb, ov_ptr, ov2, fout)
@@ -541,7 +583,7 @@ def forces(
         Number of bonds broken in this call.
     """
     ws = workspace_for(ws, row_ptr, nbr)
-    force_coefficients(ws.parallel, m, theta, K, mu, ws.coef)
+    force_coefficients(ws.parallel_particles, m, theta, K, mu, ws.coef)
     return int(_forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                              check_broken(broken, nbr), vol,
                              ws.coef, check_weight(weight, nbr), float(s0), nofail, ws.chunk_ptr,
@@ -594,7 +636,7 @@ def dilatation_and_forces(
                       m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     if between is not None:
         between(theta_out)
-    force_coefficients(ws.parallel, m, theta_out, K, mu, ws.coef)
+    force_coefficients(ws.parallel_particles, m, theta_out, K, mu, ws.coef)
     return int(_forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
                              float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
                              ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep))
