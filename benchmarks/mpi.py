@@ -82,7 +82,9 @@ def bench_mpi(n: int = 1_000_000, ranks=(1, 2), steps: int = 10) -> dict:
     env = dict(os.environ, NUMBA_NUM_THREADS="1")
     runs = []
     for k in ranks:
-        out = subprocess.run([mpiexec, "-n", str(k), sys.executable, "-m", "pdfem.benchmarks.mpi",
+        # this file by path, not ``-m``: run from a checkout, ``-m`` would import the
+        # checkout's pdfem, which has no pdfem.benchmarks (only the installed package has)
+        out = subprocess.run([mpiexec, "-n", str(k), sys.executable, str(Path(__file__).resolve()),
                               "--n", str(n), "--steps", str(steps)], env=env, check=True,
                              capture_output=True, text=True)
         runs.append(json.loads(out.stdout.strip().splitlines()[-1]))

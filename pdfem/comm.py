@@ -87,6 +87,11 @@ class MPIComm:
         self.comm.Abort(code)
 
 
+ABORT_GRACE_SECONDS = 1.0
+"""Pause between a failing rank's message and MPI_Abort: the launcher forwards standard error
+asynchronously, and an immediate abort can kill the forwarding before the message is out."""
+
+
 def launched_by_mpi() -> bool:
     """True if an MPI launcher (mpiexec/mpirun/srun) started this process."""
     return any(v in os.environ for v in _LAUNCHER_VARIABLES)
@@ -118,6 +123,7 @@ def run_guarded(fn, *args, comm=None, **kwargs):
         return fn(*args, **kwargs)
     except BaseException as exc:  # noqa: BLE001 - any failure must end every rank
         import sys
+        import time
 
         from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError, InstabilityError
 
@@ -125,5 +131,6 @@ def run_guarded(fn, *args, comm=None, **kwargs):
                 EXIT_INSTABILITY if isinstance(exc, InstabilityError) else EXIT_FAILURE)
         text = exc.text() if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
         print(f"pdfem rank {comm.rank}: {text}", file=sys.stderr, flush=True)
+        time.sleep(ABORT_GRACE_SECONDS)  # let the launcher forward the message before the abort
         comm.abort(code)
         raise
