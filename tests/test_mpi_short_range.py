@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 from pdfem.io import read_results
+from test_mpi_run import CYLINDER as BASE_CYLINDER
 
 
 
@@ -173,23 +174,11 @@ def test_demo_case_on_two_ranks_matches_one(tmp_path):
     _one_and_two_ranks(tmp_path, text, "sheet", "panel")
 
 
-CYLINDER = """
-[run]
-end_time = 1.6e-3
-output_interval = 2.0e-4
-short_range_contact = true
-[[ice]]
-name = "plate"
-dx = 0.02
-shape = { box = { min = [0.0, 0.0, 0.0], max = [1.0, 0.5, 0.04] } }
-material = { density = 900.0, youngs_modulus = 4.1e9, poisson_ratio = 0.3, fracture_energy = 3.0 }
-[[structure]]
-name = "cylinder"
-kind = "rigid"
-mesh = "indenters"
-params = { shape = "cylinder", radius = 0.1, length = 0.1, axis = "z", center_x = 0.5, center_y = 0.5905, center_z = 0.02, element_size = 0.02 }
-motion = { velocity = [0.0, -4.0, 0.0] }
-"""
+# test_mpi_run's case (same plate and cylinder), longer and with short-range contact on
+CYLINDER = (BASE_CYLINDER.replace("end_time = 1.2e-3", "end_time = 1.6e-3")
+            .replace("output_interval = 4.0e-4",
+                     "output_interval = 2.0e-4\nshort_range_contact = true"))
+assert "short_range_contact" in CYLINDER and "1.6e-3" in CYLINDER
 
 
 def test_cylinder_breaking_plate_on_two_ranks_matches_one(tmp_path):
