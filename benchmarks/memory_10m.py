@@ -22,7 +22,7 @@ import numpy as np
 
 from pdfem.pd import kernels as kn
 from pdfem.pd.body import IceBody
-from pdfem.pd.lattice import lattice_points
+from pdfem.geometry.lattice import lattice_points
 from pdfem.pd.material import SEA_ICE_DEFAULTS, IceMaterial
 
 

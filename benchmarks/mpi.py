@@ -2,7 +2,7 @@
 
 A plate of about ``n`` particles (a cubic lattice 4 : 2 : 1 in x, y, z, horizon 3.015 dx, the
 isotropic bond weights, no surface correction to keep the set-up short) is split over the ranks
-by :func:`pdfem.pd.partition.choose_partition`; every rank times ``steps`` steps (damage
+by :func:`pdfem.parallel.partition.choose_partition`; every rank times ``steps`` steps (damage
 on, nothing breaking) and the time spent in the two halo exchanges. Rank 0 prints one JSON
 object: ranks, numba threads per rank, particles, unique pairs, seconds per step (the slowest
 rank), exchange seconds per step, unique pair-steps per second, and the partition's largest halo.
@@ -20,10 +20,10 @@ import numpy as np
 
 from pdfem.pd.body import IceBody
 from pdfem.pd.material import IceMaterial
-from pdfem.shapes import Box
-from pdfem.comm import world
+from pdfem.geometry.shapes import Box
+from pdfem.parallel.comm import world
 from pdfem.pd.distributed import DistributedIce
-from pdfem.pd.partition import choose_partition
+from pdfem.parallel.partition import choose_partition
 
 
 def plate_body(n: int) -> IceBody:

@@ -78,7 +78,7 @@ def best_of(repeat: int, fn, *args):
 
 
 def cube(n: int) -> np.ndarray:
-    from pdfem.pd.lattice import lattice_points
+    from pdfem.geometry.lattice import lattice_points
 
     side = max(2, round(n ** (1 / 3)))
     return lattice_points(np.zeros(3), np.full(3, side * DX), DX)
@@ -86,7 +86,7 @@ def cube(n: int) -> np.ndarray:
 
 def plate(n: int, layers: int = 6) -> np.ndarray:
     """A plate of about ``n`` particles: ``layers`` thick in z, 3:2 in x and y."""
-    from pdfem.pd.lattice import lattice_points
+    from pdfem.geometry.lattice import lattice_points
 
     ny = max(2, round(math.sqrt(n / (1.5 * layers))))
     nx = max(2, round(n / (layers * ny)))

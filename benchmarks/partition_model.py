@@ -2,7 +2,7 @@
 
 For the seed paper's 1,440,000-particle plate (Zhang et al. 2023, section 5; here a cubic
 lattice of 600 x 300 x 8 particles, horizon 3.015 dx) and any rank count, every partitioner of
-:mod:`pdfem.pd.partition` is applied and its per-rank halo, communicating neighbours,
+:mod:`pdfem.parallel.partition` is applied and its per-rank halo, communicating neighbours,
 imbalance and bytes per step are counted exactly from the bond list. The seed observed that 8
 ranks cut 4 x 2 ran faster than 10 ranks (their Fig. 12: the 10-rank split had more
 communicating neighbours and unequal halos); :func:`partition_model` lets that be checked
@@ -17,10 +17,10 @@ import argparse
 import json
 
 
-from pdfem.pd.lattice import fill
+from pdfem.geometry.lattice import fill
 from pdfem.pd.search import cell_pairs
-from pdfem.shapes import Box
-from pdfem.pd.partition import grid_partition, grid_shapes, partition_stats, rcb_partition
+from pdfem.geometry.shapes import Box
+from pdfem.parallel.partition import grid_partition, grid_shapes, partition_stats, rcb_partition
 
 SEED_PLATE = (600, 300, 8)
 """Particles along x, y, z of the model plate: 1,440,000 particles, as in the seed's Table 3."""
@@ -41,8 +41,8 @@ def partition_model(ranks=(2, 4, 6, 8, 10, 12, 16, 24, 32, 48, 64), shape=SEED_P
     -------
     dict
         ``{"particles", "pairs", "plate": shape, "rows": [...]}``; each row is
-        :meth:`~pdfem.pd.partition.PartitionStats.summary` plus ``"best"`` (True for the
-        partition :func:`~pdfem.pd.partition.choose_partition` would pick): RCB and the
+        :meth:`~pdfem.parallel.partition.PartitionStats.summary` plus ``"best"`` (True for the
+        partition :func:`~pdfem.parallel.partition.choose_partition` would pick): RCB and the
         best grid shape for every rank count.
     """
     x, row_ptr, nbr = plate(shape)

@@ -20,7 +20,7 @@ import time
 import numba
 import numpy as np
 
-from pdfem.pd.lattice import lattice_points
+from pdfem.geometry.lattice import lattice_points
 from pdfem.pd.search import brute_pairs, cell_pairs, ckdtree_pairs
 
 

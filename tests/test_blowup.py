@@ -18,11 +18,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from pdfem.blowup import BlowupMonitor
-from pdfem.config import parse_case
+from pdfem.run.blowup import BlowupMonitor
+from pdfem.case.schema import parse_case
 from pdfem.errors import InstabilityError
-from pdfem.io import read_results
-from pdfem.pd.build import build_ice_body
+from pdfem.output.results import read_results
+from pdfem.run.build_ice import build_ice_body
 
 CASE = """
 [run]

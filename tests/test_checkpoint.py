@@ -21,10 +21,10 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem.checkpoint import CHECKPOINT_NAME
-from pdfem.config import load_case
-from pdfem.driver import run_case
-from pdfem.io import ResultsWriter, read_results
+from pdfem.run.checkpoint import CHECKPOINT_NAME
+from pdfem.case.schema import load_case
+from pdfem.run.driver import run_case
+from pdfem.output.results import ResultsWriter, read_results
 
 CASE = """
 [run]

@@ -12,8 +12,8 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem.config import load_case
-from pdfem.driver import run_case
+from pdfem.case.schema import load_case
+from pdfem.run.driver import run_case
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = sorted((ROOT / "models").glob("*.toml"))

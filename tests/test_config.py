@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from pdfem.config import parse_case
+from pdfem.case.schema import parse_case
 from pdfem.errors import InputError
 
 GOOD = """

@@ -23,7 +23,7 @@ from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.structure import ElasticStructure
 from pdfem.pd.body import IceBody
 from pdfem.pd.material import IceMaterial
-from pdfem.shapes import Box
+from pdfem.geometry.shapes import Box
 
 ICE = IceMaterial(density=900.0, youngs_modulus=4.0e9, poisson_ratio=0.3)  # unbreakable
 V0 = 2.0  # m/s, ice towards -x
@@ -158,9 +158,9 @@ def test_cylinder_impact_same_with_pair_and_full_family_loops(tmp_path):
     import dataclasses
     from pathlib import Path
 
-    from pdfem.config import load_case
-    from pdfem.driver import run_case
-    from pdfem.io import read_results
+    from pdfem.case.schema import load_case
+    from pdfem.run.driver import run_case
+    from pdfem.output.results import read_results
 
     case = load_case(Path(__file__).resolve().parents[1] / "models" / "cylinder_ice_plate.toml")
     ice = dataclasses.replace(case.ice[0], dx=0.02, horizon=3.015 * 0.02)
@@ -185,9 +185,9 @@ def test_two_ice_bodies_and_two_structures_in_one_case(tmp_path):
     pairs: each structure's load history is the sum of its pairs' (here exactly its one
     pair's), each pair sees only its own ice, and the impulse on each sphere equals the
     momentum its cube gained (momentum conservation, the spheres moving as prescribed)."""
-    from pdfem.config import parse_case
-    from pdfem.driver import run_case
-    from pdfem.io import read_results
+    from pdfem.case.schema import parse_case
+    from pdfem.run.driver import run_case
+    from pdfem.output.results import read_results
 
     text = """
 [run]
@@ -249,10 +249,10 @@ def test_hull_panel_subcycling_matches_the_small_step(tmp_path):
     step is 13 times longer when the structure subcycles)."""
     import dataclasses
 
-    from pdfem.config import parse_case
-    from pdfem.driver import run_case
-    from pdfem.fem.build import build_structure
-    from pdfem.io import read_results
+    from pdfem.case.schema import parse_case
+    from pdfem.run.driver import run_case
+    from pdfem.run.build_structures import build_structure
+    from pdfem.output.results import read_results
 
     text = """
 [run]

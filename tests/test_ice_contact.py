@@ -1,4 +1,4 @@
-"""Short-range contact between ice particles (pdfem.coupling.ice_contact).
+"""Short-range contact between ice particles (pdfem.forces.short_range).
 
 References: a brute-force O(N^2) evaluation of Silling & Askari's (2005) short-range force
 written independently here with numpy; Newton's third law (momentum conservation); the
@@ -14,11 +14,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from pdfem.coupling.ice_contact import (DENSE_CELLS_PER_PARTICLE, ShortRangeContact,
+from pdfem.forces.short_range import (DENSE_CELLS_PER_PARTICLE, ShortRangeContact,
                                         short_range_constant)
 from pdfem.pd.body import IceBody
 from pdfem.pd.material import IceMaterial
-from pdfem.shapes import Box
+from pdfem.geometry.shapes import Box
 
 RHO = 900.0
 ICE = IceMaterial(density=RHO, youngs_modulus=4.0e9, poisson_ratio=0.3)
@@ -271,7 +271,7 @@ def test_split_bodies_on_one_rank_give_the_same_forces():
     """Bodies split over one 'rank' (DistributedIce, serial communicator) take the distributed
     search: the same forces, pair count and potential as the plain bodies, bit for bit; a NaN
     position is refused; plain and split bodies cannot be mixed."""
-    from pdfem.comm import SerialComm
+    from pdfem.parallel.comm import SerialComm
     from pdfem.pd.distributed import DistributedIce
 
     dx = 0.01

@@ -12,8 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from pdfem.pd.lattice import fill, lattice_points, particle_volume
-from pdfem.shapes import Box, ClosedSurface, Cylinder, Sphere
+from pdfem.geometry.lattice import fill, lattice_points, particle_volume
+from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
 
 
 def test_box_is_filled_exactly_cell_centred():

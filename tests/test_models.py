@@ -1,4 +1,4 @@
-"""Tests of the parametric gmsh models (hull panel, propeller blade, indenters) and pdfem.meshing.
+"""Tests of the parametric gmsh models (hull panel, propeller blade, indenters) and pdfem.meshing.runner.
 
 Every mesh is read back with meshio (an independent reader) and checked against analytic
 geometry: volumes and areas of the parts, the NACA 00xx section area, the divergence theorem
@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import quad
 
 from pdfem.errors import InputError
-from pdfem.meshing import (MeshQualityError, ModelParameterError, available_models, coerce_parameters, finish_mesh,
+from pdfem.meshing.runner import (MeshQualityError, ModelParameterError, available_models, coerce_parameters, finish_mesh,
                            gmsh_session, mesh_model, parse_set, resolve_model, tet_inradii, tet_min_dihedral,
                            triangle_min_angle)
 from pdfem.models import hull_panel, indenters, propeller_blade
@@ -95,7 +95,7 @@ def test_every_model_meshes_coarsely_with_all_its_groups(name, built):
     """Each model in models/ meshes at a coarse size; every physical group it documents is in
     the file and holds elements, and every tetrahedron (triangle, for a surface mesh) has positive
     volume (area), recomputed from the file read back with meshio (reference: signed volume of a
-    simplex, independent of pdfem.meshing)."""
+    simplex, independent of pdfem.meshing.runner)."""
     assert name in MODEL_CASES, f"model '{name}' has no coarse test case in MODEL_CASES"
     report, mesh = built(name)
     groups = MODEL_CASES[name][1]
@@ -302,7 +302,7 @@ def test_resolve_model_by_name_and_errors(tmp_path):
 
 _USER_MODEL = '''
 """A user's model script: a box of tetrahedra."""
-from pdfem.meshing import check_parameters, finish_mesh, gmsh_session
+from pdfem.meshing.runner import check_parameters, finish_mesh, gmsh_session
 
 PARAMETERS = {"side": (1.0, "m", "box side"), "element_size": (0.5, "m", "mesh size")}
 

@@ -18,12 +18,12 @@ import pytest
 
 SCRIPT = textwrap.dedent('''
     import numpy as np
-    from pdfem.comm import world
+    from pdfem.parallel.comm import world
     from pdfem.pd.distributed import DistributedIce
-    from pdfem.pd.partition import choose_partition
+    from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
     from pdfem.pd.material import IceMaterial
-    from pdfem.shapes import Box
+    from pdfem.geometry.shapes import Box
 
     def build():
         mat = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3, fracture_energy=1.0)
@@ -63,12 +63,12 @@ COUPLED = textwrap.dedent('''
     from pdfem.coupling.contact import SurfaceContact
     from pdfem.coupling.coupler import ContactPair, Coupler
     from pdfem.fem.rigid import RigidBody
-    from pdfem.comm import world
+    from pdfem.parallel.comm import world
     from pdfem.pd.distributed import DistributedIce
-    from pdfem.pd.partition import choose_partition
+    from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
     from pdfem.pd.material import IceMaterial
-    from pdfem.shapes import Box
+    from pdfem.geometry.shapes import Box
 
     dx = 0.01
     def build():
@@ -152,7 +152,7 @@ def test_coupled_contact_split_matches_serial(tmp_path, ranks):
 FAULT = textwrap.dedent('''
     import time
     from pdfem.errors import InstabilityError
-    from pdfem.comm import run_guarded, world
+    from pdfem.parallel.comm import run_guarded, world
 
     def work():
         comm = world()

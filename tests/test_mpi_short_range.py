@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pdfem.io import read_results
+from pdfem.output.results import read_results
 from test_mpi_run import CYLINDER as BASE_CYLINDER
 
 
@@ -44,14 +44,14 @@ def _command(ranks: int) -> list[str]:
 SCRIPT = textwrap.dedent('''
 import sys
 import numpy as np
-from pdfem.comm import world
+from pdfem.parallel.comm import world
 from pdfem.coupling.coupler import Coupler
-from pdfem.coupling.ice_contact import ShortRangeContact
+from pdfem.forces.short_range import ShortRangeContact
 from pdfem.pd.distributed import DistributedIce
-from pdfem.pd.partition import choose_partition
+from pdfem.parallel.partition import choose_partition
 from pdfem.pd.body import IceBody
 from pdfem.pd.material import IceMaterial
-from pdfem.shapes import Box
+from pdfem.geometry.shapes import Box
 
 dx = 0.01
 def build():
@@ -81,7 +81,7 @@ def run(bodies, comm, steps, dt, owner=None):
 comm = world()
 steps = int(sys.argv[1])
 if len(sys.argv) > 2:  # force the folded grid
-    import pdfem.coupling.ice_contact as ic
+    import pdfem.forces.short_range as ic
     ic.DENSE_CELLS_PER_PARTICLE = float(sys.argv[2])
 ref = build()
 owners = []

@@ -1,4 +1,4 @@
-"""Domain partitions for MPI (pdfem.pd.partition): balance and exact halo counts.
+"""Domain partitions for MPI (pdfem.parallel.partition): balance and exact halo counts.
 
 References: a brute-force count of halos and neighbours from the pair list with Python sets,
 and the geometry of a thin plate (a plate must be cut across its plane, never through its
@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pdfem.pd.partition import (choose_partition, grid_partition, grid_shapes,
+from pdfem.parallel.partition import (choose_partition, grid_partition, grid_shapes,
                                       partition_stats, rcb_partition)
-from pdfem.pd.lattice import fill
+from pdfem.geometry.lattice import fill
 from pdfem.pd.search import cell_pairs
-from pdfem.shapes import Box
+from pdfem.geometry.shapes import Box
 
 
 def _plate(nx, ny, nz, dx=1.0):

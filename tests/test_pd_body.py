@@ -13,9 +13,9 @@ import pytest
 from pdfem.pd import kernels as kn
 from pdfem.pd.body import IceBody
 from pdfem.pd.influence import bond_weights, isotropy_gain, partial_volume_factor
-from pdfem.pd.lattice import fill
+from pdfem.geometry.lattice import fill
 from pdfem.pd.material import IceMaterial
-from pdfem.shapes import Box
+from pdfem.geometry.shapes import Box
 
 DX = 0.01
 E, RHO = 4.0e9, 900.0

@@ -15,10 +15,12 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem import cli, post
-from pdfem.config import load_case
-from pdfem.driver import run_case
-from pdfem.io import ResultsWriter
+from pdfem.cli import main as cli
+from pdfem.cli import run as cli_run
+from pdfem.post import summary as post
+from pdfem.case.schema import load_case
+from pdfem.run.driver import run_case
+from pdfem.output.results import ResultsWriter
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -66,7 +68,7 @@ def tiny_case(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def coupled(tiny_case) -> Path:
-    """Results of a real coupled run (pdfem.driver.run_case)."""
+    """Results of a real coupled run (pdfem.run.driver.run_case)."""
     summary = run_case(load_case(tiny_case), tiny_case.parent / "out", quiet=True)
     return summary.results
 
@@ -309,7 +311,7 @@ def test_run_without_case_runs_the_demo_and_summarises(tiny_case, tmp_path, monk
     """``pdfem run`` with no case: the demo (here the tiny case in its place) into
     results/demo_ice_sheet_panel/, then the post summary and where the files are."""
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(cli, "demo_case_file", lambda: contextlib.nullcontext(tiny_case))
+    monkeypatch.setattr(cli_run, "demo_case_file", lambda: contextlib.nullcontext(tiny_case))
     capsys.readouterr()
     assert cli.main(["run"]) == 0
     out = capsys.readouterr().out
@@ -320,6 +322,6 @@ def test_run_without_case_runs_the_demo_and_summarises(tiny_case, tmp_path, monk
 
 def test_builtin_demo_case_is_installed_and_valid():
     """The demo case is package data of pdfem.models and passes validation."""
-    with cli.demo_case_file() as path:
+    with cli_run.demo_case_file() as path:
         case = load_case(path)
     assert {s.name for s in case.structures} == {"panel"} and len(case.ice) == 1

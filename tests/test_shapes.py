@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pdfem.shapes import Box, ClosedSurface, Cylinder, Sphere
+from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
 
 RNG = np.random.default_rng(20240611)
 

@@ -13,7 +13,7 @@ import pytest
 
 from pdfem.pd.body import IceBody
 from pdfem.pd.material import IceMaterial
-from pdfem.shapes import Box
+from pdfem.geometry.shapes import Box
 
 E, NU, RHO = 4.0e9, 0.3, 900.0
 ICE = IceMaterial(density=RHO, youngs_modulus=E, poisson_ratio=NU)  # no fracture energy: unbreakable

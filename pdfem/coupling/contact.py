@@ -28,8 +28,8 @@ import numba
 import numpy as np
 from numba import prange
 
-from .facet_grid import FacetGrid
-from .facets import FACE, FacetTopology, closest_point_on_triangle, pseudo_normals
+from pdfem.coupling.facet_grid import FacetGrid
+from pdfem.coupling.facets import FACE, FacetTopology, closest_point_on_triangle, pseudo_normals
 
 
 @numba.njit(parallel=True, cache=True)

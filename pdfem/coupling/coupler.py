@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .contact import SurfaceContact
+from pdfem.coupling.contact import SurfaceContact
 
 
 @dataclass
@@ -88,7 +88,7 @@ class Coupler:
     short_range
         Optional short-range contact between ice particles (an object whose ``add_forces()``
         adds force density to the bodies' ``f`` at their current positions, e.g.
-        :class:`pdfem.coupling.ice_contact.ShortRangeContact`).
+        :class:`pdfem.forces.short_range.ShortRangeContact`).
     comm
         With ice bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`,
         whose ``owned`` particles are the ones each rank resolves contact for): the

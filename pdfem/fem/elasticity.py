@@ -28,7 +28,7 @@ import skfem
 from skfem.helpers import dot
 from skfem.models.elasticity import linear_elasticity
 
-from .mesh import FEMesh
+from pdfem.fem.mesh import FEMesh
 
 STEEL_DEFAULTS: dict[str, float] = {
     "density": 7850.0,         # kg/m^3, structural steel (pdfem design notes)

@@ -20,8 +20,8 @@ import os
 
 import numpy as np
 
-from .mesh import load_mesh, read_msh_groups
-from .surface import SurfaceBody, orient_outward, split_quads
+from pdfem.fem.mesh import load_mesh, read_msh_groups
+from pdfem.fem.surface import SurfaceBody, orient_outward, split_quads
 
 
 def rotation_matrix(rotation_vector) -> np.ndarray:

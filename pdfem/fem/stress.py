@@ -14,8 +14,8 @@ import numpy as np
 import scipy.sparse as sp
 import skfem
 
-from .elasticity import DofMap, ElasticMaterial, element_for
-from .mesh import FEMesh
+from pdfem.fem.elasticity import DofMap, ElasticMaterial, element_for
+from pdfem.fem.mesh import FEMesh
 
 _CENTRE = {"tet": (0.25, 0.25, 0.25), "hex": (0.5, 0.5, 0.5)}
 

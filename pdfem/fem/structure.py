@@ -29,14 +29,14 @@ import numpy as np
 import skfem
 from skfem.io.meshio import HEX_MAPPING
 
-from ..errors import InstabilityError
-from .elasticity import (DofMap, ElasticMaterial, element_volumes, lumped_mass, stiffness_matrix,
+from pdfem.errors import InstabilityError
+from pdfem.fem.elasticity import (DofMap, ElasticMaterial, element_volumes, lumped_mass, stiffness_matrix,
                          surface_load, vector_basis)
-from .explicit import CentralDifference
-from .mesh import FEMesh, load_mesh
-from .stress import (centre_basis, element_stress, kinetic_energy, nodal_average, reaction_force,
+from pdfem.fem.explicit import CentralDifference
+from pdfem.fem.mesh import FEMesh, load_mesh
+from pdfem.fem.stress import (centre_basis, element_stress, kinetic_energy, nodal_average, reaction_force,
                      strain_energy, von_mises)
-from .surface import SurfaceBody, split_quads
+from pdfem.fem.surface import SurfaceBody, split_quads
 
 
 @dataclass(frozen=True)

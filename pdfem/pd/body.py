@@ -31,15 +31,15 @@ from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 
-from . import kernels
-from .bonds import bond_lengths, cut_crack
-from .family import build_family
-from .influence import bond_weights, isotropy_gain
-from .surface import surface_corrected_weights
-from .lattice import fill
-from .material import IceMaterial
-from .pair_kernels import SIGNED
-from .search import cell_pairs
+from pdfem.pd import kernels
+from pdfem.pd.bonds import bond_lengths, cut_crack
+from pdfem.pd.family import build_family
+from pdfem.pd.influence import bond_weights, isotropy_gain
+from pdfem.pd.surface import surface_corrected_weights
+from pdfem.geometry.lattice import fill
+from pdfem.pd.material import IceMaterial
+from pdfem.pd.pair_kernels import SIGNED
+from pdfem.pd.search import cell_pairs
 
 
 @dataclass
@@ -64,7 +64,7 @@ class VelocityConstraint:
 class IceBody:
     """State of one peridynamic ice body (all arrays SI, particles in cell order).
 
-    Build one with :meth:`from_points` (or :func:`pdfem.pd.build.build_ice_body` from a case).
+    Build one with :meth:`from_points` (or :func:`pdfem.run.build_ice.build_ice_body` from a case).
     """
 
     name: str
@@ -167,7 +167,7 @@ class IceBody:
     @classmethod
     def from_shape(cls, name: str, shape, material: IceMaterial, dx: float, delta: float,
                    **kwargs) -> "IceBody":
-        """Fill ``shape`` (a :mod:`pdfem.shapes` object) with a cubic lattice of spacing ``dx``.
+        """Fill ``shape`` (a :mod:`pdfem.geometry.shapes` object) with a cubic lattice of spacing ``dx``.
 
         The lattice is aligned with the axes, so the bonds get the isotropic cubic influence
         function and the surface correction by default (``isotropic=True``,

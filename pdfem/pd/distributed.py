@@ -1,7 +1,7 @@
 """An ice body split over MPI ranks: owned particles, a halo of ghosts, two exchanges per step.
 
 Every rank builds the same global body (lattice, bonds, weights: deterministic), then keeps
-only its *local* part: the particles it owns (:mod:`pdfem.pd.partition`) and their bond
+only its *local* part: the particles it owns (:mod:`pdfem.parallel.partition`) and their bond
 partners owned elsewhere (the halo), in global order, and every bond with at least one owned
 end, in the global bond order. Bonds only break, so this pattern is fixed at set-up. One
 velocity-Verlet step on a rank:
@@ -29,8 +29,8 @@ import time
 
 import numpy as np
 
-from . import kernels
-from .body import IceBody, VelocityConstraint
+from pdfem.pd import kernels
+from pdfem.pd.body import IceBody, VelocityConstraint
 
 
 @dataclasses.dataclass
@@ -92,7 +92,7 @@ class DistributedIce:
     owner
         (N,) owner rank of each particle.
     comm
-        The communicator (:func:`pdfem.comm.world`).
+        The communicator (:func:`pdfem.parallel.comm.world`).
     """
 
     def __init__(self, body: IceBody, owner: np.ndarray, comm) -> None:

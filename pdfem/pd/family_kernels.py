@@ -14,8 +14,8 @@ import numba
 import numpy as np
 from numba import prange
 
-from .pair_kernels import check_broken, check_weight, force_coefficients
-from .workspace import FASTMATH, U64, c_contiguous
+from pdfem.pd.pair_kernels import check_broken, check_weight, force_coefficients
+from pdfem.pd.workspace import FASTMATH, U64, c_contiguous
 
 @numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
 def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, m, wt, theta):

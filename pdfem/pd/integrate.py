@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import prange
 
-from .workspace import SERIAL_BELOW_PARTICLES, twin
+from pdfem.pd.workspace import SERIAL_BELOW_PARTICLES, twin
 
 @twin(fastmath=False)
 def _kick(v, f, inv_rho, half_dt, g, free):

@@ -17,10 +17,10 @@ The kernels live in modules with one concept each:
 
 from __future__ import annotations
 
-from .family_kernels import dilatation_family, forces_family
-from .influence import bond_weights, isotropy_gain
-from .integrate import verlet_drift, verlet_kick
-from .pair_kernels import (
+from pdfem.pd.family_kernels import dilatation_family, forces_family
+from pdfem.pd.influence import bond_weights, isotropy_gain
+from pdfem.pd.integrate import verlet_drift, verlet_kick
+from pdfem.pd.pair_kernels import (
     SIGNED,
     broken_flags,
     damage,
@@ -32,8 +32,8 @@ from .pair_kernels import (
     strain_energy,
     weighted_volume,
 )
-from .timestep import max_eigenvalue_time_step, stable_time_step
-from .workspace import SERIAL_BELOW_PAIRS, SERIAL_BELOW_PARTICLES, PairWorkspace
+from pdfem.pd.timestep import max_eigenvalue_time_step, stable_time_step
+from pdfem.pd.workspace import SERIAL_BELOW_PAIRS, SERIAL_BELOW_PARTICLES, PairWorkspace
 
 __all__ = [
     "SERIAL_BELOW_PAIRS",

@@ -46,7 +46,7 @@ import numba
 import numpy as np
 from numba import prange
 
-from .workspace import (
+from pdfem.pd.workspace import (
     FASTMATH,
     U64,
     PairWorkspace,

@@ -43,7 +43,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .workspace import FASTMATH, PairWorkspace
+from pdfem.pd.workspace import FASTMATH, PairWorkspace
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")

@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
-from .pair_kernels import dilatation, family_sum, forces
-from .workspace import PairWorkspace, workspace_for
+from pdfem.pd.pair_kernels import dilatation, family_sum, forces
+from pdfem.pd.workspace import PairWorkspace, workspace_for
 
 
 def stable_time_step(

@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from .errors import InstabilityError
+from pdfem.errors import InstabilityError
 
 ENERGY_GROWTH_LIMIT = 1.0
 """Energy created (J) above this multiple of the energy supplied (J) stops the run: the total

@@ -10,8 +10,8 @@ moment, particles in contact) and the monitor probes.
 Around the loop: up-front estimates of particles, bonds and memory (a run that cannot fit is
 refused before anything is allocated), the time-step check (a ``run.time_step`` above the
 stable estimate is bad input unless ``run.allow_unstable_time_step``), checkpoints and
-restart (:mod:`pdfem.checkpoint`; the results file is continued in place), and blow-up
-detection (:mod:`pdfem.blowup`; exit 3 with the results so far kept).
+restart (:mod:`pdfem.run.checkpoint`; the results file is continued in place), and blow-up
+detection (:mod:`pdfem.run.blowup`; exit 3 with the results so far kept).
 """
 
 from __future__ import annotations
@@ -24,25 +24,25 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
-from .config import Case
-from .coupling.contact import SurfaceContact, overlapping
-from .coupling.coupler import ContactPair, Coupler, substep_counts
-from .coupling.ice_contact import ShortRangeContact
-from .comm import world
-from .parallel import (build_structures, distribute, gather_frame, owned_frame,
+from pdfem import __version__
+from pdfem.case.schema import Case
+from pdfem.coupling.contact import SurfaceContact, overlapping
+from pdfem.coupling.coupler import ContactPair, Coupler, substep_counts
+from pdfem.forces.short_range import ShortRangeContact
+from pdfem.parallel.comm import world
+from pdfem.run.parallel import (build_structures, distribute, gather_frame, owned_frame,
                        owned_reference)
-from .blowup import BlowupMonitor
-from .checkpoint import CHECKPOINT_NAME, DriverState, read_checkpoint, restore, write_checkpoint
-from .errors import InputError, InstabilityError
-from .estimates import (FIXED_BYTES, BodyEstimate, available_memory, estimate_body,
+from pdfem.run.blowup import BlowupMonitor
+from pdfem.run.checkpoint import CHECKPOINT_NAME, DriverState, read_checkpoint, restore, write_checkpoint
+from pdfem.errors import InputError, InstabilityError
+from pdfem.run.estimates import (FIXED_BYTES, BodyEstimate, available_memory, estimate_body,
                         format_bytes)
-from .io import ResultsWriter, rank_file
-from .mesh_quality import MeshQualityError, check_cells
-from .fem.structure import ElasticStructure
-from .pd.body import IceBody
-from .pd.build import build_ice_body
-from .progress import Progress
+from pdfem.output.results import ResultsWriter, rank_file
+from pdfem.meshing.quality import MeshQualityError, check_cells
+from pdfem.fem.structure import ElasticStructure
+from pdfem.pd.body import IceBody
+from pdfem.run.build_ice import build_ice_body
+from pdfem.run.progress import Progress
 
 
 @dataclass
@@ -120,7 +120,7 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
 
 def estimate_case(case: Case) -> list[BodyEstimate]:
     """Particles, pairs and memory of every ice body of a case, before building
-    (:func:`pdfem.estimates.estimate_body`)."""
+    (:func:`pdfem.run.estimates.estimate_body`)."""
     return [estimate_body(c.name, c.shape, c.dx, c.horizon) for c in case.ice]
 
 
@@ -240,15 +240,15 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     """Run a validated case and write ``results.h5`` (+ ``results.xdmf``) into ``out_dir``.
 
     Before building anything the particles, bonds and memory of the ice are estimated
-    (:mod:`pdfem.estimates`) and a run that would not fit in the available memory is refused.
-    Checkpoints (:mod:`pdfem.checkpoint`) go to ``out_dir/checkpoint.h5`` every
+    (:mod:`pdfem.run.estimates`) and a run that would not fit in the available memory is refused.
+    Checkpoints (:mod:`pdfem.run.checkpoint`) go to ``out_dir/checkpoint.h5`` every
     ``run.checkpoint_interval_steps`` steps and every ``run.checkpoint_interval_minutes`` of
-    wall time; blow-ups are detected by :class:`pdfem.blowup.BlowupMonitor`.
+    wall time; blow-ups are detected by :class:`pdfem.run.blowup.BlowupMonitor`.
 
     Parameters
     ----------
     case
-        The validated case (:func:`pdfem.config.load_case`).
+        The validated case (:func:`pdfem.case.schema.load_case`).
     out_dir
         Output directory (created).
     quiet

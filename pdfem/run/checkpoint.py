@@ -38,8 +38,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from . import __version__
-from .errors import InputError
+from pdfem import __version__
+from pdfem.errors import InputError
 
 FORMAT = 1
 """Checkpoint format version; a checkpoint of another version is refused."""

@@ -1,7 +1,7 @@
 """Up-front estimates of a run's size, made from the case alone, before anything is built.
 
 Particles: a box holds ``prod_k max(1, round(L_k / dx))`` lattice points exactly
-(:mod:`pdfem.pd.lattice`); a cylinder or a sphere about its volume / dx^3; a closed surface
+(:mod:`pdfem.geometry.lattice`); a cylinder or a sphere about its volume / dx^3; a closed surface
 mesh at most the lattice points of its bounding box. Pairs (bonds, i < j): the lattice offsets
 ``o != 0`` with ``|o| dx <= delta`` (the neighbour search's test) are counted once; half of them
 (61 for ``delta = 3.015 dx``) is the number of pairs per interior particle. For a box the count
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .shapes import Box, Cylinder, Sphere
+from pdfem.geometry.shapes import Box, Cylinder, Sphere
 
 BYTES_PER_PARTICLE = 240
 """Estimated resident bytes per ice particle (state, set-up and output arrays)."""

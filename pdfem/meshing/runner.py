@@ -20,7 +20,7 @@ and uses the helpers here to do the common parts the same way:
   [--set key=value ...] [-o FILE.msh]`` does.
 
 The quality measures themselves (volumes, angles, inscribed radii, the inverted-element check)
-and :class:`MeshQualityError` live in :mod:`pdfem.mesh_quality`; they are importable from here
+and :class:`MeshQualityError` live in :mod:`pdfem.meshing.quality`; they are importable from here
 too.
 
 Lengths are in m, areas in m^2, volumes in m^3, angles in the reports in degrees (parameters
@@ -42,9 +42,9 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from .errors import InputError
-from . import mesh_quality
-from .mesh_quality import (DEGENERATE, CellQuality, MeshQualityError, check_cells, longest_edges,  # noqa: F401
+from pdfem.errors import InputError
+from pdfem.meshing import quality as mesh_quality
+from pdfem.meshing.quality import (DEGENERATE, CellQuality, MeshQualityError, check_cells, longest_edges,  # noqa: F401
                            tet_inradii, tet_min_dihedral, tet_volumes, triangle_areas, triangle_inradii,
                            triangle_min_angle)
 

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..config import StructureConfig
-from ..errors import InputError
-from .elasticity import ElasticMaterial
-from .rigid import RigidBody
-from .structure import ElasticStructure
+from pdfem.case.schema import StructureConfig
+from pdfem.errors import InputError
+from pdfem.fem.elasticity import ElasticMaterial
+from pdfem.fem.rigid import RigidBody
+from pdfem.fem.structure import ElasticStructure
 
 
 def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
@@ -22,7 +22,7 @@ def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
     (``remesh=False``: the mesh already written there, e.g. by MPI rank 0)."""
     if cfg.mesh.endswith(".msh"):
         return Path(cfg.mesh)
-    from ..meshing import mesh_model
+    from pdfem.meshing.runner import mesh_model
     target = Path(out_dir) / f"{cfg.name}.msh"
     if not remesh:
         return target

@@ -3,7 +3,7 @@
 ``pdfem post RESULTS.h5 [--plots DIR] [--csv FILE] [--json]`` uses these functions:
 :func:`load_results` (read a file, or raise :class:`~pdfem.errors.InputError` naming it),
 :func:`summarize` (the figures, a JSON-ready dict), :func:`format_summary` (the table),
-:func:`write_csv` (the per-step histories), and from :mod:`pdfem.post_plots`
+:func:`write_csv` (the per-step histories), and from :mod:`pdfem.post.plots`
 :func:`write_plots` (PNG plots) and :func:`amplitude_spectrum`. SI units throughout: N, N m, Pa, m, s, J.
 
 Definitions used in the summary:
@@ -31,9 +31,9 @@ from typing import Any
 import h5py
 import numpy as np
 
-from .errors import InputError
-from .io import read_results
-from .post_plots import amplitude_spectrum, projection_axes, write_plots  # noqa: F401 (API)
+from pdfem.errors import InputError
+from pdfem.output.results import read_results
+from pdfem.post.plots import amplitude_spectrum, projection_axes, write_plots  # noqa: F401 (API)
 
 LOAD_PREFIXES = ("loads/", "contacts/", "monitors/")
 """History groups written at every coupling step (the CSV columns)."""
@@ -58,7 +58,7 @@ def load_results(path: str | os.PathLike) -> dict:
     Returns
     -------
     dict
-        :func:`pdfem.io.read_results` of the file, with ``"file"`` (the path as given) added.
+        :func:`pdfem.output.results.read_results` of the file, with ``"file"`` (the path as given) added.
 
     Raises
     ------
@@ -229,7 +229,7 @@ def summarize(results: dict) -> dict:
     Parameters
     ----------
     results
-        :func:`load_results` (or :func:`pdfem.io.read_results`) of a file.
+        :func:`load_results` (or :func:`pdfem.output.results.read_results`) of a file.
 
     Returns
     -------
@@ -389,7 +389,7 @@ def history_table(results: dict) -> tuple[list[str], np.ndarray]:
         ``loads/panel/force_x [N]``; groups in the order loads, contacts, monitors.
     table : numpy.ndarray
         (K, len(names)) values; rows are the union of the groups' step times (the same
-        steps in a file from :func:`pdfem.driver.run_case`), NaN where a group has no row.
+        steps in a file from :func:`pdfem.run.driver.run_case`), NaN where a group has no row.
     """
     hist = results["histories"]
     groups = [g for p in LOAD_PREFIXES for g in sorted(hist) if g.startswith(p)]

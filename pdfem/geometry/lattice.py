@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from ..shapes import Box
+from pdfem.geometry.shapes import Box
 
 __all__ = ["fill", "lattice_points", "particle_volume"]
 
@@ -57,7 +57,7 @@ def fill(shape, dx: float) -> np.ndarray:
     Parameters
     ----------
     shape
-        A :mod:`pdfem.shapes` object (anything with ``bounds()`` and ``contains(x)``).
+        A :mod:`pdfem.geometry.shapes` object (anything with ``bounds()`` and ``contains(x)``).
     dx
         Lattice spacing, m (> 0).
 
@@ -65,7 +65,7 @@ def fill(shape, dx: float) -> np.ndarray:
     -------
     ndarray
         (N,3) float64 particle positions, m, in x-major / y / z loop order. For a
-        :class:`~pdfem.shapes.Box` every lattice point of the box is kept; for other shapes the
+        :class:`~pdfem.geometry.shapes.Box` every lattice point of the box is kept; for other shapes the
         points where ``shape.contains`` is true.
     """
     dx = _check_dx(dx)

@@ -62,7 +62,7 @@ Shape of a case file::
 Checkpoints hold the whole state (ice, structures, contact, clock, output counters); continue
 a run with ``pdfem run CASE --restart <out>/checkpoint.h5``, which appends to the same results
 file. A run whose state blows up (NaN/Inf, a particle moving more than a horizon in one step,
-energy growing without work input) stops with exit 3 and a diagnosis (:mod:`pdfem.blowup`).
+energy growing without work input) stops with exit 3 and a diagnosis (:mod:`pdfem.run.blowup`).
 
 The coupling step is the larger of the ice and structure stable steps; the faster side takes
 ``run.substeps`` steps per coupling step (0 or absent = chosen automatically).
@@ -80,9 +80,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import InputError
-from .pd.material import SEA_ICE_DEFAULTS, IceMaterial
-from .shapes import Box, ClosedSurface, Cylinder, Sphere
+from pdfem.errors import InputError
+from pdfem.pd.material import SEA_ICE_DEFAULTS, IceMaterial
+from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -125,7 +125,7 @@ def run_guarded(fn, *args, comm=None, **kwargs):
         import sys
         import time
 
-        from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError, InstabilityError
+        from pdfem.errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError, InstabilityError
 
         code = (EXIT_BAD_INPUT if isinstance(exc, InputError) else
                 EXIT_INSTABILITY if isinstance(exc, InstabilityError) else EXIT_FAILURE)

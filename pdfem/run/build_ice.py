@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import IceConfig, RunConfig
-from ..errors import InputError
-from .body import IceBody
-from .influence import isotropy_gain
+from pdfem.case.schema import IceConfig, RunConfig
+from pdfem.errors import InputError
+from pdfem.pd.body import IceBody
+from pdfem.pd.influence import isotropy_gain
 
 
 def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:

@@ -2,7 +2,7 @@
 
 :func:`write_plots` writes the load history, the load spectrum (:func:`amplitude_spectrum`),
 the structural response, an ice damage snapshot and the energy history of a file read by
-:func:`pdfem.post.load_results`. SI units on every axis: N, Pa, m, s, Hz, J.
+:func:`pdfem.post.summary.load_results`. SI units on every axis: N, Pa, m, s, Hz, J.
 """
 
 from __future__ import annotations

@@ -15,17 +15,17 @@ from pathlib import Path
 
 import numpy as np
 
-from .comm import SerialComm
-from .coupling.contact import SurfaceContact
-from .coupling.coupler import ContactPair, Coupler
-from .coupling.ice_contact import ShortRangeContact
-from .fem.build import build_structure
-from .fem.rigid import RigidBody
-from .pd.body import IceBody
-from .pd.material import IceMaterial
-from .shapes import Box
-from .pd.distributed import DistributedIce
-from .pd.partition import choose_partition
+from pdfem.parallel.comm import SerialComm
+from pdfem.coupling.contact import SurfaceContact
+from pdfem.coupling.coupler import ContactPair, Coupler
+from pdfem.forces.short_range import ShortRangeContact
+from pdfem.run.build_structures import build_structure
+from pdfem.fem.rigid import RigidBody
+from pdfem.pd.body import IceBody
+from pdfem.pd.material import IceMaterial
+from pdfem.geometry.shapes import Box
+from pdfem.pd.distributed import DistributedIce
+from pdfem.parallel.partition import choose_partition
 
 
 MAX_RANKS_LISTED = 16
@@ -45,7 +45,7 @@ def build_structures(configs, out: Path, file: str, comm) -> list:
 
 
 def distribute(bodies: list, comm, say=lambda s: None) -> list:
-    """Each body split over the ranks by :func:`~pdfem.pd.partition.choose_partition`
+    """Each body split over the ranks by :func:`~pdfem.parallel.partition.choose_partition`
     (the bodies themselves when there is one rank); the partition is reported with ``say``."""
     if comm.size == 1:
         return bodies

@@ -83,11 +83,11 @@ import numba
 import numpy as np
 from numba import prange
 
-from ..pd.distributed import DistributedIce
-from ..pd.workspace import SERIAL_BELOW_PARTICLES, twin
+from pdfem.pd.distributed import DistributedIce
+from pdfem.pd.workspace import SERIAL_BELOW_PARTICLES, twin
 
 if TYPE_CHECKING:
-    from ..pd.body import IceBody
+    from pdfem.pd.body import IceBody
 
 __all__ = ["ShortRangeContact", "short_range_constant", "DENSE_CELLS_PER_PARTICLE"]
 

@@ -1,0 +1,1 @@
+"""The case file: its schema and loading (TOML -> a validated :class:`~pdfem.case.schema.Case`)."""

@@ -1,0 +1,49 @@
+"""``pdfem bench {search,step,mpi,partition} [--n N] [--json]``: performance figures.
+
+The benchmark code (the package ``pdfem.benchmarks``) is imported only when this command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from pdfem.errors import EXIT_OK, InputError
+
+NAME = "bench"
+HELP = "performance measurements (not tests)"
+
+
+def add_arguments(b: argparse.ArgumentParser) -> None:
+    """The options of ``pdfem bench``."""
+    b.add_argument("what", choices=["search", "step", "mpi", "partition"],
+                   help="search, step, mpi (strong scaling on 1 and 2 ranks), partition (the "
+                        "partition model of the 1.44M-particle plate, 2-64 ranks)")
+    b.add_argument("--n", type=int, default=1_000_000, help="number of particles (default 1,000,000)")
+    b.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the benchmark; exit status."""
+    if args.n < 8:
+        raise InputError(None, "--n", "the benchmark needs at least 8 particles", args.n)
+    if args.what == "search":
+        from pdfem.benchmarks.search import bench_search as fn
+    elif args.what == "step":
+        from pdfem.benchmarks.step import bench_step as fn
+    elif args.what == "mpi":
+        from pdfem.benchmarks.mpi import bench_mpi as fn
+    else:
+        from pdfem.benchmarks.partition_model import partition_model
+
+        def fn(n):  # the seed's plate; n is not used
+            return partition_model()
+    res = fn(n=args.n)
+    if args.json:
+        print(json.dumps(res))
+    else:
+        for k, v in res.items():
+            print(f"{k:>32}: {v}")
+    return EXIT_OK
+
+

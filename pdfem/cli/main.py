@@ -1,0 +1,84 @@
+"""The ``pdfem`` command line.
+
+    pdfem run [CASE.toml] [--out DIR] [--restart CHECKPOINT] [--quiet] [--json]
+    pdfem post RESULTS.h5 [--plots DIR] [--csv FILE] [--json]
+    pdfem mesh MODEL [--set key=value ...] [-o FILE.msh] [--json]
+    pdfem bench {search,step,mpi,partition} [--n N] [--json]
+    pdfem info [--json]
+    pdfem --version
+
+``pdfem run CASE --restart DIR/checkpoint.h5`` continues a run of CASE from its last checkpoint,
+appending to the results file in DIR (``--out`` defaults to the checkpoint's directory).
+
+``pdfem run`` without a case runs the built-in demo (``demo_ice_sheet_panel.toml`` of the
+package ``pdfem.models``) into ``results/demo_ice_sheet_panel/`` and prints its post summary.
+
+Exit status: 0 success, 2 bad input (the message names file and field), 3 a run stopped by a
+detected instability, 1 anything else. With ``--json`` standard output holds exactly one JSON
+object and nothing else.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import traceback
+import warnings
+
+from pdfem import __version__
+from pdfem.errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, EXIT_OK, InputError, InstabilityError
+
+from pdfem.cli import bench, info, mesh, post, run
+
+COMMANDS = (run, post, mesh, bench, info)
+"""The commands, each a module with ``NAME``, ``HELP``, ``add_arguments(parser)`` and
+``run(args) -> exit status``; a new command is one new module plus its entry here."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # argparse's own errors are bad input too: exit 2, no traceback
+        self.print_usage(sys.stderr)
+        raise InputError(None, None, f"{self.prog}: {message}")
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="pdfem", description="Ice loads on structures: peridynamic ice, finite-element structures. SI units.")
+    p.add_argument("--version", action="version", version=f"pdfem {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for command in COMMANDS:
+        command.add_arguments(sub.add_parser(command.NAME, help=command.HELP))
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``pdfem`` console script; returns the exit status."""
+    try:
+        args = _parser().parse_args(argv)
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")
+            warnings.showwarning = lambda msg, *a, **k: print(f"warning: {msg}", file=sys.stderr)
+            return {c.NAME: c.run for c in COMMANDS}[args.command](args)
+    except InputError as exc:
+        print(exc.text(), file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except InstabilityError as exc:
+        print(f"Run stopped: {exc}", file=sys.stderr)
+        return EXIT_INSTABILITY
+    except KeyboardInterrupt:
+        print("interrupted; results written so far are kept", file=sys.stderr)
+        return EXIT_FAILURE
+    except SystemExit as exc:  # --help / --version
+        return int(exc.code or 0) if isinstance(exc.code, int) else EXIT_OK
+    except Exception:
+        traceback.print_exc()
+        print("pdfem: an internal error stopped the run (exit 1); results written so far are kept.",
+              file=sys.stderr)
+        return EXIT_FAILURE
+
+
+def _entry() -> None:  # pragma: no cover
+    sys.exit(main())
+
+
+if __name__ == "__main__":  # pragma: no cover
+    _entry()

@@ -1,0 +1,31 @@
+"""``pdfem mesh MODEL [--set key=value ...] [-o FILE.msh] [--json]``: mesh a structure model."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from pdfem.errors import EXIT_OK
+
+NAME = "mesh"
+HELP = "mesh a model of models/ (or a .py file) with gmsh"
+
+
+def add_arguments(m: argparse.ArgumentParser) -> None:
+    """The options of ``pdfem mesh``."""
+    m.add_argument("model", help="model name (hull_panel, propeller_blade, indenters) or a .py file with build()")
+    m.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="model parameter (SI units), repeatable")
+    m.add_argument("-o", "--output", default=None, help="output .msh file (default: <model>.msh)")
+    m.add_argument("--json", action="store_true", help="print the mesh report as one JSON object")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Mesh the model; exit status."""
+    from pdfem.meshing.runner import mesh_model, parse_set
+    report = mesh_model(args.model, parse_set(args.set), Path(args.output) if args.output else None)
+    print(json.dumps(report.as_dict()) if args.json else report.text())
+    return EXIT_OK
+
+

@@ -1,0 +1,107 @@
+"""``pdfem run [CASE.toml] [--out DIR] [--restart CHECKPOINT] [--quiet] [--json]``: run a case.
+
+``pdfem run CASE --restart DIR/checkpoint.h5`` continues a run of CASE from its last checkpoint,
+appending to the results file in DIR (``--out`` defaults to the checkpoint's directory).
+Without a case it runs the built-in demo (``demo_ice_sheet_panel.toml`` of the package
+``pdfem.models``) into ``results/demo_ice_sheet_panel/`` and prints its post summary.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib.resources
+import io
+import json
+from pathlib import Path
+
+from pdfem.errors import EXIT_OK, InputError
+
+NAME = "run"
+HELP = "run a case file (no case: the built-in demo)"
+
+DEMO_CASE = "demo_ice_sheet_panel.toml"
+"""The built-in demo case (package data of ``pdfem.models``) that ``pdfem run`` runs without a case."""
+
+
+def add_arguments(r: argparse.ArgumentParser) -> None:
+    """The options of ``pdfem run``."""
+    r.add_argument("case", nargs="?", default=None,
+                   help=f"case file (TOML, SI units); default: the demo {DEMO_CASE}")
+    r.add_argument("--out", default=None, help="output directory (default: results/<case name>)")
+    r.add_argument("--restart", default=None, metavar="CHECKPOINT",
+                   help="continue the run of CASE from this checkpoint (checkpoint.h5 in the "
+                        "run's output directory), appending to its results")
+    r.add_argument("--quiet", action="store_true", help="no progress or messages")
+    r.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
+
+
+def demo_case_file() -> contextlib.AbstractContextManager[Path]:
+    """The built-in demo case, a file of the package ``pdfem.models``, as a context manager
+    giving its path on disk."""
+    return importlib.resources.as_file(importlib.resources.files("pdfem.models") / DEMO_CASE)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the case (or the demo); exit status."""
+    from pdfem.case.schema import load_case
+    from pdfem.run.driver import run_case
+    if args.case is None:  # the demo: run it, then summarise its results
+        with demo_case_file() as path:
+            if not path.is_file():
+                raise InputError(str(path), None, "the built-in demo case is missing from this "
+                                 "installation; give a case file: pdfem run CASE.toml")
+            case = load_case(path)
+        stem = Path(DEMO_CASE).stem
+    else:
+        case = load_case(args.case)
+        stem = Path(args.case).stem
+    if args.restart is not None and args.case is None:
+        raise InputError(None, "--restart", "give the case file of the run to continue: "
+                         "pdfem run CASE.toml --restart CHECKPOINT")
+    if args.out:
+        out = Path(args.out)
+    elif args.restart is not None:
+        out = Path(args.restart).parent
+    else:
+        out = Path("results") / stem
+    demo = args.case is None
+    from pdfem.parallel.comm import run_guarded, world
+    comm = world()  # under mpiexec: every rank runs, rank 0 writes and reports
+    if comm.size > 1:
+        from pdfem.run.parallel import warm_before_ranks
+        run_guarded(warm_before_ranks, comm, comm=comm)  # one rank fills numba's cache first
+    if args.json:
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            summary = run_guarded(run_case, case, out, quiet=True, restart=args.restart,
+                                  comm=comm)
+        if comm.rank != 0:
+            return EXIT_OK
+        report = {"results": str(summary.results), "steps": summary.steps,
+                  "time_step": summary.time_step, "end_time": summary.end_time,
+                  "wall_seconds": summary.wall_seconds, "particles": summary.particles,
+                  "bonds": summary.bonds, "broken_bonds": summary.broken_bonds,
+                  "frames": summary.frames}
+        if demo:
+            from pdfem.post.summary import load_results, summarize
+            report["case"] = str(case.file)
+            report["xdmf"] = str(summary.results.with_suffix(".xdmf"))
+            report["post"] = summarize(load_results(summary.results))
+        print(json.dumps(report))
+    else:
+        summary = run_guarded(run_case, case, out, quiet=args.quiet, restart=args.restart,
+                              comm=comm)
+        if not args.quiet and comm.rank == 0:
+            print(summary.text())
+            if demo:
+                from pdfem.post.summary import format_summary, load_results, summarize
+                print()
+                print(format_summary(summarize(load_results(summary.results))))
+                print()
+                print(f"Results: {summary.results} (HDF5); open "
+                      f"{summary.results.with_suffix('.xdmf')} in ParaView.\n"
+                      f"Plots: pdfem post {summary.results} --plots {out / 'plots'}")
+    return EXIT_OK
+
+

@@ -1,0 +1,1 @@
+"""Forces on ice particles other than their bonds (short-range contact between particles)."""

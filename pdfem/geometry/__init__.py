@@ -1,0 +1,1 @@
+"""Geometry shared by the ice and the structures: shapes, the particle lattice, cell hashing."""

@@ -1,0 +1,1 @@
+"""MPI: the communicator and the partition of ice bodies over ranks."""

@@ -1,0 +1,1 @@
+"""After a run: summary tables, CSV, plots and spectra of a results file."""
