@@ -23,7 +23,7 @@ import numpy as np
 from pdfem.pd import kernels as kn
 from pdfem.pd.body import IceBody
 from pdfem.geometry.lattice import lattice_points
-from pdfem.pd.material import SEA_ICE_DEFAULTS, IceMaterial
+from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
 
 
 def peak_rss() -> int:

@@ -19,7 +19,7 @@ import numba
 import numpy as np
 
 from pdfem.pd.body import IceBody
-from pdfem.pd.material import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 from pdfem.parallel.comm import world
 from pdfem.pd.distributed import DistributedIce

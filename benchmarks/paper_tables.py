@@ -138,7 +138,7 @@ def step_times(x: np.ndarray, steps: int, family: bool = True) -> dict:
     from pdfem.pd import kernels as kn
     from pdfem.pd.bonds import bond_lengths
     from pdfem.pd.family import build_family
-    from pdfem.pd.material import SEA_ICE_DEFAULTS, IceMaterial
+    from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
     from pdfem.pd.search import cell_pairs
 
     delta = HORIZON * DX
@@ -200,7 +200,7 @@ def fig9(sizes: list[int], steps: int) -> list[dict]:
 def table4_one(n: int, steps: int, family: bool) -> dict:
     """In this process: search, set-up and IceBody steps of the plate (and full family)."""
     from pdfem.pd.body import IceBody
-    from pdfem.pd.material import SEA_ICE_DEFAULTS, IceMaterial
+    from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
     from pdfem.pd.search import cell_pairs
 
     warm_up()

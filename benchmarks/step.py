@@ -23,7 +23,7 @@ import numpy as np
 
 from pdfem.pd import kernels as kn
 from pdfem.pd.family import build_family
-from pdfem.pd.material import SEA_ICE_DEFAULTS, IceMaterial
+from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
 
 
 def _lattice(side: int, dx: float) -> np.ndarray:

@@ -22,7 +22,7 @@ from pdfem.coupling.coupler import ContactPair, Coupler, substep_counts
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.structure import ElasticStructure
 from pdfem.pd.body import IceBody
-from pdfem.pd.material import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 
 ICE = IceMaterial(density=900.0, youngs_modulus=4.0e9, poisson_ratio=0.3)  # unbreakable

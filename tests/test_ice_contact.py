@@ -17,7 +17,7 @@ import pytest
 from pdfem.forces.short_range import (DENSE_CELLS_PER_PARTICLE, ShortRangeContact,
                                         short_range_constant)
 from pdfem.pd.body import IceBody
-from pdfem.pd.material import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 
 RHO = 900.0

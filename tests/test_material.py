@@ -1,4 +1,4 @@
-"""Tests of pdfem.pd.material (LPS constants, critical stretch, IceMaterial)."""
+"""Tests of pdfem.pd.materials.lps (LPS constants, critical stretch, IceMaterial)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from pdfem.pd.material import SEA_ICE_DEFAULTS, IceMaterial, critical_stretch, lps_constants
+from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial, critical_stretch, lps_constants
 
 
 def test_lps_constants_isotropic_elasticity():

@@ -22,7 +22,7 @@ SCRIPT = textwrap.dedent('''
     from pdfem.pd.distributed import DistributedIce
     from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
-    from pdfem.pd.material import IceMaterial
+    from pdfem.pd.materials.lps import IceMaterial
     from pdfem.geometry.shapes import Box
 
     def build():
@@ -67,7 +67,7 @@ COUPLED = textwrap.dedent('''
     from pdfem.pd.distributed import DistributedIce
     from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
-    from pdfem.pd.material import IceMaterial
+    from pdfem.pd.materials.lps import IceMaterial
     from pdfem.geometry.shapes import Box
 
     dx = 0.01

@@ -50,7 +50,7 @@ from pdfem.forces.short_range import ShortRangeContact
 from pdfem.pd.distributed import DistributedIce
 from pdfem.parallel.partition import choose_partition
 from pdfem.pd.body import IceBody
-from pdfem.pd.material import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 
 dx = 0.01

@@ -14,7 +14,7 @@ from pdfem.pd import kernels as kn
 from pdfem.pd.body import IceBody
 from pdfem.pd.influence import bond_weights, isotropy_gain, partial_volume_factor
 from pdfem.geometry.lattice import fill
-from pdfem.pd.material import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 
 DX = 0.01

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from pdfem.pd.body import IceBody
-from pdfem.pd.material import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 
 E, NU, RHO = 4.0e9, 0.3, 900.0

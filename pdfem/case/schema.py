@@ -81,7 +81,7 @@ from pathlib import Path
 from typing import Any
 
 from pdfem.errors import InputError
-from pdfem.pd.material import SEA_ICE_DEFAULTS, IceMaterial
+from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
 from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
 
 if sys.version_info >= (3, 11):

@@ -37,7 +37,7 @@ from pdfem.pd.family import build_family
 from pdfem.pd.influence import bond_weights, isotropy_gain
 from pdfem.pd.surface import surface_corrected_weights
 from pdfem.geometry.lattice import fill
-from pdfem.pd.material import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial
 from pdfem.pd.pair_kernels import SIGNED
 from pdfem.pd.search import cell_pairs
 

@@ -22,7 +22,7 @@ from pdfem.forces.short_range import ShortRangeContact
 from pdfem.run.build_structures import build_structure
 from pdfem.fem.rigid import RigidBody
 from pdfem.pd.body import IceBody
-from pdfem.pd.material import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 from pdfem.pd.distributed import DistributedIce
 from pdfem.parallel.partition import choose_partition
