@@ -76,8 +76,7 @@ def write_markdown(results: list["CaseResult"], directory: str | Path, quick: bo
              f"{len(results) - len(failed)} of {len(results)} cases pass "
              f"({seconds:.0f} s wall time). Produced by `pdfem validate"
              f"{' --quick' if quick else ''} --report`; the case files are in "
-             "`models/validation/`. Errors are relative unless the unit is that of an absolute "
-             "difference (reference 0).", "",
+             "`models/validation/`. Errors are relative (%), absolute where the reference is 0.", "",
              "| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
     lines += ["| " + " | ".join(row) + " |" for row in rows(results)]
     for r in results:
