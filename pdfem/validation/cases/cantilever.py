@@ -7,12 +7,16 @@ peak of the spectrum of the tip monitor's vertical displacement is the first ben
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pdfem.case import Case
 from pdfem.validation.case import Outcome, ValidationCase, replace_run
 from pdfem.validation.measure import spectral_peak
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 BETA1_L = 1.875104  # first root of cos(bL) cosh(bL) = -1 (clamped-free beam)
 
@@ -40,7 +44,7 @@ def quick(case: Case) -> Case:
     return replace_run(case, end_time=0.5 * case.run.end_time)
 
 
-def plot(fig, outcome: Outcome, value: float, ref: float) -> None:
+def plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """Tip displacement history and its amplitude spectrum."""
     t, w = _tip(outcome)
     ax, bx = fig.subplots(2, 1)

@@ -7,11 +7,16 @@ particle velocities, the block's from the motion of its mass centre over the las
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from pdfem.case import Case
 from pdfem.validation.case import Outcome, ValidationCase
 from pdfem.validation.measure import ice_momentum, structure_mass_centre, structure_momentum
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def _densities(case: Case) -> tuple[float, float]:
@@ -35,7 +40,7 @@ def energy_ratio(outcome: Outcome) -> float:
     return float((kept[-1] + e["contact_dissipated"][-1]) / (e["kinetic"][0] + e["strain"][0]))
 
 
-def plot_momentum(fig, outcome: Outcome, value: float, ref: float) -> None:
+def plot_momentum(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """Momentum of the ice (frames) and of the block (between frames) along x."""
     r = outcome.data
     rho_ice, rho_st = _densities(outcome.case)
@@ -58,7 +63,7 @@ def plot_momentum(fig, outcome: Outcome, value: float, ref: float) -> None:
     ax.legend(fontsize="small")
 
 
-def plot_energy(fig, outcome: Outcome, value: float, ref: float) -> None:
+def plot_energy(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """Energy history of the impact."""
     e = outcome.data["histories"]["energy"]
     t = e["time"] * 1e3

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -16,6 +17,9 @@ from pdfem.case import Case
 from pdfem.geometry.shapes import Box
 from pdfem.run.build_ice import build_ice_body
 from pdfem.validation.case import Outcome, ValidationCase, replace_ice, replace_run
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 STRESS = 1.0e6  # Pa, the uniaxial traction on the end faces
 
@@ -83,7 +87,7 @@ def quick(case: Case) -> Case:
     return replace_run(replace_ice(case, shape=Box((0.0, 0.0, 0.0), (0.28, 0.12, 0.12))), end_time=1.0e-3)
 
 
-def plot_modulus(fig, outcome: Outcome, value: float, ref: float) -> None:
+def plot_modulus(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """E estimated from the core strain during the relaxation."""
     ax = fig.add_subplot()
     d = outcome.data
@@ -95,7 +99,7 @@ def plot_modulus(fig, outcome: Outcome, value: float, ref: float) -> None:
     ax.legend()
 
 
-def plot_ratio(fig, outcome: Outcome, value: float, ref: float) -> None:
+def plot_ratio(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """Lateral against axial displacement of the block's core at rest."""
     d = outcome.data
     x0, u = d["x0"], d["u"]

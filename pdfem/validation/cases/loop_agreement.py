@@ -8,11 +8,15 @@ be round-off.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pdfem.case import Case
 from pdfem.validation.case import Outcome, ValidationCase, replace_run, run_and_read
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 LOOPS = ("pairs", "full_family")
 
@@ -40,7 +44,7 @@ def quick(case: Case) -> Case:
     return replace_run(case, end_time=0.5 * case.run.end_time, output_interval=0.5 * case.run.output_interval)
 
 
-def plot(fig, outcome: Outcome, value: float, ref: float) -> None:
+def plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """Load on the sphere with both loops, and their difference."""
     ax, bx = fig.subplots(2, 1)
     (_, t, fa), (_, _, fb) = (_series(outcome.data[loop]) for loop in LOOPS)

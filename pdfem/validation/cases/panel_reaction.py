@@ -3,8 +3,13 @@ the reaction at the clamped boundary at the end of the run against the resultant
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from pdfem.case import Case
 from pdfem.validation.case import Outcome, ValidationCase, replace_run, replace_structure
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def measure(outcome: Outcome) -> float:
@@ -24,7 +29,7 @@ def quick(case: Case) -> Case:
     return replace_run(replace_structure(case, params=dict(s.params, element_size=0.15)), end_time=4.0e-3)
 
 
-def plot(fig, outcome: Outcome, value: float, ref: float) -> None:
+def plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """Reaction history against p A times the load's ramp."""
     h = outcome.data["histories"]["structures/panel"]
     pulse = outcome.case.structures[0].loads[0].pulse

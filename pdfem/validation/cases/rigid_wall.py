@@ -3,13 +3,16 @@ contact force rho c A v of 1-D elastic impact theory, from the wall's load histo
 
 from __future__ import annotations
 
-import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pdfem.case import Case
 from pdfem.validation.case import Outcome, ValidationCase
 from pdfem.validation.measure import contact_window
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def _force(outcome: Outcome) -> tuple[np.ndarray, np.ndarray, float]:
@@ -40,7 +43,7 @@ def plateau(outcome: Outcome) -> float:
     return float(f[first + 2:last - 1].mean())
 
 
-def plot(fig, outcome: Outcome, value: float, ref: float) -> None:
+def plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """The wall force history against the rectangular pulse of 1-D impact theory."""
     t, f, _ = _force(outcome)
     length, area, v, c = _bar(outcome.case)

@@ -8,6 +8,7 @@ the measured speed is c = 2L / (t2 - t1), L the free length from the held end to
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,6 +16,9 @@ from pdfem.case import Case
 from pdfem.geometry.shapes import Box
 from pdfem.validation.case import Outcome, ValidationCase, replace_ice, replace_run
 from pdfem.validation.measure import zero_crossings
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def _free_end(outcome: Outcome) -> tuple[np.ndarray, np.ndarray, float]:
@@ -50,7 +54,7 @@ def quick(case: Case) -> Case:
     return replace_run(replace_ice(case, shape=shape), end_time=1.1e-3)
 
 
-def plot(fig, outcome: Outcome, value: float, ref: float) -> None:
+def plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """Free-end displacement against the fixed-free bar of the 1-D wave equation."""
     t, w, length = _free_end(outcome)
     v0 = outcome.case.ice[0].initial_velocity[0]
