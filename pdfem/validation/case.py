@@ -128,20 +128,29 @@ def load_validation_case(case_file: str) -> Case:
         return load_case(path)
 
 
+def _noted(case: Case, section: str, changes: dict) -> str:
+    """The case text with a closing comment recording ``changes`` (the results file stores the
+    case text, so a changed run says how it differs from its file)."""
+    lines = "".join(f"\n# changed for this run: {section}.{k} = {v!r}" for k, v in changes.items())
+    return case.text.rstrip("\n") + "\n" + lines + "\n"
+
+
 def replace_run(case: Case, **changes) -> Case:
     """``case`` with fields of its ``[run]`` section replaced (e.g. ``end_time``)."""
-    return dataclasses.replace(case, run=dataclasses.replace(case.run, **changes))
+    return dataclasses.replace(case, run=dataclasses.replace(case.run, **changes),
+                               text=_noted(case, "run", changes))
 
 
 def replace_ice(case: Case, index: int = 0, **changes) -> Case:
     """``case`` with fields of its ``index``-th ``[[ice]]`` body replaced (e.g. ``shape``)."""
     ice = list(case.ice)
     ice[index] = dataclasses.replace(ice[index], **changes)
-    return dataclasses.replace(case, ice=tuple(ice))
+    return dataclasses.replace(case, ice=tuple(ice), text=_noted(case, f"ice[{index}]", changes))
 
 
 def replace_structure(case: Case, index: int = 0, **changes) -> Case:
     """``case`` with fields of its ``index``-th ``[[structure]]`` replaced (e.g. ``params``)."""
     st = list(case.structures)
     st[index] = dataclasses.replace(st[index], **changes)
-    return dataclasses.replace(case, structures=tuple(st))
+    return dataclasses.replace(case, structures=tuple(st),
+                               text=_noted(case, f"structure[{index}]", changes))
