@@ -1,0 +1,39 @@
+"""The registry of validation cases: one line per case module of :mod:`pdfem.validation.cases`.
+
+To add a case: write its case file ``models/validation/<file>.toml`` and a module
+``pdfem/validation/cases/<module>.py`` exporting ``CASES`` (a tuple of
+:class:`~pdfem.validation.case.ValidationCase`), then add the module's name to ``MODULES``.
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
+
+from pdfem.validation.case import ValidationCase
+
+MODULES: tuple[str, ...] = (
+    "wave_speed",          # bar_wave_speed.toml: wave speed in a fixed-free bar
+    "elastic_constants",   # lps_block_tension.toml: E and nu of the LPS
+    "cantilever",          # cantilever_frequency.toml: first bending frequency
+    "coupled_impact",      # coupled_impact.toml: momentum and energy in an impact
+    "loop_agreement",      # sphere_ice_loops.toml: pair loop vs full-family loop
+    "rigid_wall",          # bar_rigid_wall.toml: contact duration and force
+    "panel_reaction",      # panel_pressure_reaction.toml: support reaction p A
+)
+"""The case modules, in the order of the report."""
+
+
+def all_cases() -> tuple[ValidationCase, ...]:
+    """Every registered validation case, in registry order.
+
+    Raises
+    ------
+    ValueError
+        If two cases share a name.
+    """
+    cases = tuple(c for m in MODULES for c in import_module(f"pdfem.validation.cases.{m}").CASES)
+    names = [c.name for c in cases]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ValueError(f"validation case names must be unique: {', '.join(twice)}")
+    return cases
