@@ -1,0 +1,127 @@
+"""Shapes and regions of the case file: ``box``, ``cylinder``, ``sphere`` and (ice shapes only)
+``mesh``, each validated into a :mod:`pdfem.geometry.shapes` object.
+
+A shape table holds exactly one of these keys, e.g. ``{ box = { min = [0, 0, 0], max = [1, 1, 1] } }``.
+Mesh files are found relative to the case file's directory (the validation context's
+``directory``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
+
+from pdfem.case.fields import Name, Positive, Section, Vector, fail
+from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
+
+Shape = Box | Cylinder | Sphere | ClosedSurface
+
+
+class BoxShape(Section):
+    """An axis-aligned box."""
+
+    min: Vector("m") = Field(description="Corner with the smallest coordinates (m). Required.")
+    max: Vector("m") = Field(description="Opposite corner, larger in every direction (m). Required.")
+
+    def build(self) -> Box:
+        """The geometry (raises ValueError if ``max`` is not above ``min``)."""
+        return Box(self.min, self.max)
+
+
+class CylinderShape(Section):
+    """A solid circular cylinder."""
+
+    base: Vector("m") = Field(description="Centre of the base disc (m). Required.")
+    axis: Vector() = Field(description="Direction of the axis from the base (any length, not zero). "
+                                       "Required.")
+    radius: Positive("m") = Field(description="Radius (m). Required.")
+    length: Positive("m") = Field(description="Length along the axis (m). Required.")
+
+    def build(self) -> Cylinder:
+        """The geometry (raises ValueError for a zero axis)."""
+        return Cylinder(self.base, self.axis, self.radius, self.length)
+
+
+class SphereShape(Section):
+    """A solid sphere."""
+
+    center: Vector("m") = Field(description="Centre (m). Required.")
+    radius: Positive("m") = Field(description="Radius (m). Required.")
+
+    def build(self) -> Sphere:
+        """The geometry."""
+        return Sphere(self.center, self.radius)
+
+
+class MeshShape(Section):
+    """A solid bounded by a closed triangle surface read from a mesh file."""
+
+    file: Name = Field(description="Surface mesh file (.msh, .stl, .obj, anything meshio reads), "
+                                   "relative to the case file. Required.")
+    group: Name | None = Field(None, description="Physical group of the file that holds the surface. "
+                                                 "Default: every triangle of the file.")
+
+    _path: Path = PrivateAttr()
+
+    @model_validator(mode="after")
+    def _exists(self, info: ValidationInfo) -> "MeshShape":
+        path = Path(self.file)
+        self._path = path if path.is_absolute() else directory(info) / path
+        if not self._path.is_file():
+            raise fail(f"no such mesh file ({self._path})", self.file, key="file")
+        return self
+
+    def build(self) -> ClosedSurface:
+        """The geometry (raises ValueError if the surface is not closed)."""
+        return ClosedSurface.from_file(self._path, self.group)
+
+
+def directory(info: ValidationInfo) -> Path:
+    """The directory that relative paths are resolved against (validation context)."""
+    return Path((info.context or {}).get("directory", Path.cwd()))
+
+
+class RegionSection(Section):
+    """A region: exactly one of ``box``, ``cylinder`` or ``sphere``."""
+
+    model_config = {"json_schema_extra": {"minProperties": 1, "maxProperties": 1}}
+
+    box: BoxShape | None = Field(None, description="`{min, max}` (m).")
+    cylinder: CylinderShape | None = Field(None, description="`{base, axis, radius, length}` (m).")
+    sphere: SphereShape | None = Field(None, description="`{center, radius}` (m).")
+    _geometry: Any = PrivateAttr(None)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _known_keys(cls, data: Any) -> Any:
+        if not isinstance(data, dict):
+            raise fail("expected a table ({ key = value, ... })", data)
+        kinds = cls.keys()
+        given = [k for k in kinds if k in data]
+        if len(given) != 1:
+            extra = sorted(set(data) - set(kinds))
+            what = f"unknown key '{extra[0]}'; " if extra else ""
+            raise fail(what + "expected exactly one of " + ", ".join(kinds), data)
+        return data
+
+    @model_validator(mode="after")
+    def _build(self) -> "RegionSection":
+        kind = next(k for k in self.keys() if getattr(self, k) is not None)
+        try:
+            self._geometry = getattr(self, kind).build()
+        except ValueError as exc:
+            raise fail(str(exc), key=kind) from None
+        return self
+
+    @property
+    def geometry(self) -> Shape:
+        """The validated :mod:`pdfem.geometry.shapes` object."""
+        return self._geometry
+
+
+class ShapeSection(RegionSection):
+    """A body's shape: exactly one of ``box``, ``cylinder``, ``sphere`` or ``mesh``."""
+
+    mesh: MeshShape | None = Field(None, description="`{file, group}`: a closed surface mesh.")
