@@ -173,10 +173,23 @@ def Tables(section: type) -> Any:
     return Annotated[tuple[section, ...], BeforeValidator(_tables_check)]
 
 
+def tidy_schema(schema: dict[str, Any]) -> None:
+    """Drop what only clutters a table's JSON Schema: the titles pydantic makes from field names
+    ("Dx"), and ``null`` (TOML has none: a key that is not given is absent)."""
+    for prop in schema.get("properties", {}).values():
+        prop.pop("title", None)
+        if "default" in prop and prop["default"] is None:
+            del prop["default"]
+        options = [o for o in prop.get("anyOf", ()) if o != {"type": "null"}]
+        if len(options) == 1:
+            del prop["anyOf"]
+            prop.update(options[0])
+
+
 class Section(BaseModel):
     """A TOML table: frozen, unknown keys refused (the message lists the keys allowed here)."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid", populate_by_name=True)
+    model_config = ConfigDict(frozen=True, extra="forbid", json_schema_extra=tidy_schema)
 
     @classmethod
     def keys(cls) -> list[str]:

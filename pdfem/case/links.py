@@ -18,8 +18,8 @@ class ContactSection(Section):
                                   "every ice body meets every structure).")
     structure: Name = Field(description="Name of the structure whose contact surface it meets. "
                                         "Required.")
-    name: Name | None = Field(None, description='Name of the pair (its load history). '
-                                                'Default: "<ice>-<structure>".')
+    name: Name | None = Field(
+        None, description='Name of the pair (its load history). Default: `"<ice>-<structure>"`.')
     friction: Number(ge=0.0) = Field(0.0, description="Coulomb friction coefficient (-). "
                                                       "Default: 0.")
     search_radius: Number("m", ge=0.0) = Field(

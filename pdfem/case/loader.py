@@ -48,6 +48,8 @@ def input_error(exc: ValidationError, file: str) -> InputError:
         return InputError(file, path or None, ctx["message"], ctx.get("value", ...))
     if e["type"] == "missing":
         return InputError(file, path or None, "this field is required")
+    if e["type"] == "extra_forbidden":
+        return InputError(file, path or None, "unknown key")
     if e["type"] == "value_error":
         return InputError(file, path or None, str(ctx.get("error", e["msg"])), e["input"])
     return InputError(file, path or None, e["msg"], e["input"])

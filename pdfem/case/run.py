@@ -36,7 +36,7 @@ class RunSection(Section):
         False, description="Run with a time_step above the stable estimate (only a warning); "
                            "otherwise such a step is refused (exit 2). Default: false.")
     checkpoint_interval_steps: Whole(0, "(0 = no step-based checkpoints)") = Field(
-        0, description="Write <out>/checkpoint.h5 every so many coupling steps; 0 = never. "
+        0, description="Write `<out>/checkpoint.h5` every so many coupling steps; 0 = never. "
                        "Default: 0.")
     checkpoint_interval_minutes: Number("minutes", ge=0.0) = Field(
         30.0, description="Write a checkpoint every so many minutes of wall time (minutes); "
@@ -46,7 +46,7 @@ class RunSection(Section):
                         "growth). Default: 10.")
     output_per_rank: Boolean = Field(
         False, description="On several MPI ranks, each rank writes its own ice particles to "
-                           "results.rank<R>.h5 instead of sending them to rank 0 (for very large "
+                           "`results.rank<R>.h5` instead of sending them to rank 0 (for very large "
                            "runs). Default: false.")
 
     @model_validator(mode="after")

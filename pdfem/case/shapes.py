@@ -11,9 +11,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
+from pydantic import ConfigDict, Field, PrivateAttr, ValidationInfo, model_validator
 
-from pdfem.case.fields import Name, Positive, Section, Vector, fail
+from pdfem.case.fields import Name, Positive, Section, Vector, fail, tidy_schema
 from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
 
 Shape = Box | Cylinder | Sphere | ClosedSurface
@@ -60,8 +60,9 @@ class MeshShape(Section):
 
     file: Name = Field(description="Surface mesh file (.msh, .stl, .obj, anything meshio reads), "
                                    "relative to the case file. Required.")
-    group: Name | None = Field(None, description="Physical group of the file that holds the surface. "
-                                                 "Default: every triangle of the file.")
+    group: Name | None = Field(
+        None, description="Physical group of the file that holds the surface. "
+                          "Default: every triangle of the file.")
 
     _path: Path = PrivateAttr()
 
@@ -83,14 +84,23 @@ def directory(info: ValidationInfo) -> Path:
     return Path((info.context or {}).get("directory", Path.cwd()))
 
 
+def _one_key_schema(schema: dict[str, Any]) -> None:
+    tidy_schema(schema)
+    schema.update(minProperties=1, maxProperties=1)
+
+
 class RegionSection(Section):
     """A region: exactly one of ``box``, ``cylinder`` or ``sphere``."""
 
-    model_config = {"json_schema_extra": {"minProperties": 1, "maxProperties": 1}}
+    model_config = ConfigDict(json_schema_extra=_one_key_schema)
 
-    box: BoxShape | None = Field(None, description="`{min, max}` (m).")
-    cylinder: CylinderShape | None = Field(None, description="`{base, axis, radius, length}` (m).")
-    sphere: SphereShape | None = Field(None, description="`{center, radius}` (m).")
+    box: BoxShape | None = Field(
+        None, description="A box `{min, max}` (m). Default: none (give exactly one shape).")
+    cylinder: CylinderShape | None = Field(
+        None, description="A cylinder `{base, axis, radius, length}` (m). "
+                          "Default: none (give exactly one shape).")
+    sphere: SphereShape | None = Field(
+        None, description="A sphere `{center, radius}` (m). Default: none (give exactly one shape).")
     _geometry: Any = PrivateAttr(None)
 
     @model_validator(mode="before")
@@ -100,8 +110,8 @@ class RegionSection(Section):
             raise fail("expected a table ({ key = value, ... })", data)
         kinds = cls.keys()
         given = [k for k in kinds if k in data]
-        if len(given) != 1:
-            extra = sorted(set(data) - set(kinds))
+        extra = sorted(set(data) - set(kinds))
+        if len(given) != 1 or extra:
             what = f"unknown key '{extra[0]}'; " if extra else ""
             raise fail(what + "expected exactly one of " + ", ".join(kinds), data)
         return data
@@ -124,4 +134,6 @@ class RegionSection(Section):
 class ShapeSection(RegionSection):
     """A body's shape: exactly one of ``box``, ``cylinder``, ``sphere`` or ``mesh``."""
 
-    mesh: MeshShape | None = Field(None, description="`{file, group}`: a closed surface mesh.")
+    mesh: MeshShape | None = Field(
+        None, description="A closed surface mesh `{file, group}`. "
+                          "Default: none (give exactly one shape).")
