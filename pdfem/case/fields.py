@@ -11,7 +11,9 @@ TOML gives no nulls, so ``None`` in a field means "not given".
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Iterator, Literal
+
+from annotated_types import GroupedMetadata, Interval
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 from pydantic_core import PydanticCustomError
@@ -66,15 +68,22 @@ def _number_check(unit: str, gt: float | None, ge: float | None, lt: float | Non
     return check
 
 
-def Number(unit: str = "", *, gt: float | None = None, ge: float | None = None,
-           lt: float | None = None, le: float | None = None) -> Any:
-    """A finite number (an integer is taken as a float) within the given bounds, in ``unit``."""
-    return Annotated[float, Field(gt=gt, ge=ge, lt=lt, le=le),
-                     BeforeValidator(_number_check(unit, gt, ge, lt, le))]
+class Number(GroupedMetadata):
+    """Metadata of a finite number (an int is taken as a float) within bounds, in ``unit``:
+    ``Annotated[float, Number("s", gt=0)]``."""
+
+    def __init__(self, unit: str = "", *, gt: float | None = None, ge: float | None = None,
+                 lt: float | None = None, le: float | None = None):
+        self.unit, self.bounds = unit, (gt, ge, lt, le)
+
+    def __iter__(self) -> Iterator[Any]:
+        gt, ge, lt, le = self.bounds
+        yield Interval(gt=gt, ge=ge, lt=lt, le=le)
+        yield BeforeValidator(_number_check(self.unit, gt, ge, lt, le))
 
 
-def Positive(unit: str = "") -> Any:
-    """A finite number > 0 in ``unit``."""
+def Positive(unit: str = "") -> Number:
+    """Metadata of a finite number > 0 in ``unit``."""
     return Number(unit, gt=0.0)
 
 
@@ -86,9 +95,18 @@ def _vector_check(unit: str):
     return check
 
 
-def Vector(unit: str = "") -> Any:
-    """Three finite numbers ``[x, y, z]`` in ``unit``."""
-    return Annotated[tuple[float, float, float], BeforeValidator(_vector_check(unit))]
+#: Three floats.
+Vec3 = tuple[float, float, float]
+
+
+class Vector(GroupedMetadata):
+    """Metadata of three finite numbers ``[x, y, z]`` in ``unit``: ``Annotated[Vec3, Vector("m")]``."""
+
+    def __init__(self, unit: str = ""):
+        self.unit = unit
+
+    def __iter__(self) -> Iterator[Any]:
+        yield BeforeValidator(_vector_check(self.unit))
 
 
 def _name_check(v: Any) -> str:
@@ -121,7 +139,7 @@ def _choice_check(choices: tuple[str, ...]):
 
 
 def Choice(*choices: str) -> Any:
-    """One of the strings ``choices``."""
+    """The type "one of the strings ``choices``" (declare it once, as a module-level alias)."""
     return Annotated[Literal[choices], BeforeValidator(_choice_check(choices))]
 
 
@@ -143,9 +161,16 @@ def _whole_check(low: int, note: str):
     return check
 
 
-def Whole(low: int, note: str = "") -> Any:
-    """A whole number >= ``low`` (``note`` explains a special value, e.g. "(0 = automatic)")."""
-    return Annotated[int, Field(ge=low), BeforeValidator(_whole_check(low, note))]
+class Whole(GroupedMetadata):
+    """Metadata of a whole number >= ``low`` (``note`` explains a special value, e.g.
+    "(0 = automatic)"): ``Annotated[int, Whole(0)]``."""
+
+    def __init__(self, low: int, note: str = ""):
+        self.low, self.note = low, note
+
+    def __iter__(self) -> Iterator[Any]:
+        yield Interval(ge=self.low)
+        yield BeforeValidator(_whole_check(self.low, self.note))
 
 
 def _names_check(v: Any) -> tuple[str, ...]:

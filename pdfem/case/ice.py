@@ -8,10 +8,11 @@ turns the material section into the kernels' :class:`pdfem.pd.materials.lps.IceM
 from __future__ import annotations
 
 import math
+from typing import Annotated
 
 from pydantic import Field, model_validator
 
-from pdfem.case.fields import Name, Number, Positive, Section, Tables, Vector, fail
+from pdfem.case.fields import Name, Number, Positive, Section, Tables, Vec3, Vector, fail
 from pdfem.case.shapes import BoxShape, RegionSection, ShapeSection
 
 #: Sea-ice defaults (SI), with their sources in the descriptions of :class:`IceMaterialSection`.
@@ -25,20 +26,20 @@ class IceMaterialSection(Section):
     22): not an input, but a calibrated ``critical_stretch`` can be checked against it.
     """
 
-    density: Positive("kg/m^3") = Field(
+    density: Annotated[float, Positive("kg/m^3")] = Field(
         SEA_ICE["density"], description="Mass density (kg/m^3). Default: 900 (first-year sea ice, "
         "observed 840-940 depending on brine and air content; Timco & Frederking 1996).")
-    youngs_modulus: Positive("Pa") = Field(
+    youngs_modulus: Annotated[float, Positive("Pa")] = Field(
         SEA_ICE["youngs_modulus"], description="Young's modulus (Pa). Default: 4.1e9 (mean of "
         "Kujala's beam tests on Baltic sea ice, range 3.2-5.4 GPa).")
-    poisson_ratio: Number(gt=-1.0, lt=0.5) = Field(
+    poisson_ratio: Annotated[float, Number(gt=-1.0, lt=0.5)] = Field(
         SEA_ICE["poisson_ratio"], description="Poisson's ratio (-), in (-1, 0.5). Default: 0.3 "
         "(the usual value for sea ice, e.g. Timco & Weeks 2010).")
-    fracture_energy: Positive("J/m^2") = Field(
+    fracture_energy: Annotated[float, Positive("J/m^2")] = Field(
         SEA_ICE["fracture_energy"], description="Critical energy release rate G0 (J/m^2); gives "
         "the critical bond stretch. Not with critical_stretch. Default: 10 (an order of magnitude; "
         "reported values scatter with specimen size and loading rate, Timco & Weeks 2010).")
-    critical_stretch: Positive() | None = Field(
+    critical_stretch: Annotated[float, Positive()] | None = Field(
         None, description="Critical bond stretch s0 (-), instead of fracture_energy. "
         "Default: from fracture_energy.")
 
@@ -55,8 +56,9 @@ class VelocitySection(Section):
 
     region: RegionSection = Field(description="The region: `box`, `cylinder` or `sphere` (m). "
                                               "Required.")
-    velocity: Vector("m/s") = Field(description="Prescribed velocity (m/s). Required.")
-    ramp_time: Number("s", ge=0.0) = Field(
+    velocity: Annotated[Vec3, Vector("m/s")] = Field(
+        description="Prescribed velocity (m/s). Required.")
+    ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
         0.0, description="Time over which the velocity ramps up linearly from 0 (s). Default: 0.")
 
 
@@ -64,9 +66,10 @@ class CrackSection(Section):
     """A planar pre-crack: the part of the plane (point, normal) inside box; every bond crossing
     it is broken at t = 0."""
 
-    point: Vector("m") = Field(description="A point of the crack plane (m). Required.")
-    normal: Vector() = Field(description="Normal of the crack plane (any length, not zero). "
-                                         "Required.")
+    point: Annotated[Vec3, Vector("m")] = Field(
+        description="A point of the crack plane (m). Required.")
+    normal: Annotated[Vec3, Vector()] = Field(
+        description="Normal of the crack plane (any length, not zero). Required.")
     box: BoxShape = Field(description="`{min, max}` (m): the part of the plane that is cracked. "
                                       "Required.")
 
@@ -85,10 +88,10 @@ class IceSection(Section):
     """One peridynamic ice body."""
 
     name: Name = Field(description="Body name, unique among bodies and structures. Required.")
-    dx: Positive("m") = Field(description="Lattice spacing (m). Required.")
-    horizon_factor: Number(gt=1.0) = Field(
+    dx: Annotated[float, Positive("m")] = Field(description="Lattice spacing (m). Required.")
+    horizon_factor: Annotated[float, Number(gt=1.0)] = Field(
         3.015, description="Horizon as a multiple of dx (-). Not with horizon. Default: 3.015.")
-    horizon: Positive("m") | None = Field(
+    horizon: Annotated[float, Positive("m")] | None = Field(
         None, description="Horizon (m), instead of horizon_factor. Default: horizon_factor * dx.")
     shape: ShapeSection = Field(
         description="`box = {min, max}`, `cylinder = {base, axis, radius, length}`, "
@@ -98,7 +101,7 @@ class IceSection(Section):
         default_factory=IceMaterialSection,
         description="`density` (kg/m^3), `youngs_modulus` (Pa), `poisson_ratio`, `fracture_energy` "
                     "(J/m^2) or `critical_stretch`. Default: sea ice (900, 4.1e9, 0.3, 10).")
-    initial_velocity: Vector("m/s") = Field(
+    initial_velocity: Annotated[Vec3, Vector("m/s")] = Field(
         (0.0, 0.0, 0.0), description="Initial velocity of every particle (m/s). Default: [0, 0, 0].")
     fixed: Tables(RegionSection) = Field(
         (), description="Regions held in place (m). Default: none.")

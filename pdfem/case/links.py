@@ -6,9 +6,11 @@ Both name bodies and structures of the same case; that the names exist is checke
 
 from __future__ import annotations
 
+from typing import Annotated
+
 from pydantic import Field
 
-from pdfem.case.fields import Name, Number, Section, Vector
+from pdfem.case.fields import Name, Number, Section, Vec3, Vector
 
 
 class ContactSection(Section):
@@ -20,9 +22,9 @@ class ContactSection(Section):
                                         "Required.")
     name: Name | None = Field(
         None, description='Name of the pair (its load history). Default: `"<ice>-<structure>"`.')
-    friction: Number(ge=0.0) = Field(0.0, description="Coulomb friction coefficient (-). "
-                                                      "Default: 0.")
-    search_radius: Number("m", ge=0.0) = Field(
+    friction: Annotated[float, Number(ge=0.0)] = Field(
+        0.0, description="Coulomb friction coefficient (-). Default: 0.")
+    search_radius: Annotated[float, Number("m", ge=0.0)] = Field(
         0.0, description="How far behind the surface a particle is caught (m); 0 = dx / 2 of the "
                          "ice. Default: 0 (dx / 2).")
 
@@ -32,5 +34,6 @@ class MonitorSection(Section):
 
     name: Name = Field(description="Probe name, unique among monitors. Required.")
     structure: Name = Field(description="Name of the (elastic) structure. Required.")
-    point: Vector("m") = Field(description="Probe point (m): displacement of the nearest node and "
-                                           "von Mises stress of the element containing it. Required.")
+    point: Annotated[Vec3, Vector("m")] = Field(
+        description="Probe point (m): displacement of the nearest node and von Mises stress of "
+                    "the element containing it. Required.")

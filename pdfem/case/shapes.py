@@ -9,11 +9,11 @@ Mesh files are found relative to the case file's directory (the validation conte
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 from pydantic import ConfigDict, Field, PrivateAttr, ValidationInfo, model_validator
 
-from pdfem.case.fields import Name, Positive, Section, Vector, fail, tidy_schema
+from pdfem.case.fields import Name, Positive, Section, Vec3, Vector, fail, tidy_schema
 from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
 
 Shape = Box | Cylinder | Sphere | ClosedSurface
@@ -22,8 +22,10 @@ Shape = Box | Cylinder | Sphere | ClosedSurface
 class BoxShape(Section):
     """An axis-aligned box."""
 
-    min: Vector("m") = Field(description="Corner with the smallest coordinates (m). Required.")
-    max: Vector("m") = Field(description="Opposite corner, larger in every direction (m). Required.")
+    min: Annotated[Vec3, Vector("m")] = Field(
+        description="Corner with the smallest coordinates (m). Required.")
+    max: Annotated[Vec3, Vector("m")] = Field(
+        description="Opposite corner, larger in every direction (m). Required.")
 
     def build(self) -> Box:
         """The geometry (raises ValueError if ``max`` is not above ``min``)."""
@@ -33,11 +35,12 @@ class BoxShape(Section):
 class CylinderShape(Section):
     """A solid circular cylinder."""
 
-    base: Vector("m") = Field(description="Centre of the base disc (m). Required.")
-    axis: Vector() = Field(description="Direction of the axis from the base (any length, not zero). "
-                                       "Required.")
-    radius: Positive("m") = Field(description="Radius (m). Required.")
-    length: Positive("m") = Field(description="Length along the axis (m). Required.")
+    base: Annotated[Vec3, Vector("m")] = Field(description="Centre of the base disc (m). Required.")
+    axis: Annotated[Vec3, Vector()] = Field(
+        description="Direction of the axis from the base (any length, not zero). Required.")
+    radius: Annotated[float, Positive("m")] = Field(description="Radius (m). Required.")
+    length: Annotated[float, Positive("m")] = Field(
+        description="Length along the axis (m). Required.")
 
     def build(self) -> Cylinder:
         """The geometry (raises ValueError for a zero axis)."""
@@ -47,8 +50,8 @@ class CylinderShape(Section):
 class SphereShape(Section):
     """A solid sphere."""
 
-    center: Vector("m") = Field(description="Centre (m). Required.")
-    radius: Positive("m") = Field(description="Radius (m). Required.")
+    center: Annotated[Vec3, Vector("m")] = Field(description="Centre (m). Required.")
+    radius: Annotated[float, Positive("m")] = Field(description="Radius (m). Required.")
 
     def build(self) -> Sphere:
         """The geometry."""

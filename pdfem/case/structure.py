@@ -7,27 +7,31 @@ The steel defaults are declared here with their source.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from pdfem.case.fields import Choice, Name, Names, Number, Positive, Section, Tables, Vector, fail
+from pdfem.case.fields import (Choice, Name, Names, Number, Positive, Section, Tables, Vec3, Vector,
+                               fail)
 from pdfem.case.shapes import directory
 
 #: Structural steel (SI): density and elastic constants of carbon steel as used for ship hulls
 #: (e.g. EN 1993-1-1, 3.2.6: E = 210 GPa, nu = 0.3; density 7850 kg/m^3, EN 1991-1-1 Table A.4).
 STEEL = {"density": 7850.0, "youngs_modulus": 210e9, "poisson_ratio": 0.3}
 
+#: What a structure is.
+Kind = Choice("elastic", "rigid")
+
 
 class SteelSection(Section):
     """Linear elastic material of a structure; the defaults are structural steel."""
 
-    density: Positive("kg/m^3") = Field(
+    density: Annotated[float, Positive("kg/m^3")] = Field(
         STEEL["density"], description="Mass density (kg/m^3). Default: 7850 (steel, EN 1991-1-1).")
-    youngs_modulus: Positive("Pa") = Field(
+    youngs_modulus: Annotated[float, Positive("Pa")] = Field(
         STEEL["youngs_modulus"], description="Young's modulus (Pa). Default: 210e9 (steel, "
                                              "EN 1993-1-1).")
-    poisson_ratio: Number(gt=-1.0, lt=0.5) = Field(
+    poisson_ratio: Annotated[float, Number(gt=-1.0, lt=0.5)] = Field(
         STEEL["poisson_ratio"], description="Poisson's ratio (-), in (-1, 0.5). Default: 0.3 "
                                             "(steel, EN 1993-1-1).")
 
@@ -35,32 +39,33 @@ class SteelSection(Section):
 class DampingSection(Section):
     """Rayleigh damping C = alpha M + beta K."""
 
-    alpha: Number("1/s", ge=0.0) = Field(0.0, description="Mass-proportional coefficient (1/s). "
-                                                          "Default: 0.")
-    beta: Number("s", ge=0.0) = Field(0.0, description="Stiffness-proportional coefficient (s). "
-                                                       "Default: 0.")
+    alpha: Annotated[float, Number("1/s", ge=0.0)] = Field(
+        0.0, description="Mass-proportional coefficient (1/s). Default: 0.")
+    beta: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Stiffness-proportional coefficient (s). Default: 0.")
 
 
 class PulseSection(Section):
     """Trapezoidal time history: 0 before start, rises linearly to 1, holds, falls to 0."""
 
-    start: Number("s", ge=0.0) = Field(0.0, description="Time the load starts (s). Default: 0.")
-    rise: Number("s", ge=0.0) = Field(0.0, description="Rise time from 0 to full load (s). "
-                                                       "Default: 0.")
-    hold: Number("s", ge=0.0) | None = Field(
+    start: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Time the load starts (s). Default: 0.")
+    rise: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Rise time from 0 to full load (s). Default: 0.")
+    hold: Annotated[float, Number("s", ge=0.0)] | None = Field(
         None, description="Time at full load (s). Default: forever (the load stays on).")
-    fall: Number("s", ge=0.0) = Field(0.0, description="Fall time from full load to 0 (s). "
-                                                       "Default: 0.")
+    fall: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Fall time from full load to 0 (s). Default: 0.")
 
 
 class LoadSection(Section):
     """A uniform surface load on a mesh group."""
 
     group: Name = Field(description="Mesh group (surface) the load acts on. Required.")
-    pressure: Number("Pa") = Field(0.0, description="Pressure, positive into the structure (Pa). "
-                                                    "Default: 0.")
-    traction: Vector("Pa") = Field((0.0, 0.0, 0.0), description="Traction vector (Pa). "
-                                                                "Default: [0, 0, 0].")
+    pressure: Annotated[float, Number("Pa")] = Field(
+        0.0, description="Pressure, positive into the structure (Pa). Default: 0.")
+    traction: Annotated[Vec3, Vector("Pa")] = Field(
+        (0.0, 0.0, 0.0), description="Traction vector (Pa). Default: [0, 0, 0].")
     pulse: PulseSection = Field(default_factory=PulseSection,
                                 description="Time history `{start, rise, hold, fall}` (s). "
                                             "Default: on from t = 0.")
@@ -69,12 +74,12 @@ class LoadSection(Section):
 class MotionSection(Section):
     """Prescribed rigid-body motion."""
 
-    velocity: Vector("m/s") = Field((0.0, 0.0, 0.0), description="Velocity (m/s). "
+    velocity: Annotated[Vec3, Vector("m/s")] = Field((0.0, 0.0, 0.0), description="Velocity (m/s). "
                                                                  "Default: [0, 0, 0].")
-    angular_velocity: Vector("rad/s") = Field((0.0, 0.0, 0.0), description="Angular velocity "
-                                                                           "(rad/s). Default: [0, 0, 0].")
-    center: Vector("m") = Field((0.0, 0.0, 0.0), description="Centre of rotation at t = 0 (m). "
-                                                             "Default: [0, 0, 0].")
+    angular_velocity: Annotated[Vec3, Vector("rad/s")] = Field(
+        (0.0, 0.0, 0.0), description="Angular velocity (rad/s). Default: [0, 0, 0].")
+    center: Annotated[Vec3, Vector("m")] = Field(
+        (0.0, 0.0, 0.0), description="Centre of rotation at t = 0 (m). Default: [0, 0, 0].")
 
 
 def _is_gmsh(path: Path) -> bool:
@@ -90,7 +95,7 @@ class StructureSection(Section):
     """One structure: an elastic FE model or a rigid body with prescribed motion."""
 
     name: Name = Field(description="Structure name, unique among bodies and structures. Required.")
-    kind: Choice("elastic", "rigid") = Field(
+    kind: Kind = Field(
         "elastic", description='"elastic" (finite elements) or "rigid" (prescribed motion). '
                                'Default: "elastic".')
     mesh: Name = Field(
