@@ -94,3 +94,22 @@ def test_pdfem_schema_command(capsys):
     assert "end_time" in printed["$defs"]["RunSection"]["properties"]
     assert main(["schema", "--markdown"]) == 0
     assert capsys.readouterr().out == markdown_table()
+
+
+def test_model_parameters_use_the_same_validator():
+    """Each model script's PARAMETERS table becomes a pydantic model: defaults filled in,
+    unknown and mistyped keys named (ModelParameterError, exit 2)."""
+    from pdfem.meshing import ModelParameterError, check_parameters, parameter_model
+    from pdfem.meshing.runner import available_models, resolve_model
+
+    for name in available_models():
+        table = resolve_model(name).PARAMETERS
+        model = parameter_model(table, name)
+        assert model.model_validate({}).model_dump() == {k: v[0] for k, v in table.items()}
+        assert set(model.model_json_schema()["properties"]) == set(table)
+        with pytest.raises(ModelParameterError) as err:
+            check_parameters(table, {"no_such_key": 1})
+        assert err.value.param == "no_such_key" and "valid parameters are" in str(err.value)
+    with pytest.raises(ModelParameterError) as err:
+        check_parameters({"n": (3, "-", "count")}, {"n": 2.5})
+    assert err.value.param == "n" and "integer" in str(err.value)
