@@ -3,7 +3,9 @@ of every section.
 
 Each type is a pydantic type (so the JSON Schema shows it: ``number`` with its bounds, an array
 of three numbers, an enum...) preceded by a check of our own that gives the message a user
-should read ("expected a finite number in s", "must be > 0 s"). A check fails with
+should read ("expected a finite number in s", "must be > 0 s"). Units and bounds are
+``Annotated`` metadata: ``Annotated[float, Number("s", gt=0)]``, ``Annotated[Vec3, Vector("m")]``,
+``Annotated[int, Whole(0)]``. A check fails with
 :func:`fail`, whose error :mod:`pdfem.case.loader` turns into :class:`pdfem.errors.InputError`.
 TOML gives no nulls, so ``None`` in a field means "not given".
 """
@@ -14,7 +16,6 @@ import math
 from typing import Annotated, Any, Iterator, Literal
 
 from annotated_types import GroupedMetadata, Interval
-
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 from pydantic_core import PydanticCustomError
 
