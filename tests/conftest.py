@@ -15,7 +15,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pytest
 
-from pdfem.meshing.runner import gmsh_session
+from pdfem.meshing import gmsh_session
 
 FACES = ("x0", "x1", "y0", "y1", "z0", "z1")
 

@@ -15,9 +15,10 @@ import pytest
 from scipy.integrate import quad
 
 from pdfem.errors import InputError
-from pdfem.meshing.runner import (MeshQualityError, ModelParameterError, available_models, coerce_parameters, finish_mesh,
-                           gmsh_session, mesh_model, parse_set, resolve_model, tet_inradii, tet_min_dihedral,
-                           triangle_min_angle)
+from pdfem.meshing import (MeshQualityError, ModelParameterError, coerce_parameters, finish_mesh, gmsh_session,
+                           parse_set)
+from pdfem.meshing.quality import tet_inradii, tet_min_dihedral, triangle_min_angle
+from pdfem.meshing.runner import available_models, mesh_model, resolve_model
 from pdfem.models import hull_panel, indenters, propeller_blade
 
 
@@ -302,7 +303,7 @@ def test_resolve_model_by_name_and_errors(tmp_path):
 
 _USER_MODEL = '''
 """A user's model script: a box of tetrahedra."""
-from pdfem.meshing.runner import check_parameters, finish_mesh, gmsh_session
+from pdfem.meshing import check_parameters, finish_mesh, gmsh_session
 
 PARAMETERS = {"side": (1.0, "m", "box side"), "element_size": (0.5, "m", "mesh size")}
 

@@ -21,7 +21,7 @@ from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.mesh import load_mesh
 from pdfem.fem.structure import ElasticStructure
 from pdfem.fem.surface import ContactSurface, orient_outward
-from pdfem.meshing.runner import gmsh_session
+from pdfem.meshing import gmsh_session
 
 R_CYL, LEN = 0.2, 0.5
 R_SPH = 0.3

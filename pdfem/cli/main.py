@@ -28,9 +28,9 @@ import warnings
 from pdfem import __version__
 from pdfem.errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, EXIT_OK, InputError, InstabilityError
 
-from pdfem.cli import bench, info, mesh, post, run, validate
+from pdfem.cli import bench, info, mesh, post, run, schema, validate
 
-COMMANDS = (run, post, mesh, bench, info, validate)
+COMMANDS = (run, post, mesh, validate, schema, bench, info)
 """The commands, each a module with ``NAME``, ``HELP``, ``add_arguments(parser)`` and
 ``run(args) -> exit status``; a new command is one new module plus its entry here."""
 

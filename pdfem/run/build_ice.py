@@ -2,16 +2,29 @@
 
 Each region in the case (fixed, prescribed velocity, no-fail, cracks) must select something;
 one that selects no particle (or cuts no bond) is a user error, reported with its field name.
+The case's material section becomes the kernels' :class:`~pdfem.pd.materials.lps.IceMaterial`
+here (:func:`ice_material`), so that the case schema does not depend on the physics.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from pdfem.case.schema import IceConfig, RunConfig
+from pdfem.case.config import IceConfig, RunConfig
+from pdfem.case.ice import IceMaterialSection
 from pdfem.errors import InputError
 from pdfem.pd.body import IceBody
 from pdfem.pd.influence import isotropy_gain
+from pdfem.pd.materials.lps import IceMaterial
+
+
+def ice_material(m: IceMaterialSection) -> IceMaterial:
+    """The LPS material of a case's ``material`` section (``critical_stretch``, when given,
+    replaces ``fracture_energy``)."""
+    return IceMaterial(density=m.density, youngs_modulus=m.youngs_modulus,
+                       poisson_ratio=m.poisson_ratio,
+                       fracture_energy=m.fracture_energy if m.critical_stretch is None else None,
+                       critical_stretch=m.critical_stretch)
 
 
 def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:
@@ -37,7 +50,8 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
         raise InputError(file, f"{cfg.field}.horizon_factor", str(exc),
                          cfg.horizon / cfg.dx) from None
     try:
-        body = IceBody.from_shape(cfg.name, cfg.shape, cfg.material, cfg.dx, cfg.horizon, loop=run.pd_loop)
+        body = IceBody.from_shape(cfg.name, cfg.shape, ice_material(cfg.material), cfg.dx, cfg.horizon,
+                                  loop=run.pd_loop)
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.shape", str(exc)) from None
     if body.n < 2:

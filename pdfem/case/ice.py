@@ -1,0 +1,133 @@
+"""The ``[[ice]]`` section of a case file: a peridynamic ice body, its material, regions and
+pre-cracks.
+
+The sea-ice material defaults are declared here, with their sources; :mod:`pdfem.run.build_ice`
+turns the material section into the kernels' :class:`pdfem.pd.materials.lps.IceMaterial`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated
+
+from pydantic import Field, model_validator
+
+from pdfem.case.fields import Name, Number, Positive, Section, Tables, Vec3, Vector, fail
+from pdfem.case.shapes import BoxShape, RegionSection, ShapeSection
+
+#: Sea-ice defaults (SI), with their sources in the descriptions of :class:`IceMaterialSection`.
+SEA_ICE = {"density": 900.0, "youngs_modulus": 4.1e9, "poisson_ratio": 0.3, "fracture_energy": 10.0}
+
+
+class IceMaterialSection(Section):
+    """Elastic-brittle ice; the defaults are first-year sea ice.
+
+    Flexural strength of sea ice is 0.4-0.9 MPa (Timco & O'Brien 1994, Cold Reg. Sci. Technol.
+    22): not an input, but a calibrated ``critical_stretch`` can be checked against it.
+    """
+
+    density: Annotated[float, Positive("kg/m^3")] = Field(
+        SEA_ICE["density"], description="Mass density (kg/m^3). Default: 900 (first-year sea ice, "
+        "observed 840-940 depending on brine and air content; Timco & Frederking 1996).")
+    youngs_modulus: Annotated[float, Positive("Pa")] = Field(
+        SEA_ICE["youngs_modulus"], description="Young's modulus (Pa). Default: 4.1e9 (mean of "
+        "Kujala's beam tests on Baltic sea ice, range 3.2-5.4 GPa).")
+    poisson_ratio: Annotated[float, Number(gt=-1.0, lt=0.5)] = Field(
+        SEA_ICE["poisson_ratio"], description="Poisson's ratio (-), in (-1, 0.5). Default: 0.3 "
+        "(the usual value for sea ice, e.g. Timco & Weeks 2010).")
+    fracture_energy: Annotated[float, Positive("J/m^2")] = Field(
+        SEA_ICE["fracture_energy"], description="Critical energy release rate G0 (J/m^2); gives "
+        "the critical bond stretch. Not with critical_stretch. Default: 10 (an order of magnitude; "
+        "reported values scatter with specimen size and loading rate, Timco & Weeks 2010).")
+    critical_stretch: Annotated[float, Positive()] | None = Field(
+        None, description="Critical bond stretch s0 (-), instead of fracture_energy. "
+        "Default: from fracture_energy.")
+
+    @model_validator(mode="after")
+    def _one_criterion(self) -> "IceMaterialSection":
+        if {"fracture_energy", "critical_stretch"} <= self.model_fields_set:
+            raise fail("give either fracture_energy (J/m^2) or critical_stretch, not both",
+                       key="critical_stretch")
+        return self
+
+
+class VelocitySection(Section):
+    """Particles in a region move with a prescribed velocity."""
+
+    region: RegionSection = Field(description="The region: `box`, `cylinder` or `sphere` (m). "
+                                              "Required.")
+    velocity: Annotated[Vec3, Vector("m/s")] = Field(
+        description="Prescribed velocity (m/s). Required.")
+    ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Time over which the velocity ramps up linearly from 0 (s). Default: 0.")
+
+
+class CrackSection(Section):
+    """A planar pre-crack: the part of the plane (point, normal) inside box; every bond crossing
+    it is broken at t = 0."""
+
+    point: Annotated[Vec3, Vector("m")] = Field(
+        description="A point of the crack plane (m). Required.")
+    normal: Annotated[Vec3, Vector()] = Field(
+        description="Normal of the crack plane (any length, not zero). Required.")
+    box: BoxShape = Field(description="`{min, max}` (m): the part of the plane that is cracked. "
+                                      "Required.")
+
+    @model_validator(mode="after")
+    def _normal_not_zero(self) -> "CrackSection":
+        if math.hypot(*self.normal) == 0.0:
+            raise fail("the crack plane's normal must not be zero", list(self.normal), key="normal")
+        try:
+            self.box.build()
+        except ValueError as exc:
+            raise fail(str(exc), key="box") from None
+        return self
+
+
+class IceSection(Section):
+    """One peridynamic ice body."""
+
+    name: Name = Field(description="Body name, unique among bodies and structures. Required.")
+    dx: Annotated[float, Positive("m")] = Field(description="Lattice spacing (m). Required.")
+    horizon_factor: Annotated[float, Number(gt=1.0)] = Field(
+        3.015, description="Horizon as a multiple of dx (-). Not with horizon. Default: 3.015.")
+    horizon: Annotated[float, Positive("m")] | None = Field(
+        None, description="Horizon (m), instead of horizon_factor. Default: horizon_factor * dx.")
+    shape: ShapeSection = Field(
+        description="`box = {min, max}`, `cylinder = {base, axis, radius, length}`, "
+                    "`sphere = {center, radius}` or `mesh = {file, group}` (a closed surface mesh, "
+                    "relative to the case file) (m). Required.")
+    material: IceMaterialSection = Field(
+        default_factory=IceMaterialSection,
+        description="`density` (kg/m^3), `youngs_modulus` (Pa), `poisson_ratio`, `fracture_energy` "
+                    "(J/m^2) or `critical_stretch`. Default: sea ice (900, 4.1e9, 0.3, 10).")
+    initial_velocity: Annotated[Vec3, Vector("m/s")] = Field(
+        (0.0, 0.0, 0.0), description="Initial velocity of every particle (m/s). Default: [0, 0, 0].")
+    fixed: Tables(RegionSection) = Field(
+        (), description="Regions held in place (m). Default: none.")
+    prescribed_velocity: Tables(VelocitySection) = Field(
+        (), description="List of `{region, velocity (m/s), ramp_time (s)}`. Default: none.")
+    no_fail: Tables(RegionSection) = Field(
+        (), description="Regions whose bonds never break (m). Default: none.")
+    cracks: Tables(CrackSection) = Field(
+        (), description="Planar pre-cracks `{point, normal, box}` (m). Default: none.")
+
+    def horizon_length(self) -> float:
+        """The horizon in m (given, or horizon_factor * dx)."""
+        return self.horizon if self.horizon is not None else self.horizon_factor * self.dx
+
+    @model_validator(mode="after")
+    def _horizon_and_spacing(self) -> "IceSection":
+        if self.horizon is not None and "horizon_factor" in self.model_fields_set:
+            raise fail("give either horizon (m) or horizon_factor (multiple of dx), not both",
+                       key="horizon")
+        horizon = self.horizon_length()
+        if horizon <= self.dx:
+            raise fail(f"the horizon must be larger than the spacing dx = {self.dx:g} m "
+                       "(3 dx is usual: horizon_factor = 3.015)", horizon, key="horizon")
+        lo, hi = self.shape.geometry.bounds()
+        thinnest = min(hi[k] - lo[k] for k in range(3))
+        if thinnest < self.dx * (1 - 1e-9):
+            raise fail(f"the spacing is larger than the body's thinnest extent ({thinnest:g} m); "
+                       "choose a smaller dx", self.dx, key="dx")
+        return self

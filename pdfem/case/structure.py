@@ -1,0 +1,156 @@
+"""The ``[[structure]]`` section of a case file: an elastic finite-element structure (its mesh or
+mesh model, material, supports, damping and loads) or a rigid body with prescribed motion.
+
+The steel defaults are declared here with their source.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+from pydantic import Field, ValidationInfo, field_validator, model_validator
+
+from pdfem.case.fields import (Choice, Name, Names, Number, Positive, Section, Tables, Vec3, Vector,
+                               fail)
+from pdfem.case.shapes import directory
+
+#: Structural steel (SI): density and elastic constants of carbon steel as used for ship hulls
+#: (e.g. EN 1993-1-1, 3.2.6: E = 210 GPa, nu = 0.3; density 7850 kg/m^3, EN 1991-1-1 Table A.4).
+STEEL = {"density": 7850.0, "youngs_modulus": 210e9, "poisson_ratio": 0.3}
+
+#: What a structure is.
+Kind = Choice("elastic", "rigid")
+
+
+class SteelSection(Section):
+    """Linear elastic material of a structure; the defaults are structural steel."""
+
+    density: Annotated[float, Positive("kg/m^3")] = Field(
+        STEEL["density"], description="Mass density (kg/m^3). Default: 7850 (steel, EN 1991-1-1).")
+    youngs_modulus: Annotated[float, Positive("Pa")] = Field(
+        STEEL["youngs_modulus"], description="Young's modulus (Pa). Default: 210e9 (steel, "
+                                             "EN 1993-1-1).")
+    poisson_ratio: Annotated[float, Number(gt=-1.0, lt=0.5)] = Field(
+        STEEL["poisson_ratio"], description="Poisson's ratio (-), in (-1, 0.5). Default: 0.3 "
+                                            "(steel, EN 1993-1-1).")
+
+
+class DampingSection(Section):
+    """Rayleigh damping C = alpha M + beta K."""
+
+    alpha: Annotated[float, Number("1/s", ge=0.0)] = Field(
+        0.0, description="Mass-proportional coefficient (1/s). Default: 0.")
+    beta: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Stiffness-proportional coefficient (s). Default: 0.")
+
+
+class PulseSection(Section):
+    """Trapezoidal time history: 0 before start, rises linearly to 1, holds, falls to 0."""
+
+    start: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Time the load starts (s). Default: 0.")
+    rise: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Rise time from 0 to full load (s). Default: 0.")
+    hold: Annotated[float, Number("s", ge=0.0)] | None = Field(
+        None, description="Time at full load (s). Default: forever (the load stays on).")
+    fall: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Fall time from full load to 0 (s). Default: 0.")
+
+
+class LoadSection(Section):
+    """A uniform surface load on a mesh group."""
+
+    group: Name = Field(description="Mesh group (surface) the load acts on. Required.")
+    pressure: Annotated[float, Number("Pa")] = Field(
+        0.0, description="Pressure, positive into the structure (Pa). Default: 0.")
+    traction: Annotated[Vec3, Vector("Pa")] = Field(
+        (0.0, 0.0, 0.0), description="Traction vector (Pa). Default: [0, 0, 0].")
+    pulse: PulseSection = Field(default_factory=PulseSection,
+                                description="Time history `{start, rise, hold, fall}` (s). "
+                                            "Default: on from t = 0.")
+
+
+class MotionSection(Section):
+    """Prescribed rigid-body motion."""
+
+    velocity: Annotated[Vec3, Vector("m/s")] = Field((0.0, 0.0, 0.0), description="Velocity (m/s). "
+                                                                 "Default: [0, 0, 0].")
+    angular_velocity: Annotated[Vec3, Vector("rad/s")] = Field(
+        (0.0, 0.0, 0.0), description="Angular velocity (rad/s). Default: [0, 0, 0].")
+    center: Annotated[Vec3, Vector("m")] = Field(
+        (0.0, 0.0, 0.0), description="Centre of rotation at t = 0 (m). Default: [0, 0, 0].")
+
+
+def _is_gmsh(path: Path) -> bool:
+    """Whether ``path`` starts like a gmsh .msh file (ASCII or binary: ``$MeshFormat``)."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(64).lstrip().startswith(b"$MeshFormat")
+    except OSError:
+        return False
+
+
+class StructureSection(Section):
+    """One structure: an elastic FE model or a rigid body with prescribed motion."""
+
+    name: Name = Field(description="Structure name, unique among bodies and structures. Required.")
+    kind: Kind = Field(
+        "elastic", description='"elastic" (finite elements) or "rigid" (prescribed motion). '
+                               'Default: "elastic".')
+    mesh: Name = Field(
+        description="A model of models/ by name (hull_panel, propeller_blade, indenters), a .py "
+                    "model file or a .msh file (relative to the case file). Required.")
+    params: dict[str, Any] = Field(
+        default_factory=dict,
+        description="Model parameters (SI), e.g. `{ element_size = 0.08 }` (m); each model "
+                    "script's docstring lists them. Models only. Default: the model's defaults.")
+    material: SteelSection = Field(
+        default_factory=SteelSection,
+        description="`density` (kg/m^3), `youngs_modulus` (Pa), `poisson_ratio`. "
+                    "Default: steel (7850, 210e9, 0.3).")
+    fixed_groups: Names = Field((), description="Mesh groups clamped in place. Default: [].")
+    contact_group: Name = Field("contact", description='Mesh group facing the ice. '
+                                                      'Default: "contact".')
+    damping: DampingSection = Field(default_factory=DampingSection,
+                                    description="Rayleigh `alpha` (1/s), `beta` (s). Default: 0, 0.")
+    loads: Tables(LoadSection) = Field(
+        (), description="List of `{group, pressure (Pa) or traction (Pa, vector), pulse = {start, "
+                        "rise, hold, fall} (s)}`. Default: none.")
+    motion: MotionSection = Field(
+        default_factory=MotionSection,
+        description="Rigid bodies only: `velocity` (m/s), `angular_velocity` (rad/s), `center` (m). "
+                    "Default: at rest.")
+
+    @field_validator("mesh")
+    @classmethod
+    def _mesh_file(cls, mesh: str, info: ValidationInfo) -> str:
+        if not mesh.endswith((".msh", ".py")):
+            return mesh
+        path = Path(mesh) if Path(mesh).is_absolute() else directory(info) / mesh
+        if not path.is_file():
+            raise fail(f"no such file ({path}); give a .msh file, a .py model file, or the name "
+                       "of a model in models/", mesh)
+        if mesh.endswith(".msh") and not _is_gmsh(path):
+            raise fail(f"{path} is not a gmsh mesh file (it does not start with $MeshFormat); "
+                       "write it from gmsh as .msh (format 4.1 or 2.2)", mesh)
+        return str(path)
+
+    @field_validator("params", mode="before")
+    @classmethod
+    def _params_table(cls, params: Any) -> Any:
+        if not isinstance(params, dict):
+            raise fail("expected a table of model parameters", params)
+        return params
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "StructureSection":
+        if self.params and self.mesh.endswith(".msh"):
+            raise fail("model parameters apply to a model (name or .py), not to a .msh file",
+                       key="params")
+        if self.kind == "rigid" and (self.fixed_groups or self.loads):
+            raise fail("a rigid structure moves as prescribed by 'motion'; it takes no supports "
+                       "or loads", key="fixed_groups" if self.fixed_groups else "loads")
+        if self.kind == "elastic" and "motion" in self.model_fields_set:
+            raise fail("only a rigid structure (kind = \"rigid\") takes a motion", key="motion")
+        return self
