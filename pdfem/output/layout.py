@@ -1,4 +1,4 @@
-"""Layout of a results file: where each quantity lives, which names are allowed, how to find histories.
+"""Layout of a results file: where each quantity lives, which names are allowed, the histories.
 
 Writer (:mod:`pdfem.output.writer`) and reader (:mod:`pdfem.output.reader`) share these names.
 Layout of ``<stem>.h5`` (all quantities SI)::

@@ -1,4 +1,4 @@
-"""The results writer of a run: HDF5 written frame by frame, with an XDMF file beside it for ParaView.
+"""The results writer of a run: HDF5 written frame by frame, an XDMF file beside it for ParaView.
 
 The time loop creates one :class:`ResultsWriter`, registers the ice bodies and structures,
 then calls :meth:`ResultsWriter.write_frame` at every output time and
