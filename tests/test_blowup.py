@@ -21,7 +21,7 @@ import pytest
 from pdfem.run.blowup import BlowupMonitor
 from pdfem.case.schema import parse_case
 from pdfem.errors import InstabilityError
-from pdfem.output.results import read_results
+from pdfem.output import read_results
 from pdfem.run.build_ice import build_ice_body
 
 CASE = """

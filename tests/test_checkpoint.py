@@ -24,7 +24,7 @@ import pytest
 from pdfem.run.checkpoint import CHECKPOINT_NAME
 from pdfem.case.schema import load_case
 from pdfem.run.driver import run_case
-from pdfem.output.results import ResultsWriter, read_results
+from pdfem.output import ResultsWriter, read_results
 
 CASE = """
 [run]

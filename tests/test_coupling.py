@@ -160,7 +160,7 @@ def test_cylinder_impact_same_with_pair_and_full_family_loops(tmp_path):
 
     from pdfem.case.schema import load_case
     from pdfem.run.driver import run_case
-    from pdfem.output.results import read_results
+    from pdfem.output import read_results
 
     case = load_case(Path(__file__).resolve().parents[1] / "models" / "cylinder_ice_plate.toml")
     ice = dataclasses.replace(case.ice[0], dx=0.02, horizon=3.015 * 0.02)
@@ -187,7 +187,7 @@ def test_two_ice_bodies_and_two_structures_in_one_case(tmp_path):
     momentum its cube gained (momentum conservation, the spheres moving as prescribed)."""
     from pdfem.case.schema import parse_case
     from pdfem.run.driver import run_case
-    from pdfem.output.results import read_results
+    from pdfem.output import read_results
 
     text = """
 [run]
@@ -252,7 +252,7 @@ def test_hull_panel_subcycling_matches_the_small_step(tmp_path):
     from pdfem.case.schema import parse_case
     from pdfem.run.driver import run_case
     from pdfem.run.build_structures import build_structure
-    from pdfem.output.results import read_results
+    from pdfem.output import read_results
 
     text = """
 [run]

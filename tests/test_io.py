@@ -1,4 +1,4 @@
-"""Tests of the results file (pdfem.output.results): HDF5 layout, histories, XDMF, and a killed writer.
+"""Tests of the results file (pdfem.output): HDF5 layout, histories, XDMF, and a killed writer.
 
 References: the arrays handed to the writer (an HDF5 round trip must be exact), h5py reading
 the file directly, the XML parser of the standard library, and meshio's XDMF
@@ -23,7 +23,9 @@ import numpy as np
 import pytest
 
 import pdfem
-from pdfem.output.results import HISTORY_BLOCK, VIEW_BATCH, ResultsWriter, read_results
+from pdfem.output import ResultsWriter, read_results
+from pdfem.output.frames import VIEW_BATCH
+from pdfem.output.histories import HISTORY_BLOCK
 
 
 def _frame(rng: np.random.Generator, n: int, extra: bool = False) -> dict[str, np.ndarray]:
@@ -292,7 +294,7 @@ def test_file_being_written_elsewhere(tmp_path):
     x0 = rng.random((6, 3))
     written = [_frame(rng, 6) for _ in range(3)]
     code = textwrap.dedent(f"""
-        from pdfem.output.results import ResultsWriter, read_results
+        from pdfem.output import ResultsWriter, read_results
         try:
             ResultsWriter({str(path)!r})
         except FileExistsError:
@@ -317,7 +319,7 @@ def test_file_being_written_elsewhere(tmp_path):
 _KILLED_WRITER = textwrap.dedent("""
     import sys, time
     import numpy as np
-    from pdfem.output.results import ResultsWriter
+    from pdfem.output import ResultsWriter
     n = 300
     x0 = np.arange(3.0 * n).reshape(n, 3)
     w = ResultsWriter(sys.argv[1], case_text="killed", meta={"ranks": 1})

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pdfem.output.results import read_results
+from pdfem.output import read_results
 
 CYLINDER = """
 [run]

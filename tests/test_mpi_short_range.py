@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pdfem.output.results import read_results
+from pdfem.output import read_results
 from test_mpi_run import CYLINDER as BASE_CYLINDER
 
 

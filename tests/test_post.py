@@ -17,10 +17,10 @@ import pytest
 
 from pdfem.cli import main as cli
 from pdfem.cli import run as cli_run
-from pdfem.post import summary as post
+from pdfem import post
 from pdfem.case.schema import load_case
 from pdfem.run.driver import run_case
-from pdfem.output.results import ResultsWriter
+from pdfem.output import ResultsWriter
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

@@ -15,7 +15,7 @@ import meshio
 import numpy as np
 import pytest
 
-from pdfem.output.results import read_results
+from pdfem.output import read_results
 
 P = 2.0e5  # Pa
 LENGTH, BREADTH = 2.0, 1.2  # m, the hull panel's plating (models/hull_panel.py defaults)

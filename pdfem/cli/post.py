@@ -23,8 +23,7 @@ def add_arguments(q: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Summarise the results file; exit status."""
-    from pdfem.post.summary import format_summary, load_results, summarize, write_csv
-    from pdfem.post.plots import write_plots
+    from pdfem.post import format_summary, load_results, summarize, write_csv, write_plots
     results = load_results(args.results)
     summary = summarize(results)
     written: list[str] = []

@@ -84,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
                   "bonds": summary.bonds, "broken_bonds": summary.broken_bonds,
                   "frames": summary.frames}
         if demo:
-            from pdfem.post.summary import load_results, summarize
+            from pdfem.post import load_results, summarize
             report["case"] = str(case.file)
             report["xdmf"] = str(summary.results.with_suffix(".xdmf"))
             report["post"] = summarize(load_results(summary.results))
@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
         if not args.quiet and comm.rank == 0:
             print(summary.text())
             if demo:
-                from pdfem.post.summary import format_summary, load_results, summarize
+                from pdfem.post import format_summary, load_results, summarize
                 print()
                 print(format_summary(summarize(load_results(summary.results))))
                 print()

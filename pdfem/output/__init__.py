@@ -1,5 +1,7 @@
-"""Results files: the HDF5 writer (with its XDMF for ParaView) and the reader."""
+"""Results files: the HDF5 writer (with its XDMF for ParaView), the reader and per-rank files."""
 
-from pdfem.output.results import ResultsWriter, read_results
+from pdfem.output.ranks import rank_file
+from pdfem.output.reader import read_results
+from pdfem.output.writer import ResultsWriter
 
-__all__ = ["ResultsWriter", "read_results"]
+__all__ = ["ResultsWriter", "rank_file", "read_results"]

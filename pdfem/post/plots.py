@@ -1,8 +1,9 @@
-"""Report plots of a results file (PNG, matplotlib without a screen) and the load spectrum.
+"""Report plots of a results file (PNG, matplotlib without a screen).
 
-:func:`write_plots` writes the load history, the load spectrum (:func:`amplitude_spectrum`),
-the structural response, an ice damage snapshot and the energy history of a file read by
-:func:`pdfem.post.summary.load_results`. SI units on every axis: N, Pa, m, s, Hz, J.
+:func:`write_plots` writes the load history, the load spectrum
+(:func:`pdfem.post.spectrum.amplitude_spectrum`), the structural response, an ice damage
+snapshot and the energy history of a file read by :func:`pdfem.post.load.load_results`.
+SI units on every axis: N, Pa, m, s, Hz, J.
 """
 
 from __future__ import annotations
@@ -12,52 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-_AXES = ("x", "y", "z")
-
-
-# -- spectrum -----------------------------------------------------------------------------
-
-
-def amplitude_spectrum(time: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One-sided amplitude spectrum of a sampled signal.
-
-    Parameters
-    ----------
-    time
-        (K,) sample times, s, increasing; meant to be uniform (the coupling step). If the
-        spacing varies by more than 1e-6 of the mean step, the signal is first interpolated
-        linearly onto K uniform samples over the same span.
-    values
-        (K,) the signal (e.g. the force magnitude in N).
-
-    Returns
-    -------
-    frequency : numpy.ndarray
-        (K // 2 + 1,) frequencies, Hz, spaced 1 / (K dt).
-    amplitude : numpy.ndarray
-        Same shape: the amplitude of the cosine at each frequency, in the signal's unit
-        (``2 |X_k| / K``; the mean ``|X_0| / K`` at 0 Hz, and ``|X_k| / K`` at the Nyquist
-        frequency for even K), so a sine of amplitude A at a bin frequency reads A.
-        Empty arrays for fewer than 2 samples.
-    """
-    t = np.asarray(time, dtype=np.float64)
-    y = np.asarray(values, dtype=np.float64)
-    k = t.size
-    if k < 2 or t[-1] <= t[0]:
-        return np.zeros(0), np.zeros(0)
-    dt = (t[-1] - t[0]) / (k - 1)
-    if np.max(np.abs(np.diff(t) - dt)) > 1e-6 * dt:
-        tu = t[0] + dt * np.arange(k)
-        y = np.interp(tu, t, y)
-    amp = np.abs(np.fft.rfft(y)) / k
-    amp[1:] *= 2.0
-    if k % 2 == 0:
-        amp[-1] /= 2.0
-    return np.fft.rfftfreq(k, dt), amp
-
-
-# -- plots --------------------------------------------------------------------------------
-
+from pdfem.post.groups import AXES, histories_of
+from pdfem.post.spectrum import amplitude_spectrum
 
 def _figure(rows: int, height: float = 3.0):
     from matplotlib.figure import Figure  # no pyplot: no global figure state, Agg canvas
@@ -71,28 +28,31 @@ def _save(fig, path: Path, written: list[Path]) -> None:
     written.append(path)
 
 
-def _plot_loads(hist: dict, groups: list[str], path: Path, written: list[Path]) -> None:
-    fig, axes = _figure(len(groups))
-    for ax, g in zip(axes, groups):
-        h = hist[g]
-        for a, c in enumerate(_AXES):
+def _finish(ax, title: str, ylabel: str, ncol: int = 1) -> None:
+    """Title, axis labels (time on x), grid and legend of a panel of curves over time."""
+    ax.set_title(title)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize="small", ncol=ncol)
+
+
+def _plot_loads(loads: dict[str, dict], path: Path, written: list[Path]) -> None:
+    fig, axes = _figure(len(loads))
+    for ax, (name, h) in zip(axes, loads.items()):
+        for a, c in enumerate(AXES):
             ax.plot(h["time"], h["force"][:, a], lw=0.9, label=f"$F_{c}$")
         ax.plot(h["time"], np.linalg.norm(h["force"], axis=1), "k", lw=1.2, label="$|F|$")
-        ax.set_title(f"Ice force on '{g[len('loads/'):]}'")
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("force [N]")
-        ax.grid(alpha=0.3)
-        ax.legend(loc="best", fontsize="small")
+        _finish(ax, f"Ice force on '{name}'", "force [N]")
     _save(fig, path, written)
 
 
-def _plot_spectrum(hist: dict, groups: list[str], path: Path, written: list[Path]) -> None:
-    fig, axes = _figure(len(groups))
-    for ax, g in zip(axes, groups):
-        h = hist[g]
+def _plot_spectrum(loads: dict[str, dict], path: Path, written: list[Path]) -> None:
+    fig, axes = _figure(len(loads))
+    for ax, (name, h) in zip(axes, loads.items()):
         f, amp = amplitude_spectrum(h["time"], np.linalg.norm(h["force"], axis=1))
         ax.loglog(f[1:], amp[1:], "k", lw=1.0)
-        ax.set_title(f"Spectrum of the ice force magnitude on '{g[len('loads/'):]}' "
+        ax.set_title(f"Spectrum of the ice force magnitude on '{name}' "
                      f"(mean {amp[0]:.4g} N not shown)")
         ax.set_xlabel("frequency [Hz]")
         ax.set_ylabel("amplitude of |F| [N]")
@@ -105,8 +65,7 @@ def _plot_response(results: dict, path: Path, written: list[Path]) -> None:
     t = results["time"]
     hist = results["histories"]
     elastic = {n: s for n, s in sorted(results["structure"].items()) if "von_mises" in s}
-    monitors = {g[len("monitors/"):]: h for g, h in sorted(hist.items())
-                if g.startswith("monitors/") and "u" in h}
+    monitors = histories_of(hist, "monitors", "u")
     show_vm = bool(elastic) or any("von_mises" in h for h in monitors.values())
     fig, axes = _figure(2 if show_vm else 1)
     if show_vm:
@@ -116,22 +75,14 @@ def _plot_response(results: dict, path: Path, written: list[Path]) -> None:
         for n, h in monitors.items():
             if "von_mises" in h:
                 ax.plot(h["time"], h["von_mises"], lw=0.9, label=f"monitor '{n}'")
-        ax.set_title("Structural response: von Mises stress")
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("von Mises stress [Pa]")
-        ax.grid(alpha=0.3)
-        ax.legend(loc="best", fontsize="small")
+        _finish(ax, "Structural response: von Mises stress", "von Mises stress [Pa]")
     ax = axes[-1]
     for n, s in sorted(results["structure"].items()):
         ax.plot(t, np.linalg.norm(s["u"], axis=2).max(axis=1), "o-", ms=3,
                 label=f"max over '{n}' (frames)")
     for n, h in monitors.items():
         ax.plot(h["time"], np.linalg.norm(h["u"], axis=1), lw=0.9, label=f"monitor '{n}'")
-    ax.set_title("Structural response: displacement magnitude")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("|u| [m]")
-    ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize="small")
+    _finish(ax, "Structural response: displacement magnitude", "|u| [m]")
     _save(fig, path, written)
 
 
@@ -157,9 +108,9 @@ def _plot_damage(results: dict, path: Path, written: list[Path]) -> None:
                         cmap="viridis", vmin=0.0, vmax=1.0, linewidths=0)
     fig.colorbar(sc, ax=ax, label="damage [-] (broken fraction of bonds)")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(f"{_AXES[i]} [m]")
-    ax.set_ylabel(f"{_AXES[j]} [m]")
-    ax.set_title(f"Ice damage at t = {t[-1]:.4g} s (deformed positions, {_AXES[i]}{_AXES[j]} "
+    ax.set_xlabel(f"{AXES[i]} [m]")
+    ax.set_ylabel(f"{AXES[j]} [m]")
+    ax.set_title(f"Ice damage at t = {t[-1]:.4g} s (deformed positions, {AXES[i]}{AXES[j]} "
                  "projection)")
     _save(fig, path, written)
 
@@ -169,11 +120,7 @@ def _plot_energy(h: dict, path: Path, written: list[Path]) -> None:
     ax = axes[0]
     for k in sorted(k for k in h if k != "time"):
         ax.plot(h["time"], h[k], "o-", ms=2, lw=0.9, label=k)
-    ax.set_title("Energies of the ice and the structures")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("energy [J]")
-    ax.grid(alpha=0.3)
-    ax.legend(loc="best", fontsize="small", ncol=2)
+    _finish(ax, "Energies of the ice and the structures", "energy [J]", ncol=2)
     _save(fig, path, written)
 
 
@@ -183,7 +130,7 @@ def write_plots(results: dict, out_dir: str | os.PathLike) -> list[Path]:
     Parameters
     ----------
     results
-        :func:`load_results` of a file.
+        :func:`pdfem.post.load.load_results` of a file.
     out_dir
         Directory for the plots (created).
 
@@ -204,13 +151,12 @@ def write_plots(results: dict, out_dir: str | os.PathLike) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     hist = results["histories"]
     written: list[Path] = []
-    loads = [g for g in sorted(hist) if g.startswith("loads/") and "force" in hist[g]
-             and hist[g]["time"].size]
+    loads = {n: h for n, h in histories_of(hist, "loads", "force").items() if h["time"].size}
     if loads:
-        _plot_loads(hist, loads, out / "load_history.png", written)
-    spectra = [g for g in loads if hist[g]["time"].size >= 4]
+        _plot_loads(loads, out / "load_history.png", written)
+    spectra = {n: h for n, h in loads.items() if h["time"].size >= 4}
     if spectra:
-        _plot_spectrum(hist, spectra, out / "load_spectrum.png", written)
+        _plot_spectrum(spectra, out / "load_spectrum.png", written)
     if results["structure"] and results["time"].size:
         _plot_response(results, out / "structure_response.png", written)
     if results["ice"] and results["time"].size:

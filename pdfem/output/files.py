@@ -1,0 +1,49 @@
+"""Opening results files with HDF5's file lock in mind.
+
+A writer holds HDF5's lock on its file for the whole run. Readers open a locked file without
+locking (they see the committed prefix, see :mod:`pdfem.output.writer`); a second writer is
+refused before HDF5 would truncate the file.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import h5py
+
+
+def open_for_reading(path: str | os.PathLike) -> h5py.File:
+    """Open an HDF5 file read-only, without the file lock if a running writer holds it.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be opened as HDF5.
+    """
+    try:
+        return h5py.File(path, "r")
+    except BlockingIOError:  # being written by a run: read without the file lock
+        return h5py.File(path, "r", locking=False)
+
+
+def refuse_if_being_written(path: Path) -> None:
+    """Raise if another process holds ``path`` open for writing (its HDF5 file lock).
+
+    HDF5 truncates a file before it finds the lock, so a second run would wipe a running
+    run's results: look first, with a read-only open that the writer's lock refuses.
+
+    Raises
+    ------
+    FileExistsError
+        If the file is locked by a writer.
+    """
+    if not path.exists():
+        return
+    try:
+        h5py.File(path, "r").close()
+    except BlockingIOError as err:
+        raise FileExistsError(f"results file {str(path)!r} is being written by another "
+                              "process; choose another output path") from err
+    except OSError:
+        return  # not a readable HDF5 file: it is overwritten

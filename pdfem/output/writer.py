@@ -1,0 +1,362 @@
+"""The results writer of a run: HDF5 written frame by frame, an XDMF file beside it for ParaView.
+
+The time loop creates one :class:`ResultsWriter`, registers the ice bodies and structures,
+then calls :meth:`ResultsWriter.write_frame` at every output time and
+:meth:`ResultsWriter.append_history` at every step. The file layout is described in
+:mod:`pdfem.output.layout`, the XDMF file in :mod:`pdfem.output.xdmf`.
+
+Robustness: the file stays open (HDF5's default, oldest file format) and every frame is
+committed in steps, each ended by a flush: its fields and the pending history columns; the
+histories' time rows; its ``/time`` row. Then the XDMF file is rewritten atomically
+(temporary file, ``os.replace``). Time datasets read NaN where unwritten, so a finite time
+row means its data reached the file, and a committed frame means every history row appended
+before it did too.
+A process killed after :meth:`~ResultsWriter.write_frame` returns leaves a pair that h5py,
+meshio and ParaView read, with every frame so far; one killed inside it may lose that frame,
+and :func:`pdfem.output.reader.read_results` returns only committed rows that read back. Not
+used, by measurement: ``libver="latest"`` (a killed writer leaves the file marked open for
+writing and HDF5 refuses to open it without ``h5clear``) and SWMR (no new objects may be
+created once it starts, but views and histories are added as the run goes). Neither file is
+fsync'ed: this protects against the death of the process, not of the machine. While it is
+written the file holds HDF5's lock, and a second :class:`ResultsWriter` on it is refused (HDF5
+itself would truncate it first); to read it during a run, start the reader (e.g. ParaView)
+with ``HDF5_USE_FILE_LOCKING=FALSE`` (``read_results`` does this itself).
+
+Restart: ``ResultsWriter(path, case_text, append=True)`` reopens the file of a run (killed or
+not) of the same case; after the bodies are registered again, :meth:`ResultsWriter.resume`
+cuts every frame dataset and history back to the counts a checkpoint recorded (frames and
+rows written after it are dropped, as are their XDMF views), rewrites the XDMF file, and the
+run continues appending as before.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from pdfem.output import xdmf
+from pdfem.output.bodies import store_ice_body, store_structure
+from pdfem.output.datasets import growing_dataset, has_committed, put_rows
+from pdfem.output.files import refuse_if_being_written
+from pdfem.output.frames import FrameSeries
+from pdfem.output.histories import HISTORY_BLOCK, History, first_row
+from pdfem.output.layout import (CELL_FIELDS, REQUIRED_ICE_FIELDS, REQUIRED_STRUCTURE_FIELDS,
+                                 attr_value, check_name, history_groups, write_meta)
+
+
+class ResultsWriter:
+    """Write a run's results (HDF5) frame by frame, keeping an XDMF file beside it up to date.
+
+    Parameters
+    ----------
+    path
+        The HDF5 file to create (overwritten if it exists), e.g. ``results/run.h5``. The XDMF
+        file is the same path with suffix ``.xdmf``.
+    case_text
+        The case file (TOML text), stored as ``/meta`` attribute ``case``.
+    meta
+        Further ``/meta`` attributes (e.g. ranks, threads, title): strings, numbers or arrays.
+        Ignored with ``append``.
+    append
+        Reopen an existing results file of the same case (``/meta`` case equal to
+        ``case_text``) to continue a run from a checkpoint: register the same bodies again,
+        then call :meth:`resume` before writing.
+
+    Raises
+    ------
+    ValueError
+        With ``append``, if the file holds another case.
+    FileExistsError
+        If another process is writing ``path`` (it holds the HDF5 file lock).
+
+    Notes
+    -----
+    Units are SI throughout (see :mod:`pdfem.output.layout` for the layout). Use as a context
+    manager, or call :meth:`close`. Bodies are added before the first frame; a frame is
+    validated whole before anything of it is written, so a rejected frame leaves no trace.
+    """
+
+    def __init__(self, path: str | os.PathLike, case_text: str = "",
+                 meta: dict | None = None, *, append: bool = False) -> None:
+        self.path = Path(path)
+        if self.path.suffix.lower() == ".xdmf":
+            raise ValueError(f"results path {str(self.path)!r} must be the HDF5 file, "
+                             "not the .xdmf")
+        if ":" in self.path.name:
+            raise ValueError(f"results file name {self.path.name!r} must not contain ':' "
+                             "(XDMF separates file and dataset with ':')")
+        self.xdmf_path = self.path.with_suffix(".xdmf")
+        self._h5name = self.path.name
+        self._grids: dict[str, xdmf.XdmfGrid] = {}
+        self._histories: dict[str, History] = {}
+        self._frames = 0
+        self._xdmf_frames = -1
+        self._last_time = -np.inf
+        self._append = append
+        self._resumed = not append
+        refuse_if_being_written(self.path)
+        if append:
+            self._file: h5py.File | None = h5py.File(self.path, "r+")
+            stored = attr_value(self._file["meta"].attrs.get("case", ""))
+            if stored != case_text:
+                self._file.close()
+                raise ValueError(f"results file {str(self.path)!r} was written by another case "
+                                 "(its /meta case text differs); cannot append to it")
+            return
+        self._file = h5py.File(self.path, "w")
+        try:
+            write_meta(self._file, case_text, meta or {})
+        except TypeError:
+            self._file.close()
+            raise
+        growing_dataset(self._file, "time", (), HISTORY_BLOCK, fillvalue=np.nan)
+        self._file.create_group("ice")
+        self.flush()
+
+    # -- setup ---------------------------------------------------------------------------
+
+    @property
+    def _h5(self) -> h5py.File:
+        if self._file is None:
+            raise ValueError(f"results file {str(self.path)!r} is closed")
+        return self._file
+
+    def _new_body(self, group: str, name: str) -> str:
+        """Check a body name before registration; return its HDF5 path ``/<group>/<name>``."""
+        check_name(name, f"{group} name")
+        if self._frames:
+            raise ValueError(f"{group} {name!r} added after the first frame; add all bodies first")
+        if f"{group}/{name}" in self._grids:
+            raise ValueError(f"{group} {name!r} is already registered")
+        if self._append and f"/{group}/{name}" not in self._h5:
+            raise ValueError(f"{group} {name!r} is not in the results file being appended to")
+        return f"/{group}/{name}"
+
+    def add_ice_body(self, name: str, x0: np.ndarray, volume: np.ndarray | None = None,
+                     index: np.ndarray | None = None) -> None:
+        """Register an ice body and store its reference configuration.
+
+        Parameters
+        ----------
+        name
+            Body name (letters, digits, ``_ . + -``), the group ``/ice/<name>``.
+        x0
+            (N, 3) reference particle positions, m.
+        volume
+            (N,) particle volumes, m^3, optional; shown in ParaView as the field ``volume``.
+        index
+            (N,) global particle numbers, optional: the file then holds part of the body (one
+            MPI rank's particles, :func:`~pdfem.output.reader.read_results` puts the parts
+            together).
+        """
+        f = self._h5
+        path = self._new_body("ice", name)
+        n = store_ice_body(f, path, x0, volume, index, self._append)
+        if not self._append:
+            xdmf.write_vertices(f, path, n)
+        self._grids[f"ice/{name}"] = xdmf.ice_grid(
+            self._h5name, f"ice/{name}", path, n, volume is not None,
+            FrameSeries(f, path, {"Node": n}, ((), (3,)), REQUIRED_ICE_FIELDS))
+
+    def add_structure(self, name: str, points: np.ndarray, cells: np.ndarray,
+                      cell_type: str) -> None:
+        """Register a structure (elastic mesh or rigid surface) and store its mesh.
+
+        Parameters
+        ----------
+        name
+            Structure name (letters, digits, ``_ . + -``), the group ``/structure/<name>``.
+        points
+            (Nn, 3) reference node positions, m.
+        cells
+            (Ne, k) connectivity into ``points`` in VTK / meshio node order.
+        cell_type
+            ``"tetra"``, ``"hexahedron"``, ``"triangle"`` (rigid surfaces) or ``"quad"``.
+        """
+        f = self._h5
+        path = self._new_body("structure", name)
+        nn, ne = store_structure(f, path, points, cells, cell_type, self._append)
+        series = FrameSeries(f, path, {"Node": nn, "Cell": ne}, ((), (3,)),
+                             REQUIRED_STRUCTURE_FIELDS, CELL_FIELDS)
+        self._grids[f"structure/{name}"] = xdmf.structure_grid(
+            self._h5name, f"structure/{name}", path, cell_type, nn, ne, series)
+
+    def resume(self, frames: int, history_rows: Mapping[str, int]) -> None:
+        """Continue an appended file after its first ``frames`` frames (append mode only).
+
+        Drops the frames after them and, of every history, the rows after its count in
+        ``history_rows`` (histories not named there are deleted), rebuilds the XDMF file, and
+        lets the run continue with :meth:`write_frame` and :meth:`append_history`. Call it
+        once, after registering every body of the file again.
+
+        Parameters
+        ----------
+        frames
+            Frames to keep (>= 1).
+        history_rows
+            ``{history group: rows to keep}``, e.g. ``{"energy": 120, "loads/panel": 1200}``.
+        """
+        if not self._append or self._resumed:
+            raise ValueError("resume() is for a writer opened with append=True, once")
+        f = self._h5
+        registered = {f"{g}/{n}" for g in ("ice", "structure") for n in f.get(g, {})}
+        if registered != set(self._grids):
+            raise ValueError(f"register every body of the results file first: the file has "
+                             f"{sorted(registered)}, registered {sorted(self._grids)}")
+        times = f["time"]
+        if frames < 1 or not has_committed(times, frames):
+            raise ValueError(f"the results file holds fewer than the {frames} frames to "
+                             "resume from")
+        times.resize(frames, axis=0)
+        kept = times[:frames]
+        for grid in self._grids.values():
+            grid.series.resume(frames)
+            if grid.series.fields is not None:
+                for i, t in enumerate(kept):
+                    grid.add_frame_xml(self._h5name, i, float(t))
+        for name, _ in history_groups(f):
+            if name in history_rows:
+                self._histories[name] = History.resume(f, "/" + name, int(history_rows[name]))
+            else:
+                del f[name]
+        self._frames = frames
+        self._last_time = float(kept[-1])
+        self._resumed = True
+        self._xdmf_frames = -1
+        self.flush()
+
+    def history_rows(self) -> dict[str, int]:
+        """``{history group: rows appended so far}`` (committed or buffered), for a checkpoint."""
+        return {g: h.rows for g, h in self._histories.items()}
+
+    # -- per output time -----------------------------------------------------------------
+
+    def _check_writable(self) -> h5py.File:
+        f = self._h5  # raises if the file is closed
+        if not self._resumed:
+            raise ValueError("a writer opened with append=True needs resume() before writing")
+        return f
+
+    def write_frame(self, time: float, ice: Mapping[str, Mapping[str, np.ndarray]],
+                    structures: Mapping[str, Mapping[str, np.ndarray]] | None = None) -> int:
+        """Append one output frame, flush the file and rewrite the XDMF file.
+
+        Parameters
+        ----------
+        time
+            Output time, s; strictly greater than the previous frame's.
+        ice
+            For every registered ice body, its fields: at least ``u`` (N, 3) displacement in m,
+            ``v`` (N, 3) velocity in m/s and ``damage`` (N,); any further (N,) or (N, 3)
+            field. The field set of a body is fixed by the first frame.
+        structures
+            For every registered structure, its fields: at least ``u`` (Nn, 3) nodal
+            displacement in m; ``von_mises`` (Ne,) in Pa and other names in
+            :data:`~pdfem.output.layout.CELL_FIELDS` are per element, any other (Nn,) or
+            (Nn, 3) field per node.
+
+        Returns
+        -------
+        int
+            The index of the frame written.
+        """
+        self._check_writable()
+        time = float(time)
+        if not np.isfinite(time) or time <= self._last_time:
+            raise ValueError(f"frame time {time!r} must be finite and greater than the "
+                             f"previous frame time {self._last_time!r}")
+        bodies = {f"ice/{k}": v for k, v in ice.items()}
+        bodies.update({f"structure/{k}": v for k, v in (structures or {}).items()})
+        if bodies.keys() != self._grids.keys():
+            raise ValueError("write_frame needs every registered body "
+                             f"{sorted(self._grids)}, got {sorted(bodies)}")
+        checked = {k: self._grids[k].series.check(v) for k, v in bodies.items()}
+        index = self._frames
+        for k, arrays in checked.items():
+            self._grids[k].series.append(index, arrays)
+        self._sync(time)
+        for grid in self._grids.values():
+            grid.add_frame_xml(self._h5name, index, time)
+        self._update_xdmf()
+        return index
+
+    def append_history(self, group: str, time: float,
+                       values: dict[str, float | np.ndarray]) -> None:
+        """Append one row to a per-step history (buffered; written in blocks).
+
+        Parameters
+        ----------
+        group
+            History group, e.g. ``"energy"`` or ``"loads/<name>"`` (components are names of
+            letters, digits, ``_ . + -``; the first must not be meta, time, ice, structure, xdmf).
+        time
+            Time of the row, s.
+        values
+            Scalars or arrays (e.g. ``force`` (3,) in N); keys and shapes fixed by the first row.
+        """
+        f = self._check_writable()
+        h = self._histories.get(group)
+        if h is None:
+            h = History.create(f, "/" + group, first_row(group, values, self._histories))
+            self._histories[group] = h
+        h.append(time, values)
+
+    # -- file state ----------------------------------------------------------------------
+
+    def flush(self) -> None:
+        """Write buffered history rows, flush the HDF5 file and bring the XDMF file up to date."""
+        self._sync()
+        self._update_xdmf()
+
+    def _sync(self, frame_time: float | None = None) -> None:
+        """Flush in steps, so that what is on disk is always a committed prefix.
+
+        1. history key columns (frame fields are already written), flush;
+        2. history time rows, which commit the history rows, flush;
+        3. for a new frame, its ``/time`` row, which commits the frame, flush.
+        A time row on disk thus implies its data is on disk, and a committed frame implies
+        every history row appended before it is committed. Unwritten time rows read NaN.
+        """
+        f = self._h5
+        for h in self._histories.values():
+            h.write_columns()
+        f.flush()
+        for h in self._histories.values():
+            h.commit()
+        f.flush()
+        if frame_time is not None:
+            put_rows(f["time"], self._frames, np.array([frame_time]))
+            self._frames += 1
+            self._last_time = frame_time
+            f.flush()
+
+    def _update_xdmf(self) -> None:
+        if self._xdmf_frames != self._frames:
+            xdmf.write_xdmf(self.xdmf_path, self._grids.values())
+            self._xdmf_frames = self._frames
+
+    def close(self) -> None:
+        """Write what is buffered and close the file (closing twice is allowed)."""
+        if self._file is not None:
+            try:
+                for grid in self._grids.values():
+                    grid.series.drop_unused_views(self._frames)
+                self.flush()
+            finally:
+                self._file.close()
+                self._file = None
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames written."""
+        return self._frames
+
+    def __enter__(self) -> ResultsWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

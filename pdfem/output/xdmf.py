@@ -1,0 +1,178 @@
+"""The XDMF file beside a results file, for ParaView: per-frame grids over HDF5 views.
+
+``<stem>.xdmf`` (XDMF 3) has one temporal collection per body; each frame is a uniform grid:
+for an ice body Polyvertex topology over its particles and geometry ``x0``, for a structure
+its elements (Tetrahedron, Hexahedron, Triangle or Quadrilateral) and geometry ``points``;
+one attribute per field (Scalar or Vector, centred on the nodes or, for fields such as
+``von_mises``, on the cells). The HDF5 file is named relative to the XDMF file, so the two
+can be moved together. Each attribute references a per-frame dataset
+``/xdmf/ice/<body>/<field>/<frame>``: an HDF5 virtual dataset that maps frame F of the
+(F, N, ...) dataset (no copy, :func:`create_view`). meshio's ``TimeSeriesReader`` cannot
+read XDMF hyperslabs; it and VTK's ``vtkXdmfReader`` (ParaView's XDMF reader) both read
+these views. The file is rewritten whole and atomically (:func:`write_xdmf`).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING
+from xml.sax.saxutils import escape, quoteattr
+
+import h5py
+import numpy as np
+
+if TYPE_CHECKING:
+    from pdfem.output.frames import FrameSeries
+
+XDMF_TOPOLOGY = {"tetra": ("Tetrahedron", 4), "hexahedron": ("Hexahedron", 8),
+                 "triangle": ("Triangle", 3), "quad": ("Quadrilateral", 4)}
+"""meshio cell type -> (XDMF topology type, nodes per cell); node order as in VTK."""
+
+_ATTRIBUTE_TYPE = {(): "Scalar", (3,): "Vector"}
+
+
+def _dims(shape: tuple[int, ...]) -> str:
+    return " ".join(str(int(n)) for n in shape)
+
+
+def data_item(h5name: str, path: str, shape: tuple[int, ...], number_type: str = "Float",
+              precision: int = 8) -> str:
+    """XDMF DataItem referencing the whole HDF5 dataset ``path`` of file ``h5name``."""
+    return (f'<DataItem Dimensions="{_dims(shape)}" NumberType="{number_type}" '
+            f'Precision="{precision}" Format="HDF">{escape(h5name)}:{escape(path)}</DataItem>')
+
+
+def attribute(name: str, shape: tuple[int, ...], centre: str, item: str) -> str:
+    """XDMF Attribute ``name`` (items of ``shape`` () or (3,), centred on "Node" or "Cell")."""
+    return (f'<Attribute Name={quoteattr(name)} AttributeType="{_ATTRIBUTE_TYPE[shape]}" '
+            f'Center="{centre}">{item}</Attribute>')
+
+
+def geometry(h5name: str, path: str, n: int) -> str:
+    """XDMF Geometry of the (n, 3) positions in dataset ``path``."""
+    return f'<Geometry GeometryType="XYZ">{data_item(h5name, path, (n, 3))}</Geometry>'
+
+
+def polyvertex_topology(h5name: str, body: str, n: int) -> str:
+    """XDMF Topology of ``n`` particles, one vertex each, of the body at HDF5 path ``body``.
+
+    It references ``/xdmf<body>/vertices``, made by :func:`write_vertices`.
+    """
+    vertices = data_item(h5name, f"/xdmf{body}/vertices", (n, 1), "Int", 4)
+    return (f'<Topology TopologyType="Polyvertex" NumberOfElements="{n}" '
+            f'NodesPerElement="1">{vertices}</Topology>')
+
+
+def write_vertices(file: h5py.File, body: str, n: int) -> None:
+    """Store ``/xdmf<body>/vertices`` (n, 1) int32 0 .. n - 1 for :func:`polyvertex_topology`."""
+    file.create_dataset(f"/xdmf{body}/vertices", data=np.arange(n, dtype=np.int32).reshape(n, 1))
+
+
+def cell_topology(h5name: str, cells: str, cell_type: str, ne: int) -> str:
+    """XDMF Topology of ``ne`` elements of ``cell_type`` whose connectivity is dataset ``cells``."""
+    topology_type, k = XDMF_TOPOLOGY[cell_type]
+    return (f'<Topology TopologyType="{topology_type}" NumberOfElements="{ne}">'
+            f'{data_item(h5name, cells, (ne, k), "Int", 4)}</Topology>')
+
+
+def view_path(body: str, field: str, index: int) -> str:
+    """HDF5 path of the virtual dataset showing frame ``index`` of ``<body>/<field>``."""
+    return f"/xdmf{body}/{field}/{index:06d}"
+
+
+def create_view(group: h5py.Group, source: h5py.Dataset, index: int,
+                shape: tuple[int, ...]) -> None:
+    """Create in ``group`` the virtual dataset ``<index:06d>`` mapping row ``index`` of ``source``.
+
+    The source file is ".", the file that holds the view, so the file can be moved. A view
+    of a row not yet written reads the source's fill value (0); the XDMF file names only
+    views of written frames.
+    """
+    dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+    dcpl.set_fill_value(np.array(np.nan))
+    space = h5py.h5s.create_simple((index + 1,) + shape)
+    space.select_hyperslab((index,) + (0,) * len(shape), (1,) + shape)
+    view = h5py.h5s.create_simple(shape)
+    dcpl.set_virtual(view, b".", source.name.encode(), space)
+    h5py.h5d.create(group.id, f"{index:06d}".encode(), h5py.h5t.IEEE_F64LE,
+                    view, dcpl=dcpl).close()
+
+
+class XdmfGrid:
+    """A body shown as one XDMF grid per frame: fixed topology and geometry, per-frame fields.
+
+    Parameters
+    ----------
+    name
+        Grid name, e.g. ``"ice/sheet"``.
+    topology_xml, geometry_xml
+        From :func:`polyvertex_topology` or :func:`cell_topology`, and :func:`geometry`.
+    constant_xml
+        Attributes shown in every frame (e.g. the particle volumes), or ``""``.
+    series
+        The body's per-frame fields.
+    """
+
+    def __init__(self, name: str, topology_xml: str, geometry_xml: str, constant_xml: str,
+                 series: FrameSeries) -> None:
+        self.name = name
+        self.topology_xml = topology_xml
+        self.geometry_xml = geometry_xml
+        self.constant_xml = constant_xml
+        self.series = series
+        self.frames_xml: list[str] = []
+
+    def add_frame_xml(self, h5name: str, index: int, time: float) -> None:
+        """Build (once) the XDMF grid of frame ``index``."""
+        series = self.series
+        assert series.fields is not None
+        parts = [f'<Grid Name={quoteattr(self.name)} GridType="Uniform">'
+                 f'<Time Value="{float(time)!r}"/>',
+                 self.topology_xml, self.geometry_xml, self.constant_xml]
+        for k, (centre, shape) in series.fields.items():
+            full = (series.sizes[centre],) + shape
+            parts.append(attribute(k, shape, centre,
+                                   data_item(h5name, view_path(series.path, k, index), full)))
+        parts.append("</Grid>")
+        self.frames_xml.append("\n      ".join(parts))
+
+    def xml(self) -> str:
+        """The temporal collection of all frames so far."""
+        head = (f'    <Grid Name={quoteattr(self.name)} GridType="Collection" '
+                'CollectionType="Temporal">')
+        body = "".join("\n      " + g for g in self.frames_xml)
+        return head + body + "\n    </Grid>\n"
+
+
+def ice_grid(h5name: str, name: str, body: str, n: int, volume: bool,
+             series: FrameSeries) -> XdmfGrid:
+    """The grid of an ice body at HDF5 path ``body``: ``n`` particles at ``x0``, and its
+    ``volume`` shown in every frame if it has one."""
+    constant = "" if not volume else attribute(
+        "volume", (), "Node", data_item(h5name, f"{body}/volume", (n,)))
+    return XdmfGrid(name, polyvertex_topology(h5name, body, n),
+                    geometry(h5name, f"{body}/x0", n), constant, series)
+
+
+def structure_grid(h5name: str, name: str, body: str, cell_type: str, nn: int, ne: int,
+                   series: FrameSeries) -> XdmfGrid:
+    """The grid of a structure at HDF5 path ``body``: ``ne`` elements over ``nn`` nodes."""
+    return XdmfGrid(name, cell_topology(h5name, f"{body}/cells", cell_type, ne),
+                    geometry(h5name, f"{body}/points", nn), "", series)
+
+
+def write_xdmf(path: Path, grids: Iterable[XdmfGrid]) -> None:
+    """Write the XDMF file ``path`` of the grids that have frames, atomically.
+
+    The text goes to ``<path>.tmp`` first, then replaces ``path`` (``os.replace``), so a
+    reader never sees half a file.
+    """
+    text = ('<?xml version="1.0" encoding="utf-8"?>\n'
+            '<Xdmf Version="3.0">\n  <Domain>\n'
+            + "".join(g.xml() for g in grids if g.frames_xml)
+            + "  </Domain>\n</Xdmf>\n")
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
