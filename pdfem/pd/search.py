@@ -17,8 +17,11 @@ grouped by their first index: ``row_ptr`` (N+1,) int64 and ``nbr`` (P,) int32, t
 being ``(i, nbr[k])`` for ``k`` in ``row_ptr[i]:row_ptr[i+1]``, with ``i < nbr[k]`` and ``nbr``
 ascending within each group.
 
-:func:`cell_pairs` is what the builders use. :func:`brute_pairs` (O(N^2)) and
-:func:`ckdtree_pairs` (scipy) are references for tests and the benchmark.
+The cells, the counting sort and the half stencil's columns are those of
+:mod:`pdfem.geometry.cell_hash`; the numba loops of the search are in
+:mod:`pdfem.pd.search_kernels`. :func:`cell_pairs` is what the builders use;
+:func:`brute_pairs` (O(N^2)) and :func:`ckdtree_pairs` (scipy) are references for tests and the
+benchmark.
 """
 
 from __future__ import annotations
