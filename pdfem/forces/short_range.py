@@ -222,7 +222,7 @@ class ShortRangeContact:
         self._size = n
         self._ijk = np.empty((n, 3), dtype=np.int64)
         self._key = np.empty(n, dtype=np.int64)
-        self.bucket = np.empty(n, dtype=np.int64)
+        self._bucket = np.empty(n, dtype=np.int64)
         self._perm = np.empty(n, dtype=np.int32)
         self._ys = np.empty((n, 3))
         self._ijks = np.empty((n, 3), dtype=np.int64)
@@ -266,7 +266,7 @@ class ShortRangeContact:
         h = self.cell_size
         if self._start.shape[0] != nb + 1:
             self._start = np.empty(nb + 1, dtype=np.int64)
-        ijk, key, bucket, perm = self._ijk[:n], self._key[:n], self.bucket[:n], self._perm[:n]
+        ijk, key, bucket, perm = self._ijk[:n], self._key[:n], self._bucket[:n], self._perm[:n]
         ys, ijks, keys, buckets = self._ys[:n], self._ijks[:n], self._keys[:n], self._buckets[:n]
         cells(y, lo, 1.0 / h, dims, pad, fold, ijk, key, bucket, shift)
         counting_sort(bucket, nb, self._start, perm)
@@ -279,13 +279,13 @@ class ShortRangeContact:
             par = n >= SERIAL_BELOW_PARTICLES
             if self.dense:
                 find_dense(par, ys, buckets, self._start, perm, x0, vol, stiffness, radius,
-                            body, h, fold, self.distance_factor, self.radius_factor, chunk_ptr,
-                            self._cap, self._pair, self._val, counts)
+                           body, h, fold, self.distance_factor, self.radius_factor, chunk_ptr,
+                           self._cap, self._pair, self._val, counts)
             else:
                 find_folded(par, ys, ijks, keys, buckets, self._start, perm, x0, vol,
-                             stiffness, radius, body, h, dims, fold, self.distance_factor,
-                             self.radius_factor, chunk_ptr, self._cap, self._pair, self._val,
-                             counts)
+                            stiffness, radius, body, h, dims, fold, self.distance_factor,
+                            self.radius_factor, chunk_ptr, self._cap, self._pair, self._val,
+                            counts)
             most = int(counts.max())
             if most <= self._cap:
                 break
@@ -313,7 +313,7 @@ class ShortRangeContact:
         if self.n_active == 0:
             return 0.0
         nt, energy = sum_pairs(self._counts, self._cap, self._pair, self._val, self.vol,
-                                self._acc, self._mark, self._touched)
+                               self._acc, self._mark, self._touched)
         self._n_touched = nt
         return energy
 

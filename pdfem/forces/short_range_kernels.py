@@ -71,7 +71,7 @@ def gather(perm, y, ijk, key, bucket, ys, ijks, keys, buckets, all_fields):
 
 @numba.njit(cache=True, inline="always")
 def interact(i, j, px, py, pz, d2, x0, vol, stiff, rad, body, dist_factor, rad_factor, store,
-              slot, pair, val):
+             slot, pair, val):
     """Whether particles i, j (p = y_j - y_i, d2 = |p|^2) interact; if so and ``store``, write
     the pair, its force on i (N) and its potential (J) into ``slot``."""
     rsum = rad[i] + rad[j]
@@ -99,7 +99,7 @@ def interact(i, j, px, py, pz, d2, x0, vol, stiff, rad, body, dist_factor, rad_f
 
 @twin(fastmath=False)
 def find_dense(ys, buckets, start, perm, x0, vol, stiff, rad, body, h, fold, dist_factor,
-                rad_factor, chunk_ptr, cap, pair, val, counts):
+               rad_factor, chunk_ptr, cap, pair, val, counts):
     """Pairs on a dense grid padded by one empty cell on every side, per chunk of sorted
     positions, into the chunk's slots ``[c*cap, (c+1)*cap)``.
 
@@ -140,14 +140,14 @@ def find_dense(ys, buckets, start, perm, x0, vol, stiff, rad, body, h, fold, dis
                     if d2 >= h2:
                         continue
                     if interact(perm[a], perm[q], px, py, pz, d2, x0, vol, stiff, rad, body,
-                                 dist_factor, rad_factor, cnt < cap, base + cnt, pair, val):
+                                dist_factor, rad_factor, cnt < cap, base + cnt, pair, val):
                         cnt += 1
         counts[c] = cnt
 
 
 @twin(fastmath=False)
 def find_folded(ys, ijks, keys, buckets, start, perm, x0, vol, stiff, rad, body, h, dims, fold,
-                 dist_factor, rad_factor, chunk_ptr, cap, pair, val, counts):
+                dist_factor, rad_factor, chunk_ptr, cap, pair, val, counts):
     """:func:`find_dense` for a folded grid: buckets hold several cells, told apart by key.
 
     Each particle scans the buckets of its 27 neighbour cells that come at or after its own
@@ -205,7 +205,7 @@ def find_folded(ys, ijks, keys, buckets, start, perm, x0, vol, stiff, rad, body,
                     if d2 >= h2:
                         continue
                     if interact(perm[a], perm[q], px, py, pz, d2, x0, vol, stiff, rad, body,
-                                 dist_factor, rad_factor, cnt < cap, base + cnt, pair, val):
+                                dist_factor, rad_factor, cnt < cap, base + cnt, pair, val):
                         cnt += 1
         counts[c] = cnt
 

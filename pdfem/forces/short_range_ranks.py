@@ -138,7 +138,7 @@ class DistributedSearch:
             n_pairs, energy = counted_pairs(counts, c._cap, c._pair, c._val, owned)
             if counts.sum():
                 nt, _ = sum_pairs(counts, c._cap, c._pair, c._val, vol, c._acc, c._mark,
-                                   c._touched)
+                                  c._touched)
                 c._n_touched = nt
         total = comm.allreduce_sum(np.array([float(n_pairs), energy]))
         c.n_active = int(total[0])

@@ -129,7 +129,7 @@ def family_sum(
     ws = workspace_for(ws, row_ptr, nbr)
     out = np.empty(ws.n)
     family_sum_pairs(ws.parallel, row_ptr, nbr, xi_len, np.ascontiguousarray(values, np.float64),
-                      check_weight(weight, nbr), int(mode), ws.chunk_ptr, ws.ov_ptr, ws.ov, out)
+                     check_weight(weight, nbr), int(mode), ws.chunk_ptr, ws.ov_ptr, ws.ov, out)
     return out
 
 
@@ -194,9 +194,9 @@ def dilatation(
     """
     ws = workspace_for(ws, row_ptr, nbr)
     dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                      check_broken(broken, nbr), vol, m, check_weight(weight, nbr), ws.chunk_ptr,
-                      ws.split, ws.ov_ptr, ws.ov,
-                      theta_out, _NO_R, False)
+                     check_broken(broken, nbr), vol, m, check_weight(weight, nbr), ws.chunk_ptr,
+                     ws.split, ws.ov_ptr, ws.ov,
+                     theta_out, _NO_R, False)
 
 
 def forces(
@@ -251,10 +251,10 @@ def forces(
     ws = workspace_for(ws, row_ptr, nbr)
     force_coefficients(ws.parallel_particles, m, theta, K, mu, ws.coef)
     return int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                             check_broken(broken, nbr), vol,
-                             ws.coef, check_weight(weight, nbr), float(s0), nofail, ws.chunk_ptr,
-                             ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
-                             _NO_R, False))
+                            check_broken(broken, nbr), vol,
+                            ws.coef, check_weight(weight, nbr), float(s0), nofail, ws.chunk_ptr,
+                            ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
+                            _NO_R, False))
 
 
 def dilatation_and_forces(
@@ -299,13 +299,13 @@ def dilatation_and_forces(
     wt = check_weight(weight, nbr)
     signed = check_broken(broken, nbr)
     dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, signed, vol,
-                      m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
+                     m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     if between is not None:
         between(theta_out)
     force_coefficients(ws.parallel_particles, m, theta_out, K, mu, ws.coef)
     return int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
-                             float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
-                             ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep))
+                            float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
+                            ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep))
 
 
 def strain_energy(
@@ -334,9 +334,9 @@ def strain_energy(
     ws = workspace_for(ws, row_ptr, nbr)
     W = np.empty(ws.n)
     energy_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                  check_broken(broken, nbr), vol, m, theta,
-                  float(K), float(mu), check_weight(weight, nbr), ws.chunk_ptr, ws.ov_ptr, ws.ov,
-                  W)
+                 check_broken(broken, nbr), vol, m, theta,
+                 float(K), float(mu), check_weight(weight, nbr), ws.chunk_ptr, ws.ov_ptr, ws.ov,
+                 W)
     return W
 
 
@@ -377,7 +377,7 @@ def damage(
     if signed:
         check_weight(weight, nbr)
     damage_pairs(ws.parallel, row_ptr, nbr, broken, signed, weight, ws.chunk_ptr, ws.ov_ptr,
-                  ws.ov, out, deg)
+                 ws.ov, out, deg)
     return out
 
 

@@ -70,7 +70,7 @@ def _dilatation_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, wt
 
 @twin()
 def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, split, ov_ptr,
-                      ov, theta, rbuf, store_r):
+                     ov, theta, rbuf, store_r):
     """Pair-loop dilatation; with ``store_r`` also rbuf[k] = |y_j - y_i| of unbroken bonds."""
     y = y2.reshape(y2.size)  # flat view: 3 j + c indexing, no stride multiplications
     C = cb.shape[0] - 1
@@ -173,7 +173,7 @@ def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, 
 
 @twin()
 def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, nofail,
-                  cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
+                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
     """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf."""
     y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
     coef = coef2.reshape(coef2.size)
