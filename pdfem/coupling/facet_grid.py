@@ -4,7 +4,8 @@ Every facet is entered in each cell that its bounding box, grown by a reach, ove
 then needs to look at the facets of its own cell only: any facet within ``reach`` of the point
 is listed there. The hash is rebuilt when the surface has moved by more than the margin that
 was added to the reach (:meth:`FacetGrid.needs_rebuild`), so a moving or deforming structure
-is rebuilt every few steps, not every step. Lengths in m.
+is rebuilt every few steps, not every step. The cells and the cell -> facets CSR are
+:mod:`pdfem.geometry.cell_hash`'s (:func:`~pdfem.geometry.cell_hash.bin_boxes`). Lengths in m.
 """
 
 from __future__ import annotations
@@ -12,9 +13,12 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from pdfem.geometry.cell_hash import bin_boxes, cell_floor
+
 
 @numba.njit(cache=True)
 def _cell_ranges(points, triangles, reach, origin, inv_h, dims, lo, hi):
+    """Cell box (lo, hi inclusive, clamped to the grid) of every facet's grown bounding box."""
     for f in range(triangles.shape[0]):
         for d in range(3):
             a = points[triangles[f, 0], d]
@@ -22,29 +26,8 @@ def _cell_ranges(points, triangles, reach, origin, inv_h, dims, lo, hi):
             c = points[triangles[f, 2], d]
             mn = min(a, min(b, c)) - reach
             mx = max(a, max(b, c)) + reach
-            lo[f, d] = max(0, int(np.floor((mn - origin[d]) * inv_h)))
-            hi[f, d] = min(dims[d] - 1, int(np.floor((mx - origin[d]) * inv_h)))
-
-
-@numba.njit(cache=True)
-def _fill(lo, hi, dims, start, facets):
-    """CSR of cell -> facets, facets in increasing index within each cell (deterministic)."""
-    nyz = dims[1] * dims[2]
-    for f in range(lo.shape[0]):
-        for i in range(lo[f, 0], hi[f, 0] + 1):
-            for j in range(lo[f, 1], hi[f, 1] + 1):
-                for k in range(lo[f, 2], hi[f, 2] + 1):
-                    start[i * nyz + j * dims[2] + k + 1] += 1
-    for c in range(start.shape[0] - 1):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    for f in range(lo.shape[0]):
-        for i in range(lo[f, 0], hi[f, 0] + 1):
-            for j in range(lo[f, 1], hi[f, 1] + 1):
-                for k in range(lo[f, 2], hi[f, 2] + 1):
-                    c = i * nyz + j * dims[2] + k
-                    facets[fill[c]] = f
-                    fill[c] += 1
+            lo[f, d] = max(0, cell_floor(mn, origin[d], inv_h))
+            hi[f, d] = min(dims[d] - 1, cell_floor(mx, origin[d], inv_h))
 
 
 class FacetGrid:
@@ -107,7 +90,7 @@ class FacetGrid:
         count = int(np.prod(hi - lo + 1, axis=1).sum())
         self.cell_start = np.zeros(int(np.prod(dims)) + 1, dtype=np.int64)
         self.cell_facets = np.empty(count, dtype=np.int32)
-        _fill(lo, hi, self.dims, self.cell_start, self.cell_facets)
+        bin_boxes(lo, hi, self.dims, self.cell_start, self.cell_facets)
         self.built_points = points.copy()
         self.builds += 1
 

@@ -19,6 +19,12 @@ Two partitioners are offered, both balanced to within one particle per rank:
 from the bond list itself (exact, not a geometric estimate), and :func:`choose_partition` tries
 RCB and every grid factorisation and keeps the one with the smallest largest halo, then the
 fewest neighbours. Positions in m; communication volume in bytes per step.
+
+No spatial hash here (so none of :mod:`pdfem.geometry.cell_hash`): the halo is selected from the
+bond list itself (a rank's halo is exactly the bond partners of its particles owned elsewhere,
+:func:`partition_stats`, :func:`pdfem.pd.distributed.halo_plan`), which is exact, and the cuts
+are quantiles of sorted coordinates. A geometric (cell) selection could only over-approximate
+the halo, and the bonds already are the result of the cell search (:mod:`pdfem.pd.search`).
 """
 
 from __future__ import annotations

@@ -3,19 +3,31 @@
 Every particle loops over its whole family (:func:`pdfem.pd.family.build_family`), so every
 bond is computed twice, once from each end, and each particle writes only its own entries (no
 races, no chunking). The pair loops of :mod:`pdfem.pd.pair_kernels` compute the same quantities
-with the same formulas and bond weights; tests and the step benchmark compare the two.
+with the same formulas (:mod:`pdfem.pd.lps_law`) and bond weights; tests and the step benchmark
+compare the two.
 """
 
 from __future__ import annotations
-
-import math
 
 import numba
 import numpy as np
 from numba import prange
 
-from pdfem.pd.pair_kernels import check_broken, check_weight, force_coefficients
-from pdfem.pd.workspace import FASTMATH, U64, c_contiguous
+from pdfem.pd.chunk_kernels import FASTMATH, U64
+from pdfem.pd.lps_law import (
+    bond_length,
+    bond_vector,
+    breaks,
+    dilatation_of,
+    dilatation_term,
+    force_coefficients,
+    is_broken,
+    mark_broken,
+    pair_force_scalar,
+)
+from pdfem.pd.pair_kernels import check_broken, check_weight
+from pdfem.pd.workspace import c_contiguous
+
 
 @numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
 def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, m, wt, theta):
@@ -28,20 +40,14 @@ def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, v
         for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
             k = U64(fam_bond[q])
             w = wt[k]
-            if signed:
-                if w < 0.0:
-                    continue
-            elif broken[k] != 0:
+            if is_broken(signed, w, broken, k):
                 continue
             j = U64(fam_nbr[q])
-            j3 = U64(3) * j
             l = xi_len[k]
-            d0 = y[j3] - yi0
-            d1 = y[j3 + U64(1)] - yi1
-            d2 = y[j3 + U64(2)] - yi2
-            r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            acc += w * l * (r - l) * vol[j]
-        theta[i] = 3.0 * acc / m[i] if m[i] > 0.0 else 0.0
+            d0, d1, d2 = bond_vector(y, U64(3) * j, yi0, yi1, yi2)
+            r = bond_length(d0, d1, d2)
+            acc += dilatation_term(w, l, r) * vol[j]
+        theta[i] = dilatation_of(acc, m[i])
 
 
 @numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
@@ -65,32 +71,23 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
         for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
             k = U64(fam_bond[q])
             w = wt[k]
-            if signed:
-                if w < 0.0:
-                    continue
-            elif broken[k] != 0:
+            if is_broken(signed, w, broken, k):
                 continue
             j = U64(fam_nbr[q])
-            j3 = U64(3) * j
             l = xi_len[k]
-            d0 = y[j3] - yi0
-            d1 = y[j3 + U64(1)] - yi1
-            d2 = y[j3 + U64(2)] - yi2
-            r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            d0, d1, d2 = bond_vector(y, U64(3) * j, yi0, yi1, yi2)
+            r = bond_length(d0, d1, d2)
             e = r - l
-            if e > s0 * l and can_i and nofail[j] == 0:
+            if breaks(e, l, s0, can_i, nofail, j):
                 # Both ends reach the same decision from the same stretch; only the smaller
                 # index marks and counts the bond, so the count is exact. (The larger end may
                 # read the flag before or after that write: it skips the bond either way.)
                 if iu < j:
-                    if signed:
-                        wt[k] = -w
-                    else:
-                        broken[k] = 1
+                    mark_broken(signed, wt, w, broken, k)
                     nb += 1
                 continue
             j2 = U64(2) * j
-            g = ((ai + coef[j2]) * l + (bi + coef[j2 + U64(1)]) * e) * w / r
+            g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
             g *= vol[j]
             fx += g * d0
             fy += g * d1

@@ -3,11 +3,14 @@
 The kernels live in modules with one concept each:
 
 - :mod:`pdfem.pd.workspace`: chunk layout and overflow buffers of the race-free, deterministic
-  parallel pair loops (:class:`PairWorkspace`);
+  parallel pair loops (:class:`PairWorkspace`; the numba side in :mod:`pdfem.pd.chunk_kernels`);
 - :mod:`pdfem.pd.influence`: bond weights omega = w beta (influence function times partial-volume
   factor), with the cubic-lattice isotropy correction;
-- :mod:`pdfem.pd.pair_kernels`: the particle-pair loops (weighted volume, dilatation, forces
-  and bond breaking, the fused step, strain energy, damage);
+- :mod:`pdfem.pd.lps_law`: the LPS force law per bond (stretch, dilatation term, force-state
+  scalar, breaking test), written once and inlined into every loop below;
+- :mod:`pdfem.pd.pair_kernels`: the particle-pair loops' public functions (weighted volume,
+  dilatation, forces and bond breaking, the fused step, strain energy, damage), over the numba
+  loops of :mod:`pdfem.pd.pair_step_kernels` and :mod:`pdfem.pd.pair_sum_kernels`;
 - :mod:`pdfem.pd.family_kernels`: the per-particle full-family reference loops;
 - :mod:`pdfem.pd.integrate`: the velocity-Verlet kick and drift;
 - :mod:`pdfem.pd.timestep`: stable time steps.

@@ -1,4 +1,9 @@
-"""Numba pair-loop kernels of the 3-D linear peridynamic solid (LPS, Silling et al. 2007).
+"""The pair-loop LPS kernels' public API: argument checks and calls of the numba loops.
+
+The 3-D linear peridynamic solid (LPS, Silling et al. 2007) over unique bonds. The numba loops
+live in :mod:`pdfem.pd.pair_step_kernels` (dilatation and forces of a step) and
+:mod:`pdfem.pd.pair_sum_kernels` (family sums, energy, damage); the per-bond physics in
+:mod:`pdfem.pd.lps_law`.
 
 Data layout (shared with the rest of pdfem):
 
@@ -33,29 +38,21 @@ used it). Damage is the broken fraction of a particle's initial bonds.
 The loops are chunked for race-free, deterministic threading (:mod:`pdfem.pd.workspace`).
 :func:`dilatation_and_forces` is the time loop's entry point: the two passes of a step, with
 the bond lengths of the first pass kept for the second (8 bytes per pair of scratch).
-Index arithmetic is unsigned (``U64``) inside the pair loops: numba then emits no
-negative-index wraparound code for the gathers and scatters, which is a large part of the
-instruction count of these short loop bodies.
 """
 
 from __future__ import annotations
 
-import math
+from typing import TYPE_CHECKING
 
-import numba
 import numpy as np
-from numba import prange
 
-from pdfem.pd.workspace import (
-    FASTMATH,
-    U64,
-    PairWorkspace,
-    add_overflow1,
-    add_overflow3,
-    c_contiguous,
-    twin,
-    workspace_for,
-)
+from pdfem.pd.lps_law import force_coefficients
+from pdfem.pd.pair_step_kernels import dilatation_pairs, forces_pairs
+from pdfem.pd.pair_sum_kernels import damage_pairs, energy_pairs, family_sum_pairs
+from pdfem.pd.workspace import c_contiguous, workspace_for
+
+if TYPE_CHECKING:
+    from pdfem.pd.workspace import PairWorkspace
 
 _NO_R = np.zeros(0)  # stands for "no bond-length buffer" (read-only by convention)
 
@@ -99,337 +96,6 @@ def check_weight(weight: np.ndarray, per_pair: np.ndarray) -> np.ndarray:
     return weight
 
 
-@twin()
-def _family_sum_pairs(row_ptr, nbr, xi_len, vol, wt, mode, cb, ov_ptr, ov, out):
-    """out_i = sum_j g(|xi|) omega vol_j over all bonds, g = |xi|^2, 1/|xi|, |xi|, 1 (mode 0..3)."""
-    C = cb.shape[0] - 1
-    for c in prange(C):
-        r0 = cb[c]
-        r1 = U64(cb[c + 1])
-        base = U64(ov_ptr[c])
-        for p in range(r0, r1):
-            out[p] = 0.0
-        for q in range(base, U64(ov_ptr[c + 1])):
-            ov[q, 0] = 0.0
-        for i in range(r0, r1):
-            vi = vol[i]
-            acc = 0.0
-            for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
-                j = U64(nbr[k])
-                l = xi_len[k]
-                if mode == 0:
-                    g = l * l
-                elif mode == 1:
-                    g = 1.0 / l
-                elif mode == 2:
-                    g = l
-                else:
-                    g = 1.0
-                g *= abs(wt[k])  # all initial bonds (a negative weight marks a broken one)
-                acc += g * vol[j]
-                if j < r1:
-                    out[j] += g * vi
-                else:
-                    ov[base + (j - r1), 0] += g * vi
-            out[i] += acc
-    for t in prange(C):
-        add_overflow1(t, cb, ov_ptr, ov, 0, out)
-
-
-@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, checked, r1, ov,
-                    base, rbuf, store_r):
-    """Row i of the pair-loop dilatation (``checked``: partners may lie beyond row r1)."""
-    yi0 = y[3 * i]
-    yi1 = y[3 * i + 1]
-    yi2 = y[3 * i + 2]
-    vi = vol[i]
-    acc = 0.0
-    for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
-        w = wt[k]
-        if signed:
-            if w < 0.0:
-                continue
-        elif broken[k] != 0:
-            continue
-        j = U64(nbr[k])
-        j3 = U64(3) * j
-        l = xi_len[k]
-        d0 = y[j3] - yi0
-        d1 = y[j3 + U64(1)] - yi1
-        d2 = y[j3 + U64(2)] - yi2
-        r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        if store_r:
-            rbuf[k] = r
-        g = w * l * (r - l)
-        acc += g * vol[j]
-        if checked and j >= r1:
-            ov[base + (j - r1), 0] += g * vi
-        else:
-            theta[j] += g * vi
-    theta[i] += acc
-
-
-@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _dilatation_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, r1, ov,
-                     base, rbuf, store_r):
-    """Rows r0..r1 of one chunk: unchecked up to ``split``, then checked for overflow."""
-    for i in range(r0, split):
-        _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, False,
-                        r1, ov, base, rbuf, store_r)
-    for i in range(split, r1):
-        _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, True,
-                        r1, ov, base, rbuf, store_r)
-
-
-@twin()
-def _dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, split, ov_ptr,
-                      ov, theta, rbuf, store_r):
-    """Pair-loop dilatation; with ``store_r`` also rbuf[k] = |y_j - y_i| of unbroken bonds."""
-    y = y2.reshape(y2.size)  # flat view: 3 j + c indexing, no stride multiplications
-    C = cb.shape[0] - 1
-    for c in prange(C):
-        r0 = cb[c]
-        r1 = U64(cb[c + 1])
-        base = U64(ov_ptr[c])
-        for p in range(r0, r1):
-            theta[p] = 0.0
-        for q in range(base, U64(ov_ptr[c + 1])):
-            ov[q, 0] = 0.0
-        # one copy of the row loop per flag combination, so that the flags are constants
-        # inside the hot loop (no per-bond tests of them, fewer live registers)
-        if signed:
-            if store_r:
-                _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, wt,
-                                 theta, r1, ov, base, rbuf, True)
-            else:
-                _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, wt,
-                                 theta, r1, ov, base, rbuf, False)
-        elif store_r:
-            _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, wt,
-                             theta, r1, ov, base, rbuf, True)
-        else:
-            _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, wt,
-                             theta, r1, ov, base, rbuf, False)
-    for t in prange(C):
-        add_overflow1(t, cb, ov_ptr, ov, 0, theta)
-        for p in range(cb[t], cb[t + 1]):
-            theta[p] = 3.0 * theta[p] / m[p] if m[p] > 0.0 else 0.0
-
-
-@twin(fastmath=False)
-def force_coefficients(m, theta, K, mu, coef):
-    """coef[:, 0] = theta (3K - 5mu) / m, coef[:, 1] = 15 mu / m (0 where m = 0)."""
-    c1 = 3.0 * K - 5.0 * mu
-    c2 = 15.0 * mu
-    for p in prange(m.shape[0]):
-        if m[p] > 0.0:
-            im = 1.0 / m[p]
-            coef[p, 0] = theta[p] * c1 * im
-            coef[p, 1] = c2 * im
-        else:
-            coef[p, 0] = 0.0
-            coef[p, 1] = 0.0
-
-
-@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail, f,
-                checked, r1, ov, base, rbuf, use_r):
-    """Row i of the pair-loop forces; returns the number of bonds it broke."""
-    yi0 = y[3 * i]
-    yi1 = y[3 * i + 1]
-    yi2 = y[3 * i + 2]
-    ai = coef[2 * i]
-    bi = coef[2 * i + 1]
-    vi = vol[i]
-    can_i = nofail[i] == 0
-    fx = 0.0
-    fy = 0.0
-    fz = 0.0
-    nb = 0
-    for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
-        w = wt[k]
-        if signed:
-            if w < 0.0:
-                continue
-        elif broken[k] != 0:
-            continue
-        j = U64(nbr[k])
-        j3 = U64(3) * j
-        l = xi_len[k]
-        d0 = y[j3] - yi0
-        d1 = y[j3 + U64(1)] - yi1
-        d2 = y[j3 + U64(2)] - yi2
-        if use_r:
-            r = rbuf[k]
-        else:
-            r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        e = r - l
-        if e > s0 * l and can_i and nofail[j] == 0:
-            if signed:
-                wt[k] = -w
-            else:
-                broken[k] = 1
-            nb += 1
-            continue
-        j2 = U64(2) * j
-        g = ((ai + coef[j2]) * l + (bi + coef[j2 + U64(1)]) * e) * w / r
-        gi = g * vol[j]
-        fx += gi * d0
-        fy += gi * d1
-        fz += gi * d2
-        gj = g * vi
-        if checked and j >= r1:
-            q = U64(3) * (base + (j - r1))
-            ov[q] -= gj * d0
-            ov[q + U64(1)] -= gj * d1
-            ov[q + U64(2)] -= gj * d2
-        else:
-            f[j3] -= gj * d0
-            f[j3 + U64(1)] -= gj * d1
-            f[j3 + U64(2)] -= gj * d2
-    f[3 * i] += fx
-    f[3 * i + 1] += fy
-    f[3 * i + 2] += fz
-    return nb
-
-
-@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail,
-                 f, r1, ov, base, rbuf, use_r):
-    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken."""
-    nb = 0
-    for i in range(r0, split):
-        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
-                          nofail, f, False, r1, ov, base, rbuf, use_r)
-    for i in range(split, r1):
-        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
-                          nofail, f, True, r1, ov, base, rbuf, use_r)
-    return nb
-
-
-@twin()
-def _forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, nofail,
-                  cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
-    """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf."""
-    y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
-    coef = coef2.reshape(coef2.size)
-    f = fout.reshape(fout.size)
-    ov = ov2.reshape(ov2.size)
-    C = cb.shape[0] - 1
-    for c in prange(C):
-        r0 = cb[c]
-        r1 = U64(cb[c + 1])
-        base = U64(ov_ptr[c])
-        for p in range(3 * r0, 3 * r1):
-            f[p] = 0.0
-        for q in range(U64(3) * base, U64(3) * U64(ov_ptr[c + 1])):
-            ov[q] = 0.0
-        # one copy of the row loop per flag combination (constants inside the hot loop)
-        if signed:
-            if use_r:
-                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, s0, nofail, f, r1, ov, base, rbuf, True)
-            else:
-                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, s0, nofail, f, r1, ov, base, rbuf, False)
-        elif use_r:
-            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, s0, nofail, f, r1, ov, base, rbuf, True)
-        else:
-            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, s0, nofail, f, r1, ov, base, rbuf, False)
-        counts[c] = nb
-    for t in prange(C):
-        add_overflow3(t, cb, ov_ptr, ov2, fout)
-    total = 0
-    for c in range(C):
-        total += counts[c]
-    return total
-
-
-@twin()
-def _energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, vol, m, theta, K, mu, wt,
-                  cb, ov_ptr, ov, W):
-    C = cb.shape[0] - 1
-    for c in prange(C):
-        r0 = cb[c]
-        r1 = U64(cb[c + 1])
-        base = U64(ov_ptr[c])
-        for p in range(r0, r1):
-            W[p] = 0.0
-        for q in range(base, U64(ov_ptr[c + 1])):
-            ov[q, 0] = 0.0
-        for i in range(r0, r1):
-            ti = theta[i] / 3.0
-            vi = vol[i]
-            acc = 0.0
-            for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
-                b = wt[k]
-                if signed:
-                    if b < 0.0:
-                        continue
-                elif broken[k] != 0:
-                    continue
-                j = U64(nbr[k])
-                l = xi_len[k]
-                d0 = y[j, 0] - y[i, 0]
-                d1 = y[j, 1] - y[i, 1]
-                d2 = y[j, 2] - y[i, 2]
-                e = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - l
-                edi = e - ti * l
-                edj = e - theta[j] / 3.0 * l
-                acc += edi * edi * b * vol[j]
-                g = edj * edj * b * vi
-                if j < r1:
-                    W[j] += g
-                else:
-                    ov[base + (j - r1), 0] += g
-            W[i] += acc
-    for t in prange(C):
-        add_overflow1(t, cb, ov_ptr, ov, 0, W)
-        for p in range(cb[t], cb[t + 1]):
-            s = 7.5 * mu * W[p] / m[p] if m[p] > 0.0 else 0.0
-            W[p] = 0.5 * K * theta[p] * theta[p] + s
-
-
-@twin(fastmath=False)
-def _damage_pairs(row_ptr, nbr, broken, signed, wt, cb, ov_ptr, ov, nb, deg):
-    C = cb.shape[0] - 1
-    for c in prange(C):
-        r0 = cb[c]
-        r1 = U64(cb[c + 1])
-        base = U64(ov_ptr[c])
-        for p in range(r0, r1):
-            nb[p] = 0.0
-            deg[p] = 0.0
-        for q in range(base, U64(ov_ptr[c + 1])):
-            ov[q, 0] = 0.0
-            ov[q, 1] = 0.0
-        for i in range(r0, r1):
-            cnt = 0.0
-            for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
-                j = U64(nbr[k])
-                if signed:
-                    b = 1.0 if wt[k] < 0.0 else 0.0
-                else:
-                    b = 1.0 if broken[k] != 0 else 0.0
-                cnt += b
-                if j < r1:
-                    nb[j] += b
-                    deg[j] += 1.0
-                else:
-                    ov[base + (j - r1), 0] += b
-                    ov[base + (j - r1), 1] += 1.0
-            nb[i] += cnt
-            deg[i] += row_ptr[i + 1] - row_ptr[i]
-    for t in prange(C):
-        add_overflow1(t, cb, ov_ptr, ov, 0, nb)
-        add_overflow1(t, cb, ov_ptr, ov, 1, deg)
-        for p in range(cb[t], cb[t + 1]):
-            nb[p] = nb[p] / deg[p] if deg[p] > 0.0 else 0.0
-
-
 # --------------------------------------------------------------------------- public API
 
 
@@ -462,8 +128,8 @@ def family_sum(
     """
     ws = workspace_for(ws, row_ptr, nbr)
     out = np.empty(ws.n)
-    _family_sum_pairs(ws.parallel, row_ptr, nbr, xi_len, np.ascontiguousarray(values, np.float64),
-                      check_weight(weight, nbr), int(mode), ws.chunk_ptr, ws.ov_ptr, ws.ov, out)
+    family_sum_pairs(ws.parallel, row_ptr, nbr, xi_len, np.ascontiguousarray(values, np.float64),
+                     check_weight(weight, nbr), int(mode), ws.chunk_ptr, ws.ov_ptr, ws.ov, out)
     return out
 
 
@@ -527,10 +193,10 @@ def dilatation(
         Optional :class:`PairWorkspace` for this pair list.
     """
     ws = workspace_for(ws, row_ptr, nbr)
-    _dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                      check_broken(broken, nbr), vol, m, check_weight(weight, nbr), ws.chunk_ptr,
-                      ws.split, ws.ov_ptr, ws.ov,
-                      theta_out, _NO_R, False)
+    dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
+                     check_broken(broken, nbr), vol, m, check_weight(weight, nbr), ws.chunk_ptr,
+                     ws.split, ws.ov_ptr, ws.ov,
+                     theta_out, _NO_R, False)
 
 
 def forces(
@@ -584,11 +250,11 @@ def forces(
     """
     ws = workspace_for(ws, row_ptr, nbr)
     force_coefficients(ws.parallel_particles, m, theta, K, mu, ws.coef)
-    return int(_forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                             check_broken(broken, nbr), vol,
-                             ws.coef, check_weight(weight, nbr), float(s0), nofail, ws.chunk_ptr,
-                             ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
-                             _NO_R, False))
+    return int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
+                            check_broken(broken, nbr), vol,
+                            ws.coef, check_weight(weight, nbr), float(s0), nofail, ws.chunk_ptr,
+                            ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
+                            _NO_R, False))
 
 
 def dilatation_and_forces(
@@ -632,14 +298,14 @@ def dilatation_and_forces(
     keep = rbuf.shape[0] > 0
     wt = check_weight(weight, nbr)
     signed = check_broken(broken, nbr)
-    _dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, signed, vol,
-                      m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
+    dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, signed, vol,
+                     m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     if between is not None:
         between(theta_out)
     force_coefficients(ws.parallel_particles, m, theta_out, K, mu, ws.coef)
-    return int(_forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
-                             float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
-                             ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep))
+    return int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
+                            float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
+                            ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep))
 
 
 def strain_energy(
@@ -667,10 +333,10 @@ def strain_energy(
     """
     ws = workspace_for(ws, row_ptr, nbr)
     W = np.empty(ws.n)
-    _energy_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                  check_broken(broken, nbr), vol, m, theta,
-                  float(K), float(mu), check_weight(weight, nbr), ws.chunk_ptr, ws.ov_ptr, ws.ov,
-                  W)
+    energy_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
+                 check_broken(broken, nbr), vol, m, theta,
+                 float(K), float(mu), check_weight(weight, nbr), ws.chunk_ptr, ws.ov_ptr, ws.ov,
+                 W)
     return W
 
 
@@ -710,8 +376,8 @@ def damage(
     signed = check_broken(broken, nbr)
     if signed:
         check_weight(weight, nbr)
-    _damage_pairs(ws.parallel, row_ptr, nbr, broken, signed, weight, ws.chunk_ptr, ws.ov_ptr,
-                  ws.ov, out, deg)
+    damage_pairs(ws.parallel, row_ptr, nbr, broken, signed, weight, ws.chunk_ptr, ws.ov_ptr,
+                 ws.ov, out, deg)
     return out
 
 

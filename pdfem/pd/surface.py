@@ -43,7 +43,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from pdfem.pd.workspace import FASTMATH, PairWorkspace
+from pdfem.pd.chunk_kernels import FASTMATH
+from pdfem.pd.workspace import PairWorkspace
 
 
 @numba.njit(cache=True, fastmath=FASTMATH, inline="always")

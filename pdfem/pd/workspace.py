@@ -15,100 +15,25 @@ build of the same kernel (:func:`twin`).
 
 from __future__ import annotations
 
-import types
-
 import numba
 import numpy as np
 
-FASTMATH = {"nsz", "arcp", "contract", "reassoc"}
-U64 = np.uint64
+from pdfem.pd.chunk_kernels import (  # noqa: F401  (re-exported: the old home of these names)
+    FASTMATH,
+    U64,
+    Twin,
+    add_overflow1,
+    add_overflow3,
+    chunk_split,
+    pairs_forward,
+    twin,
+)
 
 # Below these sizes the kernels run their serial build: a parallel region costs more than the
 # work, and a lot more when the machine is oversubscribed (the threads wait at a barrier for a
 # descheduled peer).
 SERIAL_BELOW_PAIRS = 50_000
 SERIAL_BELOW_PARTICLES = 20_000
-
-
-class Twin:
-    """A kernel compiled twice: thread-parallel (``prange``) and serial (``prange`` = range).
-
-    Called as ``kernel(parallel, *args)``. The serial build is a clone of the function under
-    another qualified name, so both builds have their own on-disk cache entries.
-    """
-
-    __slots__ = ("par", "ser")
-
-    def __init__(self, pyfunc, fastmath):
-        fm = FASTMATH if fastmath else False
-        self.par = numba.njit(parallel=True, cache=True, fastmath=fm, error_model="numpy")(pyfunc)
-        clone = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__ + "_serial",
-                                   pyfunc.__defaults__, pyfunc.__closure__)
-        clone.__qualname__ = pyfunc.__qualname__ + "_serial"
-        clone.__doc__ = pyfunc.__doc__
-        self.ser = numba.njit(cache=True, fastmath=fm, error_model="numpy")(clone)
-
-    def __call__(self, parallel, *args):
-        return (self.par if parallel else self.ser)(*args)
-
-
-def twin(fastmath: bool = True):
-    """Decorator: compile a kernel as a :class:`Twin` (``fastmath`` uses ``FASTMATH``)."""
-    return lambda pyfunc: Twin(pyfunc, fastmath)
-
-
-@numba.njit(cache=True)
-def add_overflow1(t, cb, ov_ptr, ov, col, out):
-    """Add the overflow of chunks 0..t-1 (in that order) into the rows of chunk t."""
-    r0 = cb[t]
-    r1 = cb[t + 1]
-    for c in range(t):
-        s = cb[c + 1]
-        base = ov_ptr[c]
-        e = s + (ov_ptr[c + 1] - base)
-        lo = max(s, r0)
-        hi = min(e, r1)
-        for p in range(lo, hi):
-            out[p] += ov[base + p - s, col]
-
-
-@numba.njit(cache=True)
-def add_overflow3(t, cb, ov_ptr, ov, out):
-    """:func:`add_overflow1` for (N, 3) outputs (all three columns)."""
-    for col in range(3):
-        add_overflow1(t, cb, ov_ptr, ov, col, out[:, col])
-
-
-@numba.njit(cache=True)
-def _pairs_forward(row_ptr, nbr):
-    """True when every pair of row i has i < nbr[k] < N (what the chunked loops rely on)."""
-    n = row_ptr.shape[0] - 1
-    for i in range(n):
-        if row_ptr[i + 1] < row_ptr[i]:
-            return False
-        for k in range(row_ptr[i], row_ptr[i + 1]):
-            j = nbr[k]
-            if j <= i or j >= n:
-                return False
-    return True
-
-
-@numba.njit(cache=True)
-def _chunk_split(row_ptr, nbr, cb):
-    """Per chunk, the first row with a partner beyond the chunk (rows before it need no check)."""
-    C = cb.shape[0] - 1
-    split = cb[1:].copy()
-    for c in range(C):
-        for i in range(cb[c], cb[c + 1]):
-            hit = False
-            for k in range(row_ptr[i], row_ptr[i + 1]):
-                if nbr[k] >= cb[c + 1]:
-                    hit = True
-                    break
-            if hit:
-                split[c] = i
-                break
-    return split
 
 
 class PairWorkspace:
@@ -157,7 +82,7 @@ class PairWorkspace:
         n = row_ptr.shape[0] - 1
         if n < 0 or row_ptr[0] != 0 or row_ptr[-1] != nbr.shape[0]:
             raise ValueError("row_ptr must start at 0 and end at the number of pairs len(nbr)")
-        if not _pairs_forward(row_ptr, nbr):
+        if not pairs_forward(row_ptr, nbr):
             raise ValueError(
                 "the pair list must hold unique pairs i < j grouped by i (nbr[k] > i for k in "
                 "row i, and every index below N)"
@@ -182,7 +107,7 @@ class PairWorkspace:
         self.n_pairs = P
         self.n_chunks = C
         self.chunk_ptr = cb
-        self.split = _chunk_split(row_ptr, nbr, cb)
+        self.split = chunk_split(row_ptr, nbr, cb)
         self.ov_ptr = np.concatenate(([0], np.cumsum(ov_len))).astype(np.int64)
         self.ov = np.zeros((int(self.ov_ptr[-1]), 3))
         self.coef = np.empty((n, 2))

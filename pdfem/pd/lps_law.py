@@ -1,0 +1,112 @@
+"""The LPS force law, written once: per-bond physics as small inlined numba helpers.
+
+The linear peridynamic solid (Silling et al. 2007; DESIGN.md "Peridynamics") per bond
+(i, j) with reference length l = |xi|, current length r = |y_j - y_i| and extension e = r - l::
+
+    dilatation:     theta_i = (3 / m_i) sum_j omega l e V_j
+    force state:    t_ij = (3 K theta_i / m_i) l + (15 mu / m_i) e_d,   e_d = e - theta_i l / 3
+                         = a_i l + b_i e,   a_i = theta_i (3K - 5mu) / m_i,   b_i = 15 mu / m_i
+    pair force:     (t_ij + t_ji) omega (y_j - y_i) / r
+    breaking:       e / l > s0 (critical stretch), unless an end has ``nofail``
+
+Every kernel that evaluates the law (the pair loops of :mod:`pdfem.pd.pair_step_kernels` and
+:mod:`pdfem.pd.pair_sum_kernels`, the full-family reference loops of
+:mod:`pdfem.pd.family_kernels`, and through the pair loops the MPI ranks of
+:mod:`pdfem.pd.distributed`) calls these helpers. They are ``inline="always"``: numba pastes
+their IR into the caller, which compiles them with its own flags, so a helper costs nothing and
+the floating-point operations (and their order) are exactly those of the formulas above.
+:func:`force_coefficients` is the per-particle half of the force state (a_i, b_i).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+from numba import prange
+
+from pdfem.pd.chunk_kernels import U64, twin
+
+_INLINE = dict(cache=True, inline="always")
+
+
+@numba.njit(**_INLINE)
+def bond_vector(y, j3, yi0, yi1, yi2):
+    """Current bond vector y_j - y_i from the flat positions ``y`` (j3 = 3 j) and y_i."""
+    return y[j3] - yi0, y[j3 + U64(1)] - yi1, y[j3 + U64(2)] - yi2
+
+
+@numba.njit(**_INLINE)
+def bond_length(d0, d1, d2):
+    """Current bond length r = |d| (m)."""
+    return math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+
+
+@numba.njit(**_INLINE)
+def is_broken(signed, w, broken, k):
+    """Whether bond k is broken: its weight ``w`` is negative (``signed``) or its flag is set."""
+    if signed:
+        return w < 0.0
+    return broken[k] != 0
+
+
+@numba.njit(**_INLINE)
+def mark_broken(signed, wt, w, broken, k):
+    """Mark bond k broken for good: negate its weight (``signed``) or set its flag."""
+    if signed:
+        wt[k] = -w
+    else:
+        broken[k] = 1
+
+
+@numba.njit(**_INLINE)
+def dilatation_term(w, l, r):
+    """A bond's dilatation summand omega l e (to be weighted by the partner's volume)."""
+    return w * l * (r - l)
+
+
+@numba.njit(**_INLINE)
+def dilatation_of(s, m):
+    """theta = 3 s / m from the family sum s of :func:`dilatation_term` times V_j (0 if m = 0)."""
+    return 3.0 * s / m if m > 0.0 else 0.0
+
+
+@numba.njit(**_INLINE)
+def breaks(e, l, s0, can_i, nofail, j):
+    """The critical-stretch test: stretch e / l above s0 and neither end ``nofail``."""
+    return e > s0 * l and can_i and nofail[j] == 0
+
+
+@numba.njit(**_INLINE)
+def pair_force_scalar(a, b, l, e, w, r):
+    """(t_ij + t_ji) omega / r, with a = a_i + a_j and b = b_i + b_j (see the module doc):
+    times V_j (y_j - y_i) it is the force density on i, times V_i (y_i - y_j) that on j."""
+    return (a * l + b * e) * w / r
+
+
+@numba.njit(**_INLINE)
+def deviatoric_extension(e, theta_third, l):
+    """e_d = e - theta l / 3, with ``theta_third`` = theta / 3 of the particle concerned."""
+    return e - theta_third * l
+
+
+@numba.njit(**_INLINE)
+def energy_density(K, mu, theta, s, m):
+    """W = K theta^2 / 2 + (15 mu / (2 m)) s, with s = sum_j omega e_d^2 V_j (J/m^3)."""
+    d = 7.5 * mu * s / m if m > 0.0 else 0.0
+    return 0.5 * K * theta * theta + d
+
+
+@twin(fastmath=False)
+def force_coefficients(m, theta, K, mu, coef):
+    """coef[:, 0] = a = theta (3K - 5mu) / m, coef[:, 1] = b = 15 mu / m (0 where m = 0)."""
+    c1 = 3.0 * K - 5.0 * mu
+    c2 = 15.0 * mu
+    for p in prange(m.shape[0]):
+        if m[p] > 0.0:
+            im = 1.0 / m[p]
+            coef[p, 0] = theta[p] * c1 * im
+            coef[p, 1] = c2 * im
+        else:
+            coef[p, 0] = 0.0
+            coef[p, 1] = 0.0

@@ -1,0 +1,211 @@
+"""The pair loops of an LPS time step: dilatation, then forces with bond breaking.
+
+The two passes of :func:`pdfem.pd.pair_kernels.dilatation_and_forces` (and of
+:func:`~pdfem.pd.pair_kernels.dilatation` and :func:`~pdfem.pd.pair_kernels.forces`) over the
+unique bonds i < j grouped by i (data layout: :mod:`pdfem.pd.pair_kernels`), chunked for
+race-free deterministic threading (:mod:`pdfem.pd.chunk_kernels`). The physics of a bond is
+:mod:`pdfem.pd.lps_law`'s. The row loop exists in one copy per combination of the flags
+``signed`` / ``store_r`` (``use_r``): each flag is then a constant inside its copy of the hot
+loop (no per-bond tests of it, fewer live registers). Index arithmetic is unsigned (``U64``):
+numba then emits no negative-index wraparound code for the gathers and scatters.
+"""
+
+from __future__ import annotations
+
+import numba
+from numba import prange
+
+from pdfem.pd.chunk_kernels import FASTMATH, U64, add_overflow1, add_overflow3, twin
+from pdfem.pd.lps_law import (
+    bond_length,
+    bond_vector,
+    breaks,
+    dilatation_of,
+    dilatation_term,
+    is_broken,
+    mark_broken,
+    pair_force_scalar,
+)
+
+
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, checked, r1, ov,
+                    base, rbuf, store_r):
+    """Row i of the pair-loop dilatation (``checked``: partners may lie beyond row r1)."""
+    yi0 = y[3 * i]
+    yi1 = y[3 * i + 1]
+    yi2 = y[3 * i + 2]
+    vi = vol[i]
+    acc = 0.0
+    for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
+        w = wt[k]
+        if is_broken(signed, w, broken, k):
+            continue
+        j = U64(nbr[k])
+        l = xi_len[k]
+        d0, d1, d2 = bond_vector(y, U64(3) * j, yi0, yi1, yi2)
+        r = bond_length(d0, d1, d2)
+        if store_r:
+            rbuf[k] = r
+        g = dilatation_term(w, l, r)
+        acc += g * vol[j]
+        if checked and j >= r1:
+            ov[base + (j - r1), 0] += g * vi
+        else:
+            theta[j] += g * vi
+    theta[i] += acc
+
+
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _dilatation_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, r1, ov,
+                     base, rbuf, store_r):
+    """Rows r0..r1 of one chunk: unchecked up to ``split``, then checked for overflow."""
+    for i in range(r0, split):
+        _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, False,
+                        r1, ov, base, rbuf, store_r)
+    for i in range(split, r1):
+        _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, True,
+                        r1, ov, base, rbuf, store_r)
+
+
+@twin()
+def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, split, ov_ptr,
+                     ov, theta, rbuf, store_r):
+    """Pair-loop dilatation; with ``store_r`` also rbuf[k] = |y_j - y_i| of unbroken bonds."""
+    y = y2.reshape(y2.size)  # flat view: 3 j + c indexing, no stride multiplications
+    C = cb.shape[0] - 1
+    for c in prange(C):
+        r0 = cb[c]
+        r1 = U64(cb[c + 1])
+        base = U64(ov_ptr[c])
+        for p in range(r0, r1):
+            theta[p] = 0.0
+        for q in range(base, U64(ov_ptr[c + 1])):
+            ov[q, 0] = 0.0
+        # one copy of the row loop per flag combination, so that the flags are constants
+        # inside the hot loop (no per-bond tests of them, fewer live registers)
+        if signed:
+            if store_r:
+                _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, wt,
+                                 theta, r1, ov, base, rbuf, True)
+            else:
+                _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, wt,
+                                 theta, r1, ov, base, rbuf, False)
+        elif store_r:
+            _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, wt,
+                             theta, r1, ov, base, rbuf, True)
+        else:
+            _dilatation_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, wt,
+                             theta, r1, ov, base, rbuf, False)
+    for t in prange(C):
+        add_overflow1(t, cb, ov_ptr, ov, 0, theta)
+        for p in range(cb[t], cb[t + 1]):
+            theta[p] = dilatation_of(theta[p], m[p])
+
+
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail, f,
+                checked, r1, ov, base, rbuf, use_r):
+    """Row i of the pair-loop forces; returns the number of bonds it broke."""
+    yi0 = y[3 * i]
+    yi1 = y[3 * i + 1]
+    yi2 = y[3 * i + 2]
+    ai = coef[2 * i]
+    bi = coef[2 * i + 1]
+    vi = vol[i]
+    can_i = nofail[i] == 0
+    fx = 0.0
+    fy = 0.0
+    fz = 0.0
+    nb = 0
+    for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
+        w = wt[k]
+        if is_broken(signed, w, broken, k):
+            continue
+        j = U64(nbr[k])
+        j3 = U64(3) * j
+        l = xi_len[k]
+        d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
+        if use_r:
+            r = rbuf[k]
+        else:
+            r = bond_length(d0, d1, d2)
+        e = r - l
+        if breaks(e, l, s0, can_i, nofail, j):
+            mark_broken(signed, wt, w, broken, k)
+            nb += 1
+            continue
+        j2 = U64(2) * j
+        g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
+        gi = g * vol[j]
+        fx += gi * d0
+        fy += gi * d1
+        fz += gi * d2
+        gj = g * vi
+        if checked and j >= r1:
+            q = U64(3) * (base + (j - r1))
+            ov[q] -= gj * d0
+            ov[q + U64(1)] -= gj * d1
+            ov[q + U64(2)] -= gj * d2
+        else:
+            f[j3] -= gj * d0
+            f[j3 + U64(1)] -= gj * d1
+            f[j3 + U64(2)] -= gj * d2
+    f[3 * i] += fx
+    f[3 * i + 1] += fy
+    f[3 * i + 2] += fz
+    return nb
+
+
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail,
+                 f, r1, ov, base, rbuf, use_r):
+    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken."""
+    nb = 0
+    for i in range(r0, split):
+        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
+                          nofail, f, False, r1, ov, base, rbuf, use_r)
+    for i in range(split, r1):
+        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
+                          nofail, f, True, r1, ov, base, rbuf, use_r)
+    return nb
+
+
+@twin()
+def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, nofail,
+                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
+    """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf."""
+    y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
+    coef = coef2.reshape(coef2.size)
+    f = fout.reshape(fout.size)
+    ov = ov2.reshape(ov2.size)
+    C = cb.shape[0] - 1
+    for c in prange(C):
+        r0 = cb[c]
+        r1 = U64(cb[c + 1])
+        base = U64(ov_ptr[c])
+        for p in range(3 * r0, 3 * r1):
+            f[p] = 0.0
+        for q in range(U64(3) * base, U64(3) * U64(ov_ptr[c + 1])):
+            ov[q] = 0.0
+        # one copy of the row loop per flag combination (constants inside the hot loop)
+        if signed:
+            if use_r:
+                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, s0, nofail, f, r1, ov, base, rbuf, True)
+            else:
+                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, s0, nofail, f, r1, ov, base, rbuf, False)
+        elif use_r:
+            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, s0, nofail, f, r1, ov, base, rbuf, True)
+        else:
+            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, s0, nofail, f, r1, ov, base, rbuf, False)
+        counts[c] = nb
+    for t in prange(C):
+        add_overflow3(t, cb, ov_ptr, ov2, fout)
+    total = 0
+    for c in range(C):
+        total += counts[c]
+    return total
