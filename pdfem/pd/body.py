@@ -13,7 +13,11 @@ stiff surface layers of the LPS; bodies from arbitrary point clouds
 
 Bonds cost 16 bytes each: int32 partner (``nbr``), float64 reference length (``xi_len``) and a
 float32 weight (``weight``) whose sign marks a broken bond (:data:`pdfem.pd.kernels.SIGNED`);
-``broken`` gives the flags as a uint8 copy.
+``broken`` gives the flags as a uint8 copy. Which bonds break is the body's failure law's
+decision (:mod:`pdfem.pd.failure`; default: the material's critical stretch), which gives the
+kernels their threshold. The body implements the ice-body interface that contact, particle
+forces and output use (:class:`pdfem.pd.ice_interface.IceParticles`), as a whole body: every
+particle is owned.
 
 One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (kg/m^3)::
 
@@ -23,6 +27,8 @@ One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (k
     theta(y); f(y, theta)        dilatation, then forces and bond breaking
     v += dt/2 (f/rho + g)        kick
     v = prescribed on constrained particles
+
+with g the uniform body acceleration ``gravity`` (set by :class:`pdfem.forces.gravity.Gravity`).
 """
 
 from __future__ import annotations
@@ -89,7 +95,8 @@ class IceBody(WholeBody):
     @classmethod
     def from_points(cls, name: str, x: np.ndarray, material: IceMaterial, dx: float, delta: float,
                     *, loop: str = "pairs", volume: np.ndarray | None = None,
-                    isotropic: bool = False, surface_correction: bool = False) -> "IceBody":
+                    isotropic: bool = False, surface_correction: bool = False,
+                    failure: FailureLaw | None = None) -> "IceBody":
         """Build a body from particle positions: cell-sort them, find bonds, set up state.
 
         Parameters
@@ -116,6 +123,9 @@ class IceBody(WholeBody):
         surface_correction
             Correct the bond weights so that every family's second moment is isotropic
             (:func:`pdfem.pd.surface.surface_corrected_weights`).
+        failure
+            The failure law of the bonds (:mod:`pdfem.pd.failure`); default: the critical
+            stretch of ``material`` at ``delta``.
 
         Raises
         ------
@@ -133,7 +143,7 @@ class IceBody(WholeBody):
                else np.ascontiguousarray(np.asarray(volume, dtype=np.float64)[perm]))
         body = cls(name=name, x0=x0, vol=vol, material=material, dx=float(dx), delta=float(delta),
                    row_ptr=row_ptr, nbr=nbr, xi_len=bond_lengths(x0, row_ptr, nbr),
-                   nofail=np.zeros(n, dtype=np.uint8), loop=loop)
+                   nofail=np.zeros(n, dtype=np.uint8), loop=loop, failure=failure)
         body.y = x0.copy()
         body.v = np.zeros_like(x0)
         body.f = np.zeros_like(x0)
