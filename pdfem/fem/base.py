@@ -14,7 +14,9 @@ Adding a kind
 -------------
 Write one new file in :mod:`pdfem.fem` with a subclass of :class:`Structure`, and add one line
 to :data:`pdfem.run.build_structures.STRUCTURE_KINDS` mapping the case's ``kind`` to a builder
-``(config, mesh_path) -> Structure``.
+``(config, mesh path, case file) -> Structure`` (a classmethod of the new class, or a small
+function beside the registry). Override what differs from the defaults below: a structure
+without elastic energy, step limit or mesh checks inherits zeros, ``inf`` and no check.
 """
 
 from __future__ import annotations

@@ -22,10 +22,17 @@ SYSTEM_STORED = ("structure_kinetic", "structure_strain", "short_range_potential
 
 
 def _fold(e: dict, keys) -> float:
+    """``e[k0] + e[k1] + ...`` summed left to right."""
     total = 0
     for k in keys:
         total = total + e[k]
     return total
+
+
+def _further_potentials() -> tuple[str, ...]:
+    """Potential-energy keys of particle-force kinds beyond gravity and short-range contact
+    (:data:`pdfem.run.build_forces.PARTICLE_FORCES`), summed after the named terms."""
+    return tuple(k for k in potential_energies([]) if k not in ICE_STORED + SYSTEM_STORED)
 
 
 class EnergyBalance:
@@ -55,19 +62,14 @@ class EnergyBalance:
         e.update(pot)
         return e
 
-    def extra_keys(self, e: dict) -> list[str]:
-        """Potential-energy keys of further particle forces, summed after the named ones."""
-        return [k for k in potential_energies([]) if k not in ICE_STORED + SYSTEM_STORED]
-
     def stored(self, e: dict) -> float:
         """Total stored energy (J) of the terms ``e``."""
-        return _fold(e, ICE_STORED + SYSTEM_STORED + tuple(self.extra_keys(e)))
+        return _fold(e, ICE_STORED + SYSTEM_STORED + _further_potentials())
 
     def start(self) -> None:
         """Take the stored energy of the initial state as :attr:`initial`."""
         e = self.energies()
-        self.initial = (_fold(e, ICE_STORED)
-                        + _fold(e, SYSTEM_STORED + tuple(self.extra_keys(e))))
+        self.initial = _fold(e, ICE_STORED) + _fold(e, SYSTEM_STORED + _further_potentials())
 
     def row(self) -> dict[str, float]:
         """The energy history row: every term, ``dissipated``, ``contact_dissipated`` and
