@@ -17,7 +17,8 @@ Adding a source
 ---------------
 Write a class with the methods of :class:`OutputSource` (subclass :class:`Source` for empty
 defaults) in the module of the component it reports on, or in :mod:`pdfem.run.outputs`, and
-add it to the source list that :func:`pdfem.run.outputs.sources` makes for a run.
+add one entry to :data:`pdfem.run.outputs.SOURCE_KINDS` (its ``of_run(setup, per_rank)``
+makes the sources of a built run).
 """
 
 from __future__ import annotations

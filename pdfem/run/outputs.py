@@ -75,6 +75,10 @@ class IceSource(Source):
     def __init__(self, body, per_rank: bool) -> None:
         self.body, self.name, self.per_rank = body, body.name, per_rank
 
+    @classmethod
+    def of_run(cls, setup, per_rank: bool) -> list[Source]:
+        return [cls(b, per_rank) for b in setup.bodies]
+
     def frame_fields(self):
         return self.body.owned_frame_fields() if self.per_rank else self.body.frame_fields()
 
@@ -86,6 +90,10 @@ class StructureSource(Source):
 
     def __init__(self, structure) -> None:
         self.structure, self.name = structure, structure.name
+
+    @classmethod
+    def of_run(cls, setup, per_rank: bool) -> list[Source]:
+        return [cls(s) for s in setup.structures]
 
     def frame_fields(self):
         return self.structure.output_fields()
@@ -102,6 +110,11 @@ class LoadSource(Source):
     def __init__(self, structure, coupler) -> None:
         self.structure, self.coupler, self.name = structure, coupler, structure.name
 
+    @classmethod
+    def of_run(cls, setup, per_rank: bool) -> list[Source]:
+        return [cls(s, setup.coupler) for s in setup.structures
+                if any(p.structure is s for p in setup.pairs)]
+
     def step_rows(self) -> Rows:
         force, moment, n = self.coupler.structure_load(self.structure)
         return {f"loads/{self.name}": {"force": force, "moment": moment, "contacts": n}}
@@ -112,6 +125,10 @@ class PairSource(Source):
 
     def __init__(self, pair) -> None:
         self.pair, self.name = pair, pair.name
+
+    @classmethod
+    def of_run(cls, setup, per_rank: bool) -> list[Source]:
+        return [cls(p) for p in setup.pairs]
 
     def step_rows(self) -> Rows:
         p = self.pair
@@ -125,20 +142,23 @@ class MonitorSource(Source):
     def __init__(self, name: str, structure, probe) -> None:
         self.name, self.structure, self.probe = name, structure, probe
 
+    @classmethod
+    def of_run(cls, setup, per_rank: bool) -> list[Source]:
+        return [cls(name, st, probe) for name, st, probe in setup.probes]
+
     def step_rows(self) -> Rows:
         u, vm = self.structure.probe_values(self.probe)
         return {f"monitors/{self.name}": {"u": u, "von_mises": vm}}
 
 
+SOURCE_KINDS = (IceSource, StructureSource, LoadSource, PairSource, MonitorSource)
+"""The kinds of output source of a run, in writing order; each makes its sources of a built run
+with ``of_run(setup, per_rank)``. A new kind: its class (a new file, or here) and one entry."""
+
+
 def sources(setup, per_rank: bool) -> list[Source]:
     """The output sources of a built run (:class:`pdfem.run.build.Setup`), in writing order."""
-    out: list[Source] = [IceSource(b, per_rank) for b in setup.bodies]
-    out += [StructureSource(s) for s in setup.structures]
-    out += [LoadSource(s, setup.coupler) for s in setup.structures
-            if any(p.structure is s for p in setup.pairs)]
-    out += [PairSource(p) for p in setup.pairs]
-    out += [MonitorSource(name, st, probe) for name, st, probe in setup.probes]
-    return out
+    return [src for kind in SOURCE_KINDS for src in kind.of_run(setup, per_rank)]
 
 
 class Outputs:
