@@ -34,7 +34,7 @@ class ContactPair:
     """An ice body, a structure and the contact between them, with its load record."""
 
     name: str
-    body: object                 # pdfem.pd.body.IceBody
+    body: object                 # pdfem.pd.ice_interface.IceParticles
     structure: object            # a pdfem.fem.surface.ContactSurface
     contact: SurfaceContact
     force: np.ndarray = field(default_factory=lambda: np.zeros(3))    # N, last coupling step
