@@ -26,11 +26,13 @@ SOFT = IceMaterial(density=RHO, youngs_modulus=1.0e9, poisson_ratio=0.25)
 
 
 def cloud_body(x0, y, dx, delta, material, vol=None):
-    """A stand-in with the attributes the contact reads (no bonds needed)."""
+    """A stand-in with the attributes the contact reads (no bonds needed): a whole body."""
     n = x0.shape[0]
-    return SimpleNamespace(x0=np.ascontiguousarray(x0), y=np.ascontiguousarray(y),
+    body = SimpleNamespace(x0=np.ascontiguousarray(x0), y=np.ascontiguousarray(y),
                            vol=np.full(n, dx ** 3) if vol is None else vol, dx=dx, delta=delta,
-                           material=material, f=np.zeros((n, 3)))
+                           material=material, f=np.zeros((n, 3)), distributed=False)
+    body.global_body = body
+    return body
 
 
 def brute_force(bodies, factor=15.0):

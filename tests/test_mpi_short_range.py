@@ -65,7 +65,7 @@ def build():
 
 def run(bodies, comm, steps, dt, owner=None):
     sr = ShortRangeContact(bodies)
-    c = Coupler(bodies, [], [], dt, short_range=sr, comm=comm)
+    c = Coupler(bodies, [], [], dt, forces=[sr], comm=comm)
     c.start()
     active, energy, cross = [], [], 0
     for _ in range(steps):

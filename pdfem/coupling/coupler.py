@@ -34,7 +34,7 @@ class ContactPair:
     """An ice body, a structure and the contact between them, with its load record."""
 
     name: str
-    body: object                 # pdfem.pd.body.IceBody
+    body: object                 # pdfem.pd.ice_interface.IceParticles
     structure: object            # a pdfem.fem.surface.ContactSurface
     contact: SurfaceContact
     force: np.ndarray = field(default_factory=lambda: np.zeros(3))    # N, last coupling step
@@ -75,8 +75,9 @@ class Coupler:
     Parameters
     ----------
     bodies
-        The ice bodies (:class:`pdfem.pd.body.IceBody`: ``begin_step``, ``compute_forces``,
-        ``end_step``, ``y``, ``v``, ``f``, ``vol``, ``material.density``, ``gravity``).
+        The ice bodies (:class:`pdfem.pd.ice_interface.IceParticles`: ``begin_step``,
+        ``compute_forces``, ``end_step``, ``y``, ``v``, ``f``, ``vol``, ``material.density``,
+        ``gravity``, ``owned``).
     structures
         The structures (elastic or rigid), each a contact surface with ``step(dt)``.
     pairs
@@ -85,20 +86,20 @@ class Coupler:
         D (s).
     ice_substeps, structure_substeps
         Steps per coupling step of each side.
-    short_range
-        Optional short-range contact between ice particles (an object whose ``add_forces()``
-        adds force density to the bodies' ``f`` at their current positions, e.g.
-        :class:`pdfem.forces.short_range.ShortRangeContact`).
+    forces
+        Particle forces other than the bonds (:class:`pdfem.forces.base.ParticleForce`, e.g.
+        gravity and short-range contact between ice particles): after the bond forces of each
+        ice step, each adds its force density to the bodies' ``f``, in list order.
     comm
-        With ice bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`,
-        whose ``owned`` particles are the ones each rank resolves contact for): the
-        communicator over which the contact impulses are summed (one sum per structure and
-        coupling step), so every rank advances the replicated structures identically.
+        With ice bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`):
+        the communicator over which the contact impulses are summed (one sum per structure and
+        coupling step), so every rank advances the replicated structures identically. Contact
+        is resolved for each body's ``owned`` particles (all of them for a whole body).
     """
 
     def __init__(self, bodies: list, structures: list, pairs: list[ContactPair],
                  coupling_step: float, ice_substeps: int = 1, structure_substeps: int = 1,
-                 short_range=None, comm=None):
+                 forces=(), comm=None):
         if ice_substeps < 1 or structure_substeps < 1:
             raise ValueError("substep counts must be >= 1")
         self.bodies = list(bodies)
@@ -107,7 +108,7 @@ class Coupler:
         self.dt = float(coupling_step)
         self.ice_substeps = int(ice_substeps)
         self.structure_substeps = int(structure_substeps)
-        self.short_range = short_range
+        self.forces = list(forces)
         self.comm = comm
         self.time = 0.0
         self._pairs_of = {id(b): [p for p in self.pairs if p.body is b] for b in self.bodies}
@@ -195,8 +196,8 @@ class Coupler:
         """Initial forces of the ice (call once before the first step)."""
         for b in self.bodies:
             b.start()
-        if self.short_range is not None:
-            self.short_range.add_forces()
+        for force in self.forces:
+            force.add_forces()
 
     def step(self) -> int:
         """Advance everything by one coupling step; return the number of bonds broken."""
@@ -236,19 +237,20 @@ class Coupler:
 
     def _ice_step(self, h: float) -> int:
         """One velocity-Verlet step of every ice body, with surface contact after the position
-        update and the short-range forces added to the bond forces; bonds broken."""
+        update and the particle forces added to the bond forces; bonds broken."""
         olds = [b.begin_step(h, keep_old=bool(self._pairs_of[id(b)])) for b in self.bodies]
         for body, y_old in zip(self.bodies, olds):
             kick = (body.f, body.material.density, body.gravity)
-            active = getattr(body, "owned", None)
-            for p in self._pairs_of[id(body)]:
+            pairs = self._pairs_of[id(body)]
+            active = body.owned if pairs else None
+            for p in pairs:
                 s = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h,
                                       active=active, kick=kick)
                 p.contacts += s.contacts
                 self.contact_work_on_ice += s.work
         broken = sum(b.compute_forces() for b in self.bodies)
-        if self.short_range is not None:
-            self.short_range.add_forces()
+        for force in self.forces:
+            force.add_forces()
         for b in self.bodies:
             b.end_step(h)
         return broken

@@ -21,7 +21,8 @@ import os
 import numpy as np
 
 from pdfem.fem.mesh import load_mesh, read_msh_groups
-from pdfem.fem.surface import SurfaceBody, orient_outward, split_quads
+from pdfem.fem.base import Structure
+from pdfem.fem.surface import orient_outward, split_quads
 
 
 def rotation_matrix(rotation_vector) -> np.ndarray:
@@ -84,8 +85,9 @@ def read_surface(path: str | os.PathLike, group: str = "contact") -> tuple[np.nd
     return pts, orient_outward(pts, local.reshape(tris.shape))
 
 
-class RigidBody(SurfaceBody):
-    """A rigid surface moving with prescribed constant translation and rotation.
+class RigidBody(Structure):
+    """A rigid surface moving with prescribed constant translation and rotation (a
+    :class:`pdfem.fem.base.Structure` with ``prescribed_motion``: no step limit, no energy).
 
     Parameters
     ----------
@@ -173,9 +175,23 @@ class RigidBody(SurfaceBody):
         self._surface_forces[:] = forces
         self._update_pose()
 
+    prescribed_motion = True
+
     def stable_time_step(self) -> float:
         """A rigid body imposes no step limit: ``inf``."""
         return math.inf
+
+    def output_mesh(self) -> tuple[np.ndarray, np.ndarray, str]:
+        """Surface nodes at t = 0 (m) and the surface triangles."""
+        return self.x0, self.surface_triangles, "triangle"
+
+    def output_fields(self) -> dict[str, np.ndarray]:
+        """``u`` (Ns, 3): displacement of the surface nodes (m)."""
+        return {"u": self.surface_points() - self.x0}
+
+    def describe(self) -> str:
+        """Surface nodes."""
+        return f"rigid body '{self.name}': {len(self.x0):,} surface nodes"
 
     # ------------------------------------------------------------------ surface interface
     def surface_points(self) -> np.ndarray:

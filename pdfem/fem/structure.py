@@ -22,11 +22,9 @@ positions and normals reported to the contact code use the current one (referenc
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-import skfem
 from skfem.io.meshio import HEX_MAPPING
 
 from pdfem.errors import InstabilityError
@@ -34,25 +32,17 @@ from pdfem.fem.elasticity import (DofMap, ElasticMaterial, element_volumes, lump
                          surface_load, vector_basis)
 from pdfem.fem.explicit import CentralDifference
 from pdfem.fem.mesh import FEMesh, load_mesh
+from pdfem.fem.probe import Probe, make_probe, probe_values
 from pdfem.fem.stress import (centre_basis, element_stress, kinetic_energy, nodal_average, reaction_force,
                      strain_energy, von_mises)
-from pdfem.fem.surface import SurfaceBody, split_quads
+from pdfem.fem.base import Structure
+from pdfem.fem.surface import split_quads
+from pdfem.meshing.quality import check_cells
 
 
-@dataclass(frozen=True)
-class Probe:
-    """A point of a structure read every step: a node and an element (see
-    :meth:`ElasticStructure.probe`)."""
-
-    node: int
-    element: int
-    node_dofs: np.ndarray       # (3,) DOFs of the node
-    element_dofs: np.ndarray    # (k,) DOFs of the element
-    gradient: np.ndarray        # (9, k) displacement gradient at the element centre per DOF
-
-
-class ElasticStructure(SurfaceBody):
-    """A linear-elastic FE structure advanced by explicit central differences.
+class ElasticStructure(Structure):
+    """A linear-elastic FE structure advanced by explicit central differences (a
+    :class:`pdfem.fem.base.Structure`).
 
     Parameters
     ----------
@@ -299,6 +289,10 @@ class ElasticStructure(SurfaceBody):
         """Stable step (s): safety factor x 2 / omega_max (damping-reduced)."""
         return self.solver.stable_time_step()
 
+    def critical_time_step(self) -> float:
+        """Critical step (s) 2 / omega_max (damping-reduced), without the safety factor."""
+        return self.solver.critical_time_step()
+
     def step(self, dt: float) -> None:
         """Advance by ``dt`` (s) under the current loads and accumulated contact forces.
 
@@ -339,34 +333,13 @@ class ElasticStructure(SurfaceBody):
         """(Nn,) volume-weighted nodal average of the element von Mises stress (Pa)."""
         return nodal_average(self.mesh, self.von_mises(), self._volumes)
 
-    def probe(self, point) -> "Probe":
-        """A probe at ``point`` (m): the nearest node, and the element whose centre is nearest.
+    def probe(self, point) -> Probe:
+        """A probe at ``point`` (m) (:func:`pdfem.fem.probe.make_probe`)."""
+        return make_probe(self, point)
 
-        Probes are cheap to read every step (:meth:`probe_values`): the displacement gradient of
-        the element is one small precomputed matrix times the element's DOFs.
-        """
-        point = np.asarray(point, dtype=np.float64).reshape(3)
-        node = int(np.argmin(np.linalg.norm(self._x0 - point, axis=1)))
-        t = self.mesh.mesh.t
-        centres = self._x0[t].mean(axis=0)  # (Ne, 3)
-        element = int(np.argmin(np.linalg.norm(centres - point, axis=1)))
-        dofs = self.basis.element_dofs[:, element]
-        grad = np.empty((9, len(dofs)))
-        sub = skfem.Basis(self.mesh.mesh, self._stress_basis.elem, quadrature=(
-            self._stress_basis.X, self._stress_basis.W), elements=np.array([element]))
-        for k in range(len(dofs)):
-            e = np.zeros(self.dofmap.n_dofs)
-            e[dofs[k]] = 1.0
-            grad[:, k] = sub.interpolate(e).grad[:, :, 0, 0].ravel()
-        return Probe(node, element, self.dofmap.nodal_dofs[:, node].copy(), dofs.copy(), grad)
-
-    def probe_values(self, probe: "Probe") -> tuple[np.ndarray, float]:
+    def probe_values(self, probe: Probe) -> tuple[np.ndarray, float]:
         """Displacement (m, (3,)) of the probe's node and von Mises stress (Pa) of its element."""
-        g = (probe.gradient @ self.solver.u[probe.element_dofs]).reshape(3, 3)
-        eps = 0.5 * (g + g.T)
-        lam, mu = self.material.lame
-        sigma = 2.0 * mu * eps + lam * np.trace(eps) * np.eye(3)
-        return self.solver.u[probe.node_dofs].copy(), float(von_mises(sigma))
+        return probe_values(self, probe)
 
     def reaction(self, group: str) -> np.ndarray:
         """(3,) force (N) that the supports at the named group's nodes exert on the structure
@@ -374,3 +347,34 @@ class ElasticStructure(SurfaceBody):
         clamped)."""
         nodes = self.mesh.group_nodes(group)
         return reaction_force(self.solver.residual_force(), self.dofmap, nodes)
+
+    # ------------------------------------------------------------------ run interface
+    def output_mesh(self) -> tuple[np.ndarray, np.ndarray, str]:
+        """Nodes (m), elements and their meshio cell type."""
+        return self.points, self.cells, self.cell_type
+
+    def output_fields(self) -> dict[str, np.ndarray]:
+        """``u`` (Nn, 3) m and ``von_mises`` (Ne,) Pa."""
+        return {"u": self.displacement(), "von_mises": self.von_mises()}
+
+    def frame_history(self) -> dict[str, float | np.ndarray]:
+        """``kinetic``, ``strain`` (J) and ``reaction_<group>`` (N) of each clamped group."""
+        hist = {"kinetic": self.kinetic_energy(), "strain": self.strain_energy()}
+        for g in self.fixed_groups:
+            hist[f"reaction_{g}"] = self.reaction(g)
+        return hist
+
+    def describe(self) -> str:
+        """Nodes, elements and critical step."""
+        return (f"structure '{self.name}': {self.mesh.n_nodes:,} nodes, "
+                f"{self.mesh.n_elements:,} {self.cell_type} elements, critical step "
+                f"{self.critical_time_step():.3e} s")
+
+    def check_mesh(self) -> None:
+        """Refuse inverted or degenerate tetrahedra (:func:`pdfem.meshing.quality.check_cells`)."""
+        if self.cell_type == "tetra":
+            check_cells(self.points, self.cells, 3)
+
+    def is_finite(self) -> bool:
+        """Whether every displacement is finite."""
+        return bool(np.isfinite(self.displacement()).all())

@@ -75,6 +75,7 @@ from typing import TYPE_CHECKING, Sequence
 import numba
 import numpy as np
 
+from pdfem.forces.base import ParticleForce
 from pdfem.forces.short_range_kernels import (
     NO_SHIFT,
     NOT_FINITE,
@@ -87,7 +88,6 @@ from pdfem.forces.short_range_kernels import (
 )
 from pdfem.forces.short_range_ranks import DistributedSearch
 from pdfem.geometry.cell_hash import bounding_box, counting_sort
-from pdfem.pd.distributed import DistributedIce
 from pdfem.pd.workspace import SERIAL_BELOW_PARTICLES
 
 if TYPE_CHECKING:
@@ -127,7 +127,7 @@ def short_range_constant(K: float, delta: float, factor: float = 15.0) -> float:
 # the contact object
 
 
-class ShortRangeContact:
+class ShortRangeContact(ParticleForce):
     """Short-range repulsion among the particles of one or more ice bodies.
 
     Parameters
@@ -169,12 +169,12 @@ class ShortRangeContact:
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"{name} must be a positive finite number, got {v!r}")
         self.bodies: list = list(bodies)
-        distributed = [isinstance(b, DistributedIce) for b in self.bodies]
+        distributed = [b.distributed for b in self.bodies]
         if any(distributed) and not all(distributed):
             raise ValueError("short-range contact needs all ice bodies split over the ranks "
                              "(DistributedIce) or none")
         # the particles of all bodies, numbered body after body (whole bodies under MPI)
-        whole = [b.global_body if d else b for b, d in zip(self.bodies, distributed)]
+        whole = [b.global_body for b in self.bodies]
         sizes = [int(b.x0.shape[0]) for b in whole]
         self.offsets = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
         n = int(self.offsets[-1])
@@ -211,6 +211,9 @@ class ShortRangeContact:
         self.n_active = 0
         self.dense = True
         self.n_buckets = 0
+
+    energy_key = "short_range_potential"
+    """Key of :meth:`potential_energy` in the energy history (:class:`ParticleForce`)."""
 
     # -- search ---------------------------------------------------------------------------------
     def _reserve(self, n: int) -> None:

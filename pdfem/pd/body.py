@@ -13,7 +13,11 @@ stiff surface layers of the LPS; bodies from arbitrary point clouds
 
 Bonds cost 16 bytes each: int32 partner (``nbr``), float64 reference length (``xi_len``) and a
 float32 weight (``weight``) whose sign marks a broken bond (:data:`pdfem.pd.kernels.SIGNED`);
-``broken`` gives the flags as a uint8 copy.
+``broken`` gives the flags as a uint8 copy. Which bonds break is the body's failure law's
+decision (:mod:`pdfem.pd.failure`; default: the material's critical stretch), which gives the
+kernels their threshold. The body implements the ice-body interface that contact, particle
+forces and output use (:class:`pdfem.pd.ice_interface.IceParticles`), as a whole body: every
+particle is owned.
 
 One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (kg/m^3)::
 
@@ -23,16 +27,21 @@ One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (k
     theta(y); f(y, theta)        dilatation, then forces and bond breaking
     v += dt/2 (f/rho + g)        kick
     v = prescribed on constrained particles
+
+with g the uniform body acceleration ``gravity`` (set by :class:`pdfem.forces.gravity.Gravity`).
 """
 
 from __future__ import annotations
 
-from dataclasses import InitVar, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from pdfem.pd import kernels
 from pdfem.pd.bonds import bond_lengths, cut_crack
+from pdfem.pd.constraints import VelocityConstraint
+from pdfem.pd.failure import CriticalStretch, FailureLaw
+from pdfem.pd.ice_interface import WholeBody
 from pdfem.pd.family import build_family
 from pdfem.pd.influence import bond_weights, isotropy_gain
 from pdfem.pd.surface import surface_corrected_weights
@@ -43,25 +52,7 @@ from pdfem.pd.search import cell_pairs
 
 
 @dataclass
-class VelocityConstraint:
-    """Particles ``index`` move with ``velocity`` (m/s) scaled by min(1, t / ramp_time)."""
-
-    index: np.ndarray
-    velocity: np.ndarray
-    ramp_time: float = 0.0
-
-    def value(self, t: float) -> np.ndarray:
-        s = 1.0 if self.ramp_time <= 0.0 else min(1.0, max(t, 0.0) / self.ramp_time)
-        return self.velocity * s
-
-    def acceleration(self, t: float) -> np.ndarray:
-        if self.ramp_time > 0.0 and t < self.ramp_time:
-            return self.velocity / self.ramp_time
-        return np.zeros(3)
-
-
-@dataclass
-class IceBody:
+class IceBody(WholeBody):
     """State of one peridynamic ice body (all arrays SI, particles in cell order).
 
     Build one with :meth:`from_points` (or :func:`pdfem.run.build_ice.build_ice_body` from a case).
@@ -85,25 +76,27 @@ class IceBody:
     weight: np.ndarray = None  # (P,) float32 bond weights omega = w beta, negative = broken
     influence_gain: float = 0.0  # gain g of the cubic influence function (0: w = 1)
     loop: str = "pairs"
+    # uniform body acceleration (m/s^2) of the kick, set by pdfem.forces.gravity.Gravity
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     fixed: np.ndarray = None  # (N,) bool
     constraints: list = field(default_factory=list)
     external_work: float = 0.0
     time: float = 0.0
+    failure: FailureLaw | None = None  # default: critical stretch of the material at delta
     # Optional (P,) uint8 broken flags. Without them (how the builders make bodies) a broken
-    # bond is a negative weight. Given (e.g. by dataclasses.replace(body, broken=...)), the body
+    # bond is a negative weight. Given (e.g. by dataclasses.replace(body, flags=...)), the body
     # keeps them as a separate array that the kernels update in place, and ``broken`` is it.
-    broken: InitVar[np.ndarray | None] = None
-    _flags: np.ndarray | None = field(default=None, init=False, repr=False, compare=False)
+    flags: np.ndarray | None = field(default=None, repr=False, compare=False)
 
-    def __post_init__(self, broken):
-        if isinstance(broken, np.ndarray):
-            self._flags = broken
+    def __post_init__(self) -> None:
+        if self.failure is None:
+            self.failure = CriticalStretch.from_material(self.material, self.delta)
 
     @classmethod
     def from_points(cls, name: str, x: np.ndarray, material: IceMaterial, dx: float, delta: float,
                     *, loop: str = "pairs", volume: np.ndarray | None = None,
-                    isotropic: bool = False, surface_correction: bool = False) -> "IceBody":
+                    isotropic: bool = False, surface_correction: bool = False,
+                    failure: FailureLaw | None = None) -> "IceBody":
         """Build a body from particle positions: cell-sort them, find bonds, set up state.
 
         Parameters
@@ -130,6 +123,9 @@ class IceBody:
         surface_correction
             Correct the bond weights so that every family's second moment is isotropic
             (:func:`pdfem.pd.surface.surface_corrected_weights`).
+        failure
+            The failure law of the bonds (:mod:`pdfem.pd.failure`); default: the critical
+            stretch of ``material`` at ``delta``.
 
         Raises
         ------
@@ -147,7 +143,7 @@ class IceBody:
                else np.ascontiguousarray(np.asarray(volume, dtype=np.float64)[perm]))
         body = cls(name=name, x0=x0, vol=vol, material=material, dx=float(dx), delta=float(delta),
                    row_ptr=row_ptr, nbr=nbr, xi_len=bond_lengths(x0, row_ptr, nbr),
-                   nofail=np.zeros(n, dtype=np.uint8), loop=loop)
+                   nofail=np.zeros(n, dtype=np.uint8), loop=loop, failure=failure)
         body.y = x0.copy()
         body.v = np.zeros_like(x0)
         body.f = np.zeros_like(x0)
@@ -190,12 +186,25 @@ class IceBody:
 
     def _broken_arg(self) -> np.ndarray:
         """What the kernels get as ``broken``: the flag array, or SIGNED (negative weights)."""
-        return SIGNED if self._flags is None else self._flags
+        return SIGNED if self.flags is None else self.flags
+
+    @property
+    def broken(self) -> np.ndarray:
+        """(P,) uint8 broken flags, 1 = broken. For a body that stores broken bonds as negative
+        weights (16 bytes per pair) this is a copy; assign a flag array to change the flags."""
+        return kernels.broken_flags(self.weight) if self.flags is None else self.flags
+
+    @broken.setter
+    def broken(self, flags: np.ndarray) -> None:
+        if self.flags is None:
+            self.weight[:] = kernels.signed_weights(self.weight, flags)
+        else:
+            self.flags[:] = flags
 
     @property
     def s0(self) -> float:
-        """Critical stretch (inf when the material cannot break)."""
-        return self.material.s0(self.delta)
+        """The stretch above which bonds break (:attr:`failure`; inf: never)."""
+        return self.failure.stretch_limit()
 
     def cut_crack(self, point, normal, lo, hi) -> int:
         """Break the bonds crossing a planar pre-crack (see :func:`pdfem.pd.bonds.cut_crack`)."""
@@ -340,13 +349,6 @@ class IceBody:
                                   br, self.vol, self.m, theta, mat.K, mat.mu, self._ws)
         return float(np.dot(W, self.vol))
 
-    def gravity_potential(self) -> float:
-        """Potential energy in the gravity field relative to the reference positions, J."""
-        if not np.any(self.gravity):
-            return 0.0
-        u = self.y - self.x0
-        return -self.material.density * float(np.sum(self.vol * (u @ self.gravity)))
-
     def momentum(self) -> np.ndarray:
         """Linear momentum (3,), kg m/s."""
         return self.material.density * (self.vol @ self.v)
@@ -387,21 +389,3 @@ STATE_ARRAYS = ("y", "v", "f", "broken", "theta")
 
 STATE_SCALARS = ("time", "external_work")
 """Scalar state of an ice body (s, J), for checkpoints."""
-
-
-def _get_broken(self: IceBody) -> np.ndarray:
-    """(P,) uint8 broken flags, 1 = broken. For a body that stores broken bonds as negative
-    weights (16 bytes per pair) this is a copy; assign a flag array to change the flags."""
-    return kernels.broken_flags(self.weight) if self._flags is None else self._flags
-
-
-def _set_broken(self: IceBody, flags: np.ndarray) -> None:
-    if self._flags is None:
-        self.weight[:] = kernels.signed_weights(self.weight, flags)
-    else:
-        self._flags[:] = flags
-
-
-# set after the dataclass is made, so that ``broken`` is both an optional constructor argument
-# (an InitVar with default None) and a property
-IceBody.broken = property(_get_broken, _set_broken)

@@ -30,7 +30,8 @@ import time
 import numpy as np
 
 from pdfem.pd import kernels
-from pdfem.pd.body import IceBody, VelocityConstraint
+from pdfem.pd.body import IceBody
+from pdfem.pd.constraints import VelocityConstraint
 
 
 @dataclasses.dataclass
@@ -85,6 +86,10 @@ def halo_plan(owner: np.ndarray, row_ptr: np.ndarray, nbr: np.ndarray, rank: int
 class DistributedIce:
     """This rank's part of an ice body, advanced in step with the other ranks.
 
+    It implements the ice-body interface of :class:`pdfem.pd.ice_interface.IceParticles`, as
+    the whole :class:`~pdfem.pd.body.IceBody` does, so the coupler, the particle forces and the
+    output treat both alike.
+
     Parameters
     ----------
     body
@@ -115,7 +120,7 @@ class DistributedIce:
             nofail=body.nofail[loc].copy(), y=body.y[loc].copy(), v=body.v[loc].copy(),
             f=np.zeros((len(loc), 3)), m=body.m[loc].copy(), theta=np.zeros(len(loc)),
             weight=kernels.signed_weights(body.weight[pairs], body.broken[pairs]),
-            broken=None,  # broken bonds are negative weights (replace would copy the flags)
+            flags=None,  # broken bonds are negative weights (replace would copy the flags)
             fixed=body.fixed[loc].copy(), constraints=[],
             loop="pairs", external_work=0.0)
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
@@ -170,12 +175,13 @@ class DistributedIce:
         self.body.end_step(dt)
         return int(self.comm.allreduce_sum(broken))
 
-    # -- the IceBody interface the coupler and the driver use ---------------------------------
+    # -- the IceParticles interface (pdfem.pd.ice_interface) ----------------------------------
     # Arrays are the local ones (owned and halo particles); sums are over owned particles and
     # over all ranks, so every rank gets the same totals.
+    distributed = True
     name = property(lambda self: self.body.name)
     material = property(lambda self: self.body.material)
-    gravity = property(lambda self: self.body.gravity)
+    failure = property(lambda self: self.body.failure)
     dx = property(lambda self: self.body.dx)
     delta = property(lambda self: self.body.delta)
     s0 = property(lambda self: self.body.s0)
@@ -193,6 +199,15 @@ class DistributedIce:
         """(n_local,) bool: the particles this rank owns (contact is resolved for these)."""
         return self.plan.owned
 
+    @property
+    def gravity(self) -> np.ndarray:
+        """(3,) uniform body acceleration of the kick (m/s^2)."""
+        return self.body.gravity
+
+    @gravity.setter
+    def gravity(self, value) -> None:
+        self.body.gravity = value
+
     def begin_step(self, dt: float, keep_old: bool = False):
         return self.body.begin_step(dt, keep_old)
 
@@ -203,8 +218,11 @@ class DistributedIce:
     def end_step(self, dt: float) -> None:
         self.body.end_step(dt)
 
-    def _sum(self, per_particle: np.ndarray):
+    def owned_sum(self, per_particle: np.ndarray):
+        """Sum of a local per-particle array over the owned particles of all ranks."""
         return self.comm.allreduce_sum(per_particle[self.plan.owned].sum(axis=0))
+
+    _sum = owned_sum
 
     @property
     def external_work(self) -> float:
@@ -228,12 +246,6 @@ class DistributedIce:
                                   b.m, theta, mat.K, mat.mu, b._ws)
         return float(self._sum(W * b.vol))
 
-    def gravity_potential(self) -> float:
-        b = self.body
-        if not np.any(b.gravity):
-            return 0.0
-        return -b.material.density * float(self._sum(b.vol * ((b.y - b.x0) @ b.gravity)))
-
     def momentum(self) -> np.ndarray:
         b = self.body
         return b.material.density * self._sum(b.vol[:, None] * b.v)
@@ -253,6 +265,25 @@ class DistributedIce:
         for idx, vals in parts:
             out[idx] = vals
         return out
+
+    def frame_fields(self) -> dict[str, np.ndarray] | None:
+        """``{"u" m, "v" m/s, "damage"}`` in global order on rank 0 (``None`` elsewhere; every
+        rank must call it)."""
+        u = self.gather(self.body.displacement())
+        v = self.gather(self.body.v)
+        d = self.gather(self.damage())
+        return None if u is None else {"u": u, "v": v, "damage": d}
+
+    def owned_reference(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Global numbers, reference positions (m) and volumes (m^3) of the owned particles."""
+        own = self.owned
+        return self.plan.local[own], self.x0[own], self.vol[own]
+
+    def owned_frame_fields(self) -> dict[str, np.ndarray]:
+        """``{"u", "v", "damage"}`` of the owned particles, in :meth:`owned_reference` order."""
+        own = self.owned
+        return {"u": self.body.displacement()[own], "v": self.body.v[own],
+                "damage": self.damage()[own]}
 
     # -- checkpoints -------------------------------------------------------------------------
     def checkpoint_state(self) -> dict | None:

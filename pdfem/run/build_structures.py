@@ -1,4 +1,5 @@
-"""Structures from validated case entries: mesh the model (or read the .msh), then assemble.
+"""Structures from validated case entries: mesh the model (or read the .msh), then build the
+structure of the entry's kind (the registry :data:`STRUCTURE_KINDS`).
 
 A model named in the case (a model of ``models/`` or a ``.py`` file) is meshed with gmsh into the
 run's output directory, so the mesh used by a run is kept beside its results. Problems with the
@@ -7,10 +8,12 @@ mesh or its groups are user errors, reported with the case-file field.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 from pdfem.case.schema import StructureConfig
 from pdfem.errors import InputError
+from pdfem.fem.base import Structure
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.rigid import RigidBody
 from pdfem.fem.structure import ElasticStructure
@@ -34,31 +37,50 @@ def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
     return target
 
 
-def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
-                    remesh: bool = True):
-    """Build the elastic structure or rigid body that ``cfg`` describes (``remesh``: see
-    :func:`structure_mesh`).
+def _rigid(cfg: StructureConfig, path: Path, file: str) -> RigidBody:
+    """A rigid body with the case's prescribed motion, from its contact group's surface."""
+    return RigidBody.from_msh(path, cfg.contact_group, velocity=cfg.velocity,
+                              angular_velocity=cfg.angular_velocity, centre=cfg.center,
+                              name=cfg.name)
 
-    Returns
-    -------
-    ElasticStructure or RigidBody
+
+def _elastic(cfg: StructureConfig, path: Path, file: str) -> ElasticStructure:
+    """An elastic FE structure with its supports, damping and surface loads."""
+    material = ElasticMaterial(cfg.density, cfg.youngs_modulus, cfg.poisson_ratio)
+    s = ElasticStructure.from_file(path, material, fixed_groups=cfg.fixed_groups,
+                                   contact_group=cfg.contact_group, name=cfg.name,
+                                   rayleigh_alpha=cfg.damping_alpha, rayleigh_beta=cfg.damping_beta)
+    for load in cfg.loads:
+        try:
+            s.add_surface_load(load.group, load.traction, load.pressure, history=load.pulse)
+        except ValueError as exc:
+            raise InputError(file, f"{load.field}.group", str(exc), load.group) from None
+    return s
+
+
+STRUCTURE_KINDS: dict[str, Callable[[StructureConfig, Path, str], Structure]] = {
+    "elastic": _elastic,
+    "rigid": _rigid,
+}
+"""The case's structure ``kind`` -> builder ``(config, mesh path, case file) -> Structure``.
+A new kind: its :class:`~pdfem.fem.base.Structure` in a new file of :mod:`pdfem.fem` and one
+line here (builder errors: :class:`ValueError` or :class:`OSError` for a bad mesh, or an
+:class:`~pdfem.errors.InputError` naming the field)."""
+
+
+def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
+                    remesh: bool = True) -> Structure:
+    """Build the structure that ``cfg`` describes with the builder of its kind
+    (:data:`STRUCTURE_KINDS`; ``remesh``: see :func:`structure_mesh`).
+
+    Raises
+    ------
+    InputError
+        For a mesh or group the structure cannot be built from.
     """
     path = structure_mesh(cfg, out_dir, file, remesh)
     try:
-        if cfg.kind == "rigid":
-            return RigidBody.from_msh(path, cfg.contact_group, velocity=cfg.velocity,
-                                      angular_velocity=cfg.angular_velocity, centre=cfg.center,
-                                      name=cfg.name)
-        material = ElasticMaterial(cfg.density, cfg.youngs_modulus, cfg.poisson_ratio)
-        s = ElasticStructure.from_file(path, material, fixed_groups=cfg.fixed_groups,
-                                       contact_group=cfg.contact_group, name=cfg.name,
-                                       rayleigh_alpha=cfg.damping_alpha, rayleigh_beta=cfg.damping_beta)
-        for load in cfg.loads:
-            try:
-                s.add_surface_load(load.group, load.traction, load.pressure, history=load.pulse)
-            except ValueError as exc:
-                raise InputError(file, f"{load.field}.group", str(exc), load.group) from None
-        return s
+        return STRUCTURE_KINDS[cfg.kind](cfg, path, file)
     except InputError:
         raise
     except (ValueError, OSError) as exc:

@@ -4,9 +4,10 @@
   every rank reads the same meshes (the structures are small and replicated on every rank).
 * :func:`distribute`: split each ice body over the ranks (the partition is reported), or leave
   it whole on a single rank.
-* :func:`gather_frame`: the per-particle fields of a frame assembled on rank 0; or, for runs
-  that write one ice file per rank, :func:`owned_reference` and :func:`owned_frame`: this
-  rank's particles only.
+* :func:`warm_before_ranks`: rank 0 fills numba's kernel cache before the other ranks start.
+
+Gathering a frame to rank 0 (or keeping each rank's particles) is the ice bodies' own business
+(:class:`pdfem.pd.ice_interface.IceParticles`).
 """
 
 from __future__ import annotations
@@ -64,38 +65,10 @@ def distribute(bodies: list, comm, say=lambda s: None) -> list:
     return out
 
 
-def gather_frame(body) -> dict | None:
-    """``{"u", "v", "damage"}`` of a body in global order on rank 0 (``None`` elsewhere)."""
-    if not isinstance(body, DistributedIce):
-        return {"u": body.displacement(), "v": body.v, "damage": body.damage()}
-    u = body.gather(body.body.displacement())
-    v = body.gather(body.body.v)
-    d = body.gather(body.damage())
-    return None if u is None else {"u": u, "v": v, "damage": d}
-
-
-def owned_reference(body) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Global numbers, reference positions (m) and volumes (m^3) of the particles this rank
-    owns (all of them for a whole body)."""
-    if not isinstance(body, DistributedIce):
-        return np.arange(body.n), body.x0, body.vol
-    own = body.owned
-    return body.plan.local[own], body.x0[own], body.vol[own]
-
-
-def owned_frame(body) -> dict:
-    """``{"u", "v", "damage"}`` of the particles this rank owns, in the order of
-    :func:`owned_reference`."""
-    if not isinstance(body, DistributedIce):
-        return gather_frame(body)
-    own = body.owned
-    return {"u": body.body.displacement()[own], "v": body.body.v[own],
-            "damage": body.damage()[own]}
-
-
 def any_rank(flag: bool, comm) -> bool:
     """True on every rank if ``flag`` is true on any."""
     return bool(comm.allreduce_sum(np.int64(bool(flag))))
+
 
 def warm_up() -> None:
     """Run two steps of a tiny ice cube pressed by a rigid plate (with short-range contact),
@@ -108,7 +81,7 @@ def warm_up() -> None:
                                 [-1, 1, 0.0501]]), np.array([[0, 1, 2], [0, 2, 3]]),
                       velocity=(0, 0, -1.0))
     pair = ContactPair("warm", ice, plate, SurfaceContact(plate, 0.005))
-    c = Coupler([ice], [plate], [pair], 1e-6, short_range=ShortRangeContact([ice]),
+    c = Coupler([ice], [plate], [pair], 1e-6, forces=[ShortRangeContact([ice])],
                 comm=SerialComm())
     c.start()
     for _ in range(2):

@@ -1,0 +1,98 @@
+"""The structure interface: what the coupler and the driver need from any structure.
+
+A structure is a body with a contact surface (:class:`pdfem.fem.surface.SurfaceBody`: surface
+nodes, triangles, the contact forces it receives) that advances in time under those forces.
+:class:`Structure` adds what a run needs from it: its stable-step limit, output (mesh, fields
+per frame, a history row per frame), energies, how the work of the contact loads on it counts in
+the energy balance, a mesh check, checkpoints, and a line for the start-up report. The driver
+calls only these methods, so it never asks which kind of structure it holds.
+
+Implementations: :class:`pdfem.fem.structure.ElasticStructure` (linear-elastic FE, explicit)
+and :class:`pdfem.fem.rigid.RigidBody` (prescribed rigid motion).
+
+Adding a kind
+-------------
+Write one new file in :mod:`pdfem.fem` with a subclass of :class:`Structure`, and add one line
+to :data:`pdfem.run.build_structures.STRUCTURE_KINDS` mapping the case's ``kind`` to a builder
+``(config, mesh path, case file) -> Structure`` (a classmethod of the new class, or a small
+function beside the registry). Override what differs from the defaults below: a structure
+without elastic energy, step limit or mesh checks inherits zeros, ``inf`` and no check.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from pdfem.fem.surface import SurfaceBody
+
+
+class Structure(SurfaceBody, ABC):
+    """A structure in a coupled run (SI units: m, s, N, J, Pa)."""
+
+    name: str
+
+    prescribed_motion: bool = False
+    """True when the structure moves as prescribed, whatever the loads (a rigid indenter): the
+    work of the contact loads on it is then energy supplied to the ice from outside, not energy
+    the structure stores. False for a structure that responds to its loads."""
+
+    # -- time stepping -------------------------------------------------------------------------
+    @abstractmethod
+    def step(self, dt: float) -> None:
+        """Advance by ``dt`` (s) under the current loads and contact forces."""
+
+    def critical_time_step(self) -> float:
+        """Stable-step limit (s) of the explicit integration, no safety factor; ``inf`` if none."""
+        return math.inf
+
+    def stable_time_step(self) -> float:
+        """Largest stable step (s) with the structure's own safety factor; ``inf`` if none."""
+        return math.inf
+
+    # -- output --------------------------------------------------------------------------------
+    @abstractmethod
+    def output_mesh(self) -> tuple[np.ndarray, np.ndarray, str]:
+        """``(points (m), cells, meshio cell type)`` of the mesh that output fields live on."""
+
+    @abstractmethod
+    def output_fields(self) -> dict[str, np.ndarray]:
+        """Fields of one output frame on :meth:`output_mesh`: at least ``u`` (nodal
+        displacement, m); ``von_mises`` (Pa) per cell where the structure has stresses."""
+
+    def frame_history(self) -> dict[str, float | np.ndarray]:
+        """One history row per output frame (energies J, support reactions N); empty: none."""
+        return {}
+
+    def describe(self) -> str:
+        """One line for the start-up report."""
+        return f"structure '{self.name}'"
+
+    # -- energy balance ------------------------------------------------------------------------
+    def kinetic_energy(self) -> float:
+        """Kinetic energy (J) the structure holds (0 for a prescribed motion)."""
+        return 0.0
+
+    def strain_energy(self) -> float:
+        """Elastic energy (J) the structure holds (0 for a rigid body)."""
+        return 0.0
+
+    # -- checks --------------------------------------------------------------------------------
+    def check_mesh(self) -> None:
+        """Raise :class:`pdfem.meshing.quality.MeshQualityError` for a mesh the structure cannot
+        be run on (inverted or degenerate elements); nothing to check by default."""
+
+    def is_finite(self) -> bool:
+        """Whether the state is finite (after a blow-up, to decide on a last frame)."""
+        return True
+
+    # -- checkpoints ---------------------------------------------------------------------------
+    @abstractmethod
+    def checkpoint_state(self) -> dict[str, np.ndarray | float]:
+        """Copies of the state a restart needs."""
+
+    @abstractmethod
+    def restore_state(self, state: dict) -> None:
+        """Put a state from :meth:`checkpoint_state` back, exactly."""

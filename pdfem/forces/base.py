@@ -1,0 +1,37 @@
+"""The particle-force interface: forces on ice particles other than their bonds.
+
+A particle force acts on a list of ice bodies (:class:`pdfem.pd.ice_interface.IceParticles`).
+Every ice step, once the bodies' bond forces are computed at the new positions, the coupler
+(:class:`pdfem.coupling.coupler.Coupler`) calls :meth:`ParticleForce.add_forces` of each force
+in its list, which adds force density (N/m^3) into the bodies' ``f`` arrays (for owned
+particles; under MPI every call is collective). For the energy balance each force reports the
+potential energy of its field (:meth:`ParticleForce.potential_energy`, J) under the history key
+:attr:`ParticleForce.energy_key`.
+
+Adding a force
+--------------
+Write one new file in :mod:`pdfem.forces` with a subclass of :class:`ParticleForce`, and add
+one line to the registry of particle-force kinds, :data:`pdfem.run.build_forces.PARTICLE_FORCES`
+(its builder makes the force from the case, or returns ``None`` when the case does not use it).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+
+class ParticleForce(ABC):
+    """A force on ice particles, added to their force density every ice step (SI units)."""
+
+    energy_key: str = ""
+    """Name of this force's potential energy in the energy history (J)."""
+
+    @abstractmethod
+    def add_forces(self) -> int | None:
+        """Add this force's force density (N/m^3) at the current positions into the bodies'
+        ``f``; may return a count for diagnostics (e.g. interacting pairs)."""
+
+    @abstractmethod
+    def potential_energy(self) -> float:
+        """Potential energy (J) of the force at the current positions (0 for a force without
+        one); the same on every rank."""

@@ -1,0 +1,81 @@
+"""Output sources: what a component of a run writes to the results, and when.
+
+A source (an ice body, a structure, a contact pair, a monitor, the energy balance) hands the
+results writer its data at two moments:
+
+* every output frame: fields on its mesh (:meth:`OutputSource.frame_fields`: per particle,
+  node or cell, written under ``/ice/<name>`` or ``/structure/<name>``) and history rows
+  (:meth:`OutputSource.frame_rows`);
+* every coupling step: history rows (:meth:`OutputSource.step_rows`).
+
+A history row is ``{group: {key: scalar or small array}}``, e.g. ``{"loads/panel": {"force":
+(3,), "moment": (3,), "contacts": n}}``. Units are SI; :data:`UNITS` names the unit of each key
+pdfem writes. The driver adapts sources to the writer's calls
+(:class:`pdfem.output.results.ResultsWriter`: ``write_frame`` and ``append_history``).
+
+Adding a source
+---------------
+Write a class with the methods of :class:`OutputSource` (subclass :class:`Source` for empty
+defaults) in the module of the component it reports on, or in :mod:`pdfem.run.outputs`, and
+add one entry to :data:`pdfem.run.outputs.SOURCE_KINDS` (its ``of_run(setup, per_rank)``
+makes the sources of a built run).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+Rows = dict[str, dict[str, Any]]
+"""History rows: ``{history group: {key: value}}``."""
+
+UNITS: dict[str, str] = {
+    "u": "m", "v": "m/s", "damage": "1", "von_mises": "Pa",
+    "force": "N", "moment": "N m", "contacts": "1",
+    "kinetic": "J", "strain": "J", "gravity_potential": "J", "external_work": "J",
+    "structure_kinetic": "J", "structure_strain": "J", "short_range_potential": "J",
+    "rigid_body_work": "J", "dissipated": "J", "contact_dissipated": "J",
+    "fracture_dissipated": "J", "reaction_<group>": "N",
+}
+"""Unit of each field or history key that pdfem writes."""
+
+
+@runtime_checkable
+class OutputSource(Protocol):
+    """What a component writes: fields per frame, history rows per frame and per step."""
+
+    name: str
+    mesh_kind: str
+    """``"ice"``, ``"structure"`` (fields on a mesh of that group) or ``""`` (histories only)."""
+
+    def frame_fields(self) -> dict[str, np.ndarray] | None:
+        """Fields of one output frame on the source's mesh (None: nothing on this rank)."""
+        ...
+
+    def frame_rows(self) -> Rows:
+        """History rows written at every output frame."""
+        ...
+
+    def step_rows(self) -> Rows:
+        """History rows written at every coupling step."""
+        ...
+
+
+class Source:
+    """An :class:`OutputSource` that writes nothing; subclasses override what they write."""
+
+    name: str = ""
+    mesh_kind: str = ""
+
+    def frame_fields(self) -> dict[str, np.ndarray] | None:
+        """No fields."""
+        return None
+
+    def frame_rows(self) -> Rows:
+        """No rows."""
+        return {}
+
+    def step_rows(self) -> Rows:
+        """No rows."""
+        return {}

@@ -1,0 +1,35 @@
+"""The critical-stretch failure law: a bond breaks for good when its stretch exceeds s0.
+
+s0 is the material's given critical stretch, or follows from its fracture energy G0 and the
+horizon delta (:func:`pdfem.pd.materials.lps.critical_stretch`, 3-D OSB-PD); without either the
+bonds never break (s0 = inf). The numba kernels compare each bond's stretch with
+:meth:`CriticalStretch.stretch_limit`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class CriticalStretch:
+    """Bonds with stretch ``e / |xi| > s0`` break (no-fail particles excepted, in the kernels).
+
+    Parameters
+    ----------
+    s0
+        The critical stretch (dimensionless, > 0; ``inf``: bonds never break).
+    """
+
+    s0: float
+    name: str = "critical_stretch"
+
+    @classmethod
+    def from_material(cls, material, delta: float) -> "CriticalStretch":
+        """The law of an ice material (:class:`pdfem.pd.materials.lps.IceMaterial`) at
+        horizon ``delta`` (m): ``s0 = material.s0(delta)``."""
+        return cls(float(material.s0(delta)))
+
+    def stretch_limit(self) -> float:
+        """s0, the stretch above which a bond breaks."""
+        return self.s0

@@ -1,0 +1,106 @@
+"""The interface of an ice body that the coupler, the particle forces and the output use.
+
+Two classes implement it: :class:`pdfem.pd.body.IceBody`, a whole body on one rank (through
+:class:`WholeBody` below), and :class:`pdfem.pd.distributed.DistributedIce`, one rank's part of
+a body split over MPI ranks. Code above them (contact, short-range forces, the driver and its
+output) uses only what :class:`IceParticles` lists, so it never asks which of the two it holds:
+per-particle arrays are the rank's local ones, ``owned`` marks the particles the rank answers
+for, sums and gathers run over the owned particles of all ranks. A new kind of ice body
+implements :class:`IceParticles` (one new file) and is made by a builder in :mod:`pdfem.run`.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+
+@runtime_checkable
+class IceParticles(Protocol):
+    """What the rest of pdfem needs from an ice body (SI units)."""
+
+    name: str
+    distributed: bool   # split over MPI ranks (every sum and gather is then collective)
+    x0: np.ndarray      # (n, 3) reference positions of the local particles, m
+    y: np.ndarray       # (n, 3) positions, m
+    v: np.ndarray       # (n, 3) velocities, m/s
+    f: np.ndarray       # (n, 3) force density, N/m^3 (particle forces add into it)
+    vol: np.ndarray     # (n,) volumes, m^3
+    gravity: np.ndarray  # (3,) uniform body acceleration of the kick, m/s^2
+
+    @property
+    def owned(self) -> np.ndarray:
+        """(n,) bool: the local particles this rank owns."""
+        ...
+
+    @property
+    def global_body(self):
+        """The whole body (:class:`pdfem.pd.body.IceBody`), as built on every rank."""
+        ...
+
+    def start(self) -> None: ...
+
+    def begin_step(self, dt: float, keep_old: bool = False) -> np.ndarray | None: ...
+
+    def compute_forces(self) -> int: ...
+
+    def end_step(self, dt: float) -> None: ...
+
+    def owned_sum(self, values: np.ndarray):
+        """Sum of a local per-particle array over the owned particles of all ranks."""
+        ...
+
+    def gather(self, values: np.ndarray) -> np.ndarray | None:
+        """Owned entries of a local per-particle array in global order on rank 0, else None."""
+        ...
+
+    def frame_fields(self) -> dict[str, np.ndarray] | None:
+        """``{"u", "v", "damage"}`` in global order on rank 0 (None elsewhere; collective)."""
+        ...
+
+    def owned_reference(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Global numbers, reference positions (m) and volumes (m^3) of the owned particles."""
+        ...
+
+    def owned_frame_fields(self) -> dict[str, np.ndarray]:
+        """:meth:`frame_fields` of the owned particles, in :meth:`owned_reference` order."""
+        ...
+
+
+class WholeBody:
+    """:class:`IceParticles` for a body held whole by one rank: every particle is owned, sums
+    are plain sums, gathers return the array itself. Needs ``n``, ``x0``, ``vol``, ``v``,
+    ``displacement()`` and ``damage()`` of the class it is mixed into."""
+
+    distributed = False
+
+    @property
+    def owned(self) -> np.ndarray:
+        """(N,) bool, all True."""
+        return np.ones(self.n, dtype=np.bool_)
+
+    @property
+    def global_body(self):
+        """The body itself."""
+        return self
+
+    def owned_sum(self, values: np.ndarray):
+        """``values.sum(axis=0)``."""
+        return values.sum(axis=0)
+
+    def gather(self, values: np.ndarray) -> np.ndarray:
+        """``values`` itself (already in global order)."""
+        return values
+
+    def frame_fields(self) -> dict[str, np.ndarray]:
+        """``{"u" m, "v" m/s, "damage"}`` of every particle."""
+        return {"u": self.displacement(), "v": self.v, "damage": self.damage()}
+
+    def owned_reference(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``arange(n)``, ``x0`` (m), ``vol`` (m^3)."""
+        return np.arange(self.n), self.x0, self.vol
+
+    def owned_frame_fields(self) -> dict[str, np.ndarray]:
+        """Same as :meth:`frame_fields`."""
+        return self.frame_fields()

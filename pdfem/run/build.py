@@ -1,0 +1,144 @@
+"""Build a run from a case: ice bodies, structures, contact pairs, particle forces, coupler.
+
+:func:`build` is the first of the driver's three steps (build -> loop -> finish, see
+:mod:`pdfem.run.driver`). It translates the validated case into physics objects through the
+builders of :mod:`pdfem.run` (ice: :func:`pdfem.run.build_ice.build_ice_body`; structures: the
+kinds of :data:`pdfem.run.build_structures.STRUCTURE_KINDS`; particle forces: the kinds of
+:data:`pdfem.run.build_forces.PARTICLE_FORCES`), checks what can only be checked on the built
+objects (meshes, ice starting inside a structure, the time step), splits the ice over the MPI
+ranks and reports what it built with ``say``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pdfem.case.schema import Case
+from pdfem.coupling.contact import SurfaceContact, overlapping
+from pdfem.coupling.coupler import ContactPair, Coupler
+from pdfem.errors import InputError
+from pdfem.meshing.quality import MeshQualityError
+from pdfem.run.build_forces import build_forces
+from pdfem.run.build_ice import build_ice_body
+from pdfem.run.parallel import build_structures, distribute
+from pdfem.run.timesteps import choose_time_steps
+
+
+@dataclass
+class Setup:
+    """A built run (SI units)."""
+
+    bodies: list                 # ice bodies (whole, or this rank's part under MPI)
+    structures: list             # pdfem.fem.base.Structure
+    pairs: list                  # ContactPair
+    forces: list                 # pdfem.forces.base.ParticleForce
+    coupler: Coupler
+    probes: list                 # (monitor name, structure, probe)
+    dt: float                    # coupling step, s
+    n_ice: int                   # ice substeps per coupling step
+    n_st: int                    # structure substeps per coupling step
+    nsteps: int                  # coupling steps to the end time
+    stable: dict[str, float]     # stable step of each ice body, s
+    particles: int
+    bonds: int
+    cut: int                     # bonds broken before the run (pre-cracks)
+    reference: dict = field(default_factory=dict)  # body name -> (x0 m, vol m^3), global order
+
+
+def check_mesh(st, cfg, file: str) -> None:
+    """Refuse a structure whose mesh has bad elements (exit 2), naming its case field."""
+    try:
+        st.check_mesh()
+    except MeshQualityError as exc:
+        raise InputError(file, f"{cfg.field}.mesh", f"the mesh of structure '{st.name}' has bad "
+                         f"elements: {exc}; fix or re-mesh it", cfg.mesh) from None
+
+
+def contact_pairs(case: Case, bodies: list, structures: list) -> list[ContactPair]:
+    """The case's contact pairs, refused if the structure has no contact surface or the ice
+    starts inside it."""
+    by_name = {b.name: b for b in bodies} | {s.name: s for s in structures}
+    pairs = []
+    for c in case.contacts:
+        body, st = by_name[c.ice], by_name[c.structure]
+        if len(st.surface_triangles) == 0:
+            raise InputError(case.file, f"{c.field or 'contact'}.structure",
+                             f"structure '{st.name}' has no contact surface (its contact_group "
+                             "names no faces)", c.structure)
+        radius = c.search_radius or 0.5 * body.dx
+        depth = max(radius, body.delta)
+        inside = overlapping(st, body.y, depth)
+        if inside.any():
+            i = int(np.flatnonzero(inside)[0])
+            raise InputError(case.file, c.field or "contact",
+                             f"{int(inside.sum())} particles of ice '{body.name}' start inside "
+                             f"structure '{st.name}' (behind its contact surface, up to {depth:g} m "
+                             f"deep; the first at {body.x0[i].round(6).tolist()} m); move the ice "
+                             "or the structure so that they start apart")
+        pairs.append(ContactPair(c.name, body, st,
+                                 SurfaceContact(st, radius, c.friction, name=c.name)))
+    return pairs
+
+
+def build(case: Case, out: Path, comm, say, steps: tuple[float, int, int] | None = None) -> Setup:
+    """Build the run of ``case`` on this rank (collective under MPI).
+
+    Parameters
+    ----------
+    case
+        The validated case.
+    out
+        The output directory (structure models are meshed into it).
+    comm
+        The communicator (:func:`pdfem.parallel.comm.world`).
+    say
+        Function taking one line of the start-up report.
+    steps
+        ``(coupling step, ice substeps, structure substeps)`` to use instead of the chosen
+        ones (a restart continues with the steps it was started with).
+
+    Raises
+    ------
+    InputError
+        Bad input found while building.
+    """
+    bodies = [build_ice_body(cfg, case.run, case.file) for cfg in case.ice]
+    structures = build_structures(case.structures, out, case.file, comm)
+    for st, cfg in zip(structures, case.structures):
+        check_mesh(st, cfg, case.file)
+    st_by_name = {s.name: s for s in structures}
+    probes = [(m.name, st_by_name[m.structure], st_by_name[m.structure].probe(m.point))
+              for m in case.monitors]
+    dt, n_ice, n_st = choose_time_steps(case, bodies, structures)
+    stable = {b.name: b.stable_time_step() for b in bodies}
+    for b in bodies:
+        say(f"  ice '{b.name}': {b.n:,} particles, {b.n_bonds:,} bonds, dx = {b.dx:g} m, "
+            f"horizon = {b.delta:g} m, s0 = {b.s0:.3e}, stable step {stable[b.name]:.3e} s")
+    reference = {b.name: (b.x0, b.vol) for b in bodies}
+    counts = (sum(b.n for b in bodies), sum(b.n_bonds for b in bodies),
+              sum(int(b.broken.sum()) for b in bodies))
+    bodies = distribute(bodies, comm, say)
+    pairs = contact_pairs(case, bodies, structures)
+    if steps is not None:
+        dt, n_ice, n_st = steps
+    end = case.run.end_time
+    nsteps = max(1, round(end / dt))
+    for st in structures:
+        say(f"  {st.describe()}")
+    for p in pairs:
+        say(f"  contact '{p.name}': ice '{p.body.name}' on structure '{p.structure.name}', "
+            f"search radius {p.contact.search_radius:g} m, friction {p.contact.friction:g}")
+    sub = ""
+    if n_ice > 1:
+        sub = f" (ice subcycles: {n_ice} steps of {dt / n_ice:.3e} s)"
+    elif n_st > 1:
+        sub = f" (structures subcycle: {n_st} steps of {dt / n_st:.3e} s)"
+    say(f"  coupling step {dt:.3e} s{sub}, {nsteps:,} steps to {end:g} s")
+    forces = build_forces(case, bodies)
+    coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st, forces,
+                      comm if comm.size > 1 else None)
+    return Setup(bodies, structures, pairs, forces, coupler, probes, dt, n_ice, n_st, nsteps,
+                 stable, *counts, reference=reference)

@@ -1,0 +1,46 @@
+"""Particle forces of a run from the case: the registry of particle-force kinds.
+
+:data:`PARTICLE_FORCES` maps each kind (a :class:`pdfem.forces.base.ParticleForce` subclass) to
+its builder ``(case, bodies) -> force or None`` (None: the case does not use it). A new kind is
+one new file in :mod:`pdfem.forces` and one entry here. Every registered kind has a column
+(:attr:`~pdfem.forces.base.ParticleForce.energy_key`) in the energy history, 0 when unused, so
+runs with and without it write the same columns.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from pdfem.case.schema import Case
+from pdfem.forces.base import ParticleForce
+from pdfem.forces.gravity import Gravity
+from pdfem.forces.short_range import ShortRangeContact
+
+
+def _gravity(case: Case, bodies: list) -> Gravity:
+    return Gravity(bodies, case.run.gravity)
+
+
+def _short_range(case: Case, bodies: list) -> ShortRangeContact | None:
+    return ShortRangeContact(bodies) if case.run.short_range_contact and bodies else None
+
+
+PARTICLE_FORCES: dict[type[ParticleForce], Callable[[Case, list], ParticleForce | None]] = {
+    Gravity: _gravity,
+    ShortRangeContact: _short_range,
+}
+"""Particle-force kind -> builder; forces act in this order every ice step."""
+
+
+def build_forces(case: Case, bodies: list) -> list[ParticleForce]:
+    """The particle forces the case uses on its ice bodies (after they are distributed)."""
+    forces = (build(case, bodies) for build in PARTICLE_FORCES.values())
+    return [f for f in forces if f is not None]
+
+
+def potential_energies(forces: list[ParticleForce]) -> dict[str, float]:
+    """``{energy key: potential energy (J)}`` of every registered kind (0 when not used)."""
+    out = {kind.energy_key: 0.0 for kind in PARTICLE_FORCES}
+    for f in forces:
+        out[f.energy_key] = f.potential_energy()
+    return out

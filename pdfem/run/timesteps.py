@@ -1,0 +1,52 @@
+"""The time steps of a run: the coupling step and the substeps of the ice and the structures."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+from pdfem.case.schema import Case
+from pdfem.coupling.coupler import substep_counts
+from pdfem.errors import InputError
+
+
+def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float, int, int]:
+    """The coupling step (s) and the substeps of the ice and of the structures per step.
+
+    The ice step is the case's ``time_step`` or safety_factor x the smallest stable ice step
+    (:meth:`pdfem.pd.body.IceBody.stable_time_step`); the structure step is safety_factor x the
+    smallest critical structure step (:meth:`pdfem.fem.base.Structure.critical_time_step`,
+    ``inf`` for rigid bodies). The faster side subcycles
+    (:func:`pdfem.coupling.coupler.substep_counts`); ``run.substeps`` overrides the count. The
+    coupling step is then shortened so that a whole number of steps ends the run.
+
+    Raises
+    ------
+    InputError
+        If ``run.time_step`` exceeds the stable ice step and the case does not set
+        ``run.allow_unstable_time_step = true`` (with it: a warning).
+    """
+    run = case.run
+    ice = min((b.stable_time_step() for b in bodies), default=math.inf)
+    if run.time_step is not None:
+        if run.time_step > ice:
+            worst = min(bodies, key=lambda b: b.stable_time_step()).name
+            if not run.allow_unstable_time_step:
+                raise InputError(case.file, "run.time_step",
+                                 f"exceeds the stable step {ice:.4e} s of ice body '{worst}' "
+                                 f"({run.time_step / ice:.2f} x), so the run would blow up; "
+                                 f"choose time_step <= {ice:.4e} s, leave it out (automatic "
+                                 "step), or set run.allow_unstable_time_step = true to run "
+                                 "anyway", run.time_step)
+            warnings.warn(f"{case.file}: run.time_step = {run.time_step:.3e} s exceeds the stable "
+                          f"ice step {ice:.3e} s of '{worst}' (allowed by "
+                          "run.allow_unstable_time_step); the run may blow up", stacklevel=3)
+        ice = run.time_step
+    else:
+        ice *= run.safety_factor
+    st = run.safety_factor * min((s.critical_time_step() for s in structures), default=math.inf)
+    if not math.isfinite(ice) and not math.isfinite(st):
+        ice = run.output_interval / 10  # rigid bodies only
+    dt, n_ice, n_st = substep_counts(ice, st, run.substeps)
+    nsteps = max(1, math.ceil(run.end_time / dt - 1e-9))
+    return run.end_time / nsteps, n_ice, n_st
