@@ -24,7 +24,7 @@ from pdfem.forces.base import ParticleForce
 from pdfem.forces.gravity import Gravity
 from pdfem.forces.short_range import ShortRangeContact
 from pdfem.geometry.shapes import Box
-from pdfem.output.results import ResultsWriter
+from pdfem.output import ResultsWriter
 from pdfem.output.source import OutputSource
 from pdfem.pd.body import IceBody
 from pdfem.pd.failure import FAILURE_LAWS, CriticalStretch, FailureLaw, failure_law

@@ -3,15 +3,13 @@
     pdfem run [CASE.toml] [--out DIR] [--restart CHECKPOINT] [--quiet] [--json]
     pdfem post RESULTS.h5 [--plots DIR] [--csv FILE] [--json]
     pdfem mesh MODEL [--set key=value ...] [-o FILE.msh] [--json]
+    pdfem validate [--quick] [--report DIR] [--json] [--case NAME ...]
+    pdfem schema [--markdown]
     pdfem bench {search,step,mpi,partition} [--n N] [--json]
     pdfem info [--json]
     pdfem --version
 
-``pdfem run CASE --restart DIR/checkpoint.h5`` continues a run of CASE from its last checkpoint,
-appending to the results file in DIR (``--out`` defaults to the checkpoint's directory).
-
-``pdfem run`` without a case runs the built-in demo (``demo_ice_sheet_panel.toml`` of the
-package ``pdfem.models``) into ``results/demo_ice_sheet_panel/`` and prints its post summary.
+Each command is a module of :mod:`pdfem.cli` (its docstring says what it does).
 
 Exit status: 0 success, 2 bad input (the message names file and field), 3 a run stopped by a
 detected instability, 1 anything else. With ``--json`` standard output holds exactly one JSON

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 from os import PathLike
 
 import numpy as np
@@ -125,6 +126,14 @@ class ClosedSurface:
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Axis-aligned bounding box ``(lo, hi)``, m."""
         return self.vertices.min(axis=0), self.vertices.max(axis=0)
+
+    fills_bounds: ClassVar[bool] = False
+
+    def volume_bound(self) -> float:
+        """An upper bound of the enclosed volume, m³: the bounding box's (the triangles of a
+        user's mesh need not be consistently oriented, so no signed-volume sum is trusted)."""
+        lo, hi = self.bounds()
+        return float(np.prod(hi - lo))
 
 
 def _cells_of(mesh, types: tuple[str, ...], group: str | None, path) -> np.ndarray:

@@ -1,11 +1,15 @@
 """Geometric regions: the shapes that ice bodies are filled from and that select boundary regions.
 
-Every shape is a frozen dataclass with two methods:
+Every shape is a frozen dataclass with three methods and one flag:
 
 ``contains(x)``
     (N,3) points (m) -> (N,) bool, vectorised.
 ``bounds()``
     the axis-aligned bounding box ``(lo, hi)``, two (3,) float64 arrays (m).
+``volume_bound()``
+    an upper bound of the enclosed volume (m³): exact for the analytic shapes.
+``fills_bounds``
+    True when the shape is its own bounding box (a lattice count of the box is then exact).
 
 :class:`Box`, :class:`Cylinder` and :class:`Sphere` are inclusive with a tolerance of 1e-9 times
 the shape's diagonal (diameter for a sphere), so lattice points that lie exactly on a face count as
@@ -18,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -66,9 +71,15 @@ class Box:
         hi = np.asarray(self.max) + t
         return np.all((x >= lo) & (x <= hi), axis=1)
 
+    fills_bounds: ClassVar[bool] = True
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Axis-aligned bounding box ``(lo, hi)``, m."""
         return np.array(self.min), np.array(self.max)
+
+    def volume_bound(self) -> float:
+        """Enclosed volume, m³ (exact)."""
+        return float(np.prod(np.subtract(self.max, self.min)))
 
 
 @dataclass(frozen=True)
@@ -132,6 +143,12 @@ class Cylinder:
         ext = self.radius * np.sqrt(np.clip(1.0 - a * a, 0.0, 1.0))
         return np.minimum(b0, b1) - ext, np.maximum(b0, b1) + ext
 
+    fills_bounds: ClassVar[bool] = False
+
+    def volume_bound(self) -> float:
+        """Enclosed volume pi r^2 L, m³ (exact)."""
+        return math.pi * self.radius ** 2 * self.length
+
 
 @dataclass(frozen=True)
 class Sphere:
@@ -171,3 +188,9 @@ class Sphere:
         """Axis-aligned bounding box ``(lo, hi)``, m."""
         c = np.asarray(self.center)
         return c - self.radius, c + self.radius
+
+    fills_bounds: ClassVar[bool] = False
+
+    def volume_bound(self) -> float:
+        """Enclosed volume 4/3 pi r^3, m³ (exact)."""
+        return 4.0 / 3.0 * math.pi * self.radius ** 3

@@ -11,7 +11,7 @@ results writer its data at two moments:
 A history row is ``{group: {key: scalar or small array}}``, e.g. ``{"loads/panel": {"force":
 (3,), "moment": (3,), "contacts": n}}``. Units are SI; :data:`UNITS` names the unit of each key
 pdfem writes. The driver adapts sources to the writer's calls
-(:class:`pdfem.output.results.ResultsWriter`: ``write_frame`` and ``append_history``).
+(:class:`pdfem.output.writer.ResultsWriter`: ``write_frame`` and ``append_history``).
 
 Adding a source
 ---------------

@@ -24,7 +24,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pdfem.geometry.shapes import Box, Cylinder, Sphere
 
 BYTES_PER_PARTICLE = 240
 """Estimated resident bytes per ice particle (state, set-up and output arrays)."""
@@ -67,13 +66,9 @@ def _particles(shape, dx: float) -> tuple[float, bool]:
     lo, hi = shape.bounds()
     counts = [max(1, int(round((hi[k] - lo[k]) / dx))) for k in range(3)]
     box = float(np.prod(np.asarray(counts, dtype=np.float64)))
-    if isinstance(shape, Box):
+    if shape.fills_bounds:
         return box, True
-    if isinstance(shape, Cylinder):
-        return min(box, math.pi * shape.radius ** 2 * shape.length / dx ** 3), False
-    if isinstance(shape, Sphere):
-        return min(box, 4.0 / 3.0 * math.pi * shape.radius ** 3 / dx ** 3), False
-    return box, False
+    return min(box, shape.volume_bound() / dx ** 3), False
 
 
 def estimate_body(name: str, shape, dx: float, horizon: float) -> BodyEstimate:

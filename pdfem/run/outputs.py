@@ -13,13 +13,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from pdfem.errors import InputError
-from pdfem.output.results import ResultsWriter, rank_file
+from pdfem.output import ResultsWriter, rank_file
 from pdfem.output.source import Rows, Source
 
 
 class NoOutput:
     """The results writer of MPI ranks other than 0: it takes every call of
-    :class:`~pdfem.output.results.ResultsWriter` that a run makes and writes nothing."""
+    :class:`~pdfem.output.writer.ResultsWriter` that a run makes and writes nothing."""
 
     n_frames = 0
 

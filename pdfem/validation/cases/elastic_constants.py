@@ -15,7 +15,7 @@ import numpy as np
 
 from pdfem.case import Case
 from pdfem.geometry.shapes import Box
-from pdfem.run.build_ice import build_ice_body
+from pdfem.run.build_ice import build_ice_body, ice_material
 from pdfem.validation.case import Outcome, ValidationCase, replace_ice, replace_run
 
 if TYPE_CHECKING:
@@ -51,7 +51,7 @@ def relax(case: Case, directory: Path) -> dict:
         traction[end, 0] = sign * STRESS * dx * dx / body.vol[end]
     dt = case.run.safety_factor * body.stable_time_step()
     length = x.max() - x.min() + dx
-    damp = math.exp(-math.pi * cfg.material.wave_speed / length * dt)  # near critical, axial mode
+    damp = math.exp(-math.pi * ice_material(cfg.material).wave_speed / length * dt)  # near critical, axial mode
     body.start()
     body.f += traction
     times, moduli = [], []

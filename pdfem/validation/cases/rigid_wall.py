@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from pdfem.case import Case
+from pdfem.run.build_ice import ice_material
 from pdfem.validation.case import Outcome, ValidationCase
 from pdfem.validation.measure import contact_window
 
@@ -26,7 +27,7 @@ def _bar(case: Case) -> tuple[float, float, float, float]:
     ice = case.ice[0]
     lo, hi = ice.shape.min, ice.shape.max
     return (hi[2] - lo[2], (hi[0] - lo[0]) * (hi[1] - lo[1]), abs(ice.initial_velocity[2]),
-            ice.material.wave_speed)
+            ice_material(ice.material).wave_speed)
 
 
 def duration(outcome: Outcome) -> float:
