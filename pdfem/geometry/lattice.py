@@ -18,8 +18,6 @@ import math
 
 import numpy as np
 
-from pdfem.geometry.shapes import Box
-
 __all__ = ["fill", "lattice_points", "particle_volume"]
 
 
@@ -57,21 +55,21 @@ def fill(shape, dx: float) -> np.ndarray:
     Parameters
     ----------
     shape
-        A :mod:`pdfem.geometry.shapes` object (anything with ``bounds()`` and ``contains(x)``).
+        A :mod:`pdfem.geometry.shapes` object (``bounds()``, ``contains(x)``, ``fills_bounds``).
     dx
         Lattice spacing, m (> 0).
 
     Returns
     -------
     ndarray
-        (N,3) float64 particle positions, m, in x-major / y / z loop order. For a
-        :class:`~pdfem.geometry.shapes.Box` every lattice point of the box is kept; for other shapes the
-        points where ``shape.contains`` is true.
+        (N,3) float64 particle positions, m, in x-major / y / z loop order. For a shape
+        that fills its bounds (a :class:`~pdfem.geometry.shapes.Box`) every lattice point of the
+        box is kept; for other shapes the points where ``shape.contains`` is true.
     """
     dx = _check_dx(dx)
     lo, hi = shape.bounds()
     pts = lattice_points(lo, hi, dx)
-    if isinstance(shape, Box):
+    if shape.fills_bounds:
         return pts
     return np.ascontiguousarray(pts[shape.contains(pts)])
 
