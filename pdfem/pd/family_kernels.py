@@ -13,7 +13,7 @@ import numba
 import numpy as np
 from numba import prange
 
-from pdfem.pd.chunk_kernels import FASTMATH, U64
+from pdfem.pd.chunk_kernels import FASTMATH, U64, fma
 from pdfem.pd.lps_law import (
     bond_length,
     bond_vector,
@@ -46,7 +46,7 @@ def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, v
             l = xi_len[k]
             d0, d1, d2 = bond_vector(y, U64(3) * j, yi0, yi1, yi2)
             r = bond_length(d0, d1, d2)
-            acc += dilatation_term(w, l, r) * vol[j]
+            acc = fma(dilatation_term(w, l, r), vol[j], acc)
         theta[i] = dilatation_of(acc, m[i])
 
 
@@ -89,9 +89,9 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
             j2 = U64(2) * j
             g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
             g *= vol[j]
-            fx += g * d0
-            fy += g * d1
-            fz += g * d2
+            fx = fma(g, d0, fx)
+            fy = fma(g, d1, fy)
+            fz = fma(g, d2, fz)
         f[3 * i] = fx
         f[3 * i + 1] = fy
         f[3 * i + 2] = fz

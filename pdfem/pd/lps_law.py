@@ -25,7 +25,7 @@ import math
 import numba
 from numba import prange
 
-from pdfem.pd.chunk_kernels import U64, twin
+from pdfem.pd.chunk_kernels import U64, fma, twin
 
 _INLINE = dict(cache=True, inline="always")
 
@@ -39,7 +39,7 @@ def bond_vector(y, j3, yi0, yi1, yi2):
 @numba.njit(**_INLINE)
 def bond_length(d0, d1, d2):
     """Current bond length r = |d| (m)."""
-    return math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    return math.sqrt(fma(d2, d2, fma(d1, d1, d0 * d0)))
 
 
 @numba.njit(**_INLINE)
@@ -81,7 +81,7 @@ def breaks(e, l, s0, can_i, nofail, j):
 def pair_force_scalar(a, b, l, e, w, r):
     """(t_ij + t_ji) omega / r, with a = a_i + a_j and b = b_i + b_j (see the module doc):
     times V_j (y_j - y_i) it is the force density on i, times V_i (y_i - y_j) that on j."""
-    return (a * l + b * e) * w / r
+    return fma(a, l, b * e) * w / r
 
 
 @numba.njit(**_INLINE)

@@ -7,7 +7,9 @@ race-free deterministic threading (:mod:`pdfem.pd.chunk_kernels`). The physics o
 :mod:`pdfem.pd.lps_law`'s. The row loop exists in one copy per combination of the flags
 ``signed`` / ``store_r`` (``use_r``): each flag is then a constant inside its copy of the hot
 loop (no per-bond tests of it, fewer live registers). Index arithmetic is unsigned (``U64``):
-numba then emits no negative-index wraparound code for the gathers and scatters.
+numba then emits no negative-index wraparound code for the gathers and scatters. The
+multiply-adds into the sums are explicit :func:`~pdfem.pd.chunk_kernels.fma` calls, not
+fastmath contraction: a cache-loaded kernel then computes the same bits as a fresh compile.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from __future__ import annotations
 import numba
 from numba import prange
 
-from pdfem.pd.chunk_kernels import FASTMATH, U64, add_overflow1, add_overflow3, twin
+from pdfem.pd.chunk_kernels import FASTMATH, U64, add_overflow1, add_overflow3, fma, twin
 from pdfem.pd.lps_law import (
     bond_length,
     bond_vector,
@@ -48,11 +50,12 @@ def _dilatation_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, theta, 
         if store_r:
             rbuf[k] = r
         g = dilatation_term(w, l, r)
-        acc += g * vol[j]
+        acc = fma(g, vol[j], acc)
         if checked and j >= r1:
-            ov[base + (j - r1), 0] += g * vi
+            q = base + (j - r1)
+            ov[q, 0] = fma(g, vi, ov[q, 0])
         else:
-            theta[j] += g * vi
+            theta[j] = fma(g, vi, theta[j])
     theta[i] += acc
 
 
@@ -138,19 +141,19 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, n
         j2 = U64(2) * j
         g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
         gi = g * vol[j]
-        fx += gi * d0
-        fy += gi * d1
-        fz += gi * d2
-        gj = g * vi
+        fx = fma(gi, d0, fx)
+        fy = fma(gi, d1, fy)
+        fz = fma(gi, d2, fz)
+        gj = -g * vi
         if checked and j >= r1:
             q = U64(3) * (base + (j - r1))
-            ov[q] -= gj * d0
-            ov[q + U64(1)] -= gj * d1
-            ov[q + U64(2)] -= gj * d2
+            ov[q] = fma(gj, d0, ov[q])
+            ov[q + U64(1)] = fma(gj, d1, ov[q + U64(1)])
+            ov[q + U64(2)] = fma(gj, d2, ov[q + U64(2)])
         else:
-            f[j3] -= gj * d0
-            f[j3 + U64(1)] -= gj * d1
-            f[j3 + U64(2)] -= gj * d2
+            f[j3] = fma(gj, d0, f[j3])
+            f[j3 + U64(1)] = fma(gj, d1, f[j3 + U64(1)])
+            f[j3 + U64(2)] = fma(gj, d2, f[j3 + U64(2)])
     f[3 * i] += fx
     f[3 * i + 1] += fy
     f[3 * i + 2] += fz

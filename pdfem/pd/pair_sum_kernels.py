@@ -4,7 +4,9 @@ Over the unique bonds i < j grouped by i (data layout: :mod:`pdfem.pd.pair_kerne
 for race-free deterministic threading (:mod:`pdfem.pd.chunk_kernels`), every bond adding to both
 its ends: :func:`family_sum_pairs` (weighted volume and the time-step sums),
 :func:`energy_pairs` (strain energy density, :mod:`pdfem.pd.lps_law`) and
-:func:`damage_pairs` (broken fraction of the initial bonds).
+:func:`damage_pairs` (broken fraction of the initial bonds). Float flags: ``FASTMATH`` of
+:mod:`pdfem.pd.chunk_kernels` (no FMA contraction, so the code compiled in this process and the
+code loaded from numba's cache give the same bits).
 """
 
 from __future__ import annotations

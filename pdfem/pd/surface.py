@@ -35,7 +35,9 @@ position-aware linear solid constitutive model for peridynamics", J. Mech. Mater
 which makes the moments isotropic with per-particle influence functions; here the correction
 is symmetrised so that it fits the one-weight-per-bond storage and costs nothing per step.
 The setup cost is a pass over the pairs per iteration (``iterations + 1`` passes), threaded
-with the chunked, deterministic pair loop of :mod:`pdfem.pd.workspace`.
+with the chunked, deterministic pair loop of :mod:`pdfem.pd.workspace`, under the float flags
+``FASTMATH`` of :mod:`pdfem.pd.chunk_kernels` (no FMA contraction: freshly compiled and cached
+code give the same bits).
 """
 
 from __future__ import annotations
