@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from pdfem.case.casefile import CaseFile
+from pdfem.case.links import ContactSection
 from pdfem.case.ice import IceMaterialSection, IceSection
 from pdfem.case.shapes import Shape
 from pdfem.geometry.shapes import Box
@@ -21,22 +22,25 @@ from pdfem.case.structure import StructureSection
 
 @dataclass(frozen=True)
 class RunConfig:
-    """Time-loop settings (seconds); see :class:`pdfem.case.run.RunSection`."""
+    """Time-loop settings (seconds); see :class:`pdfem.case.run.RunSection`.
+
+    The dataclasses here have no defaults of their own: every default is declared once, in the
+    schema's sections, and :func:`resolve` passes every value."""
 
     end_time: float
     output_interval: float
-    time_step: float | None = None
-    safety_factor: float = 0.8
-    pd_loop: str = "pairs"
-    gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    title: str = ""
-    substeps: int = 0
-    short_range_contact: bool = False
-    allow_unstable_time_step: bool = False
-    checkpoint_interval_steps: int = 0
-    checkpoint_interval_minutes: float = 30.0
-    stability_check_interval_steps: int = 10
-    output_per_rank: bool = False
+    time_step: float | None
+    safety_factor: float
+    pd_loop: str
+    gravity: tuple[float, float, float]
+    title: str
+    substeps: int
+    short_range_contact: bool
+    allow_unstable_time_step: bool
+    checkpoint_interval_steps: int
+    checkpoint_interval_minutes: float
+    stability_check_interval_steps: int
+    output_per_rank: bool
 
 
 @dataclass(frozen=True)
@@ -45,7 +49,7 @@ class VelocityBC:
 
     region: Shape
     velocity: tuple[float, float, float]
-    ramp_time: float = 0.0
+    ramp_time: float
     field: str = ""
 
 
@@ -71,11 +75,11 @@ class IceConfig:
     horizon: float
     shape: Shape
     material: IceMaterialSection
-    initial_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    fixed: tuple[tuple[Shape, str], ...] = ()
-    prescribed_velocity: tuple[VelocityBC, ...] = ()
-    no_fail: tuple[tuple[Shape, str], ...] = ()
-    cracks: tuple[Crack, ...] = ()
+    initial_velocity: tuple[float, float, float]
+    fixed: tuple[tuple[Shape, str], ...]
+    prescribed_velocity: tuple[VelocityBC, ...]
+    no_fail: tuple[tuple[Shape, str], ...]
+    cracks: tuple[Crack, ...]
     field: str = ""
 
 
@@ -84,10 +88,10 @@ class Pulse:
     """Trapezoidal time history (s): 0 before ``start``, rises linearly over ``rise`` to 1,
     holds for ``hold``, falls linearly over ``fall`` to 0. ``hold = inf`` keeps it on."""
 
-    start: float = 0.0
-    rise: float = 0.0
-    hold: float = math.inf
-    fall: float = 0.0
+    start: float
+    rise: float
+    hold: float
+    fall: float
 
     def __call__(self, t: float) -> float:
         s = t - self.start
@@ -109,9 +113,9 @@ class SurfaceLoad:
     """A uniform pressure (Pa, positive into the structure) and/or traction (Pa) on a group."""
 
     group: str
-    pressure: float = 0.0
-    traction: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    pulse: Pulse = Pulse()
+    pressure: float
+    traction: tuple[float, float, float]
+    pulse: Pulse
     field: str = ""
 
 
@@ -122,18 +126,18 @@ class StructureConfig:
     name: str
     kind: str
     mesh: str
-    params: dict = field(default_factory=dict)
-    density: float = 7850.0
-    youngs_modulus: float = 210e9
-    poisson_ratio: float = 0.3
-    fixed_groups: tuple[str, ...] = ()
-    contact_group: str = "contact"
-    damping_alpha: float = 0.0
-    damping_beta: float = 0.0
-    loads: tuple[SurfaceLoad, ...] = ()
-    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    angular_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    params: dict
+    density: float
+    youngs_modulus: float
+    poisson_ratio: float
+    fixed_groups: tuple[str, ...]
+    contact_group: str
+    damping_alpha: float
+    damping_beta: float
+    loads: tuple[SurfaceLoad, ...]
+    velocity: tuple[float, float, float]
+    angular_velocity: tuple[float, float, float]
+    center: tuple[float, float, float]
     field: str = ""
 
 
@@ -144,8 +148,8 @@ class ContactConfig:
     name: str
     ice: str
     structure: str
-    friction: float = 0.0
-    search_radius: float = 0.0   # m; 0 = half the ice spacing
+    friction: float
+    search_radius: float
     field: str = ""
 
 
@@ -175,48 +179,63 @@ class Case:
 
 
 def _ice(s: IceSection, at: str) -> IceConfig:
-    bcs = tuple(VelocityBC(r.region.geometry, r.velocity, r.ramp_time, f"{at}.prescribed_velocity[{k}]")
+    bcs = tuple(VelocityBC(region=r.region.geometry, velocity=r.velocity, ramp_time=r.ramp_time,
+                            field=f"{at}.prescribed_velocity[{k}]")
                 for k, r in enumerate(s.prescribed_velocity))
-    cracks = tuple(Crack(c.point, c.normal, c.box.build(), f"{at}.cracks[{k}]")
+    cracks = tuple(Crack(point=c.point, normal=c.normal, box=c.box.build(),
+                         field=f"{at}.cracks[{k}]")
                    for k, c in enumerate(s.cracks))
-    return IceConfig(s.name, s.dx, s.horizon_length(), s.shape.geometry, s.material,
-                     s.initial_velocity,
-                     tuple((r.geometry, f"{at}.fixed[{k}]") for k, r in enumerate(s.fixed)), bcs,
-                     tuple((r.geometry, f"{at}.no_fail[{k}]") for k, r in enumerate(s.no_fail)),
-                     cracks, at)
+    return IceConfig(
+        name=s.name, dx=s.dx, horizon=s.horizon_length(), shape=s.shape.geometry,
+        material=s.material, initial_velocity=s.initial_velocity,
+        fixed=tuple((r.geometry, f"{at}.fixed[{k}]") for k, r in enumerate(s.fixed)),
+        prescribed_velocity=bcs,
+        no_fail=tuple((r.geometry, f"{at}.no_fail[{k}]") for k, r in enumerate(s.no_fail)),
+        cracks=cracks, field=at)
 
 
 def _structure(s: StructureSection, at: str) -> StructureConfig:
     loads = []
     for k, r in enumerate(s.loads):
         p = r.pulse
-        pulse = Pulse(p.start, p.rise, math.inf if p.hold is None else p.hold, p.fall)
-        loads.append(SurfaceLoad(r.group, r.pressure, r.traction, pulse, f"{at}.loads[{k}]"))
+        pulse = Pulse(start=p.start, rise=p.rise, hold=math.inf if p.hold is None else p.hold,
+                      fall=p.fall)
+        loads.append(SurfaceLoad(group=r.group, pressure=r.pressure, traction=r.traction,
+                                 pulse=pulse, field=f"{at}.loads[{k}]"))
     m = s.motion
-    return StructureConfig(s.name, s.kind, s.mesh, dict(s.params), s.material.density,
-                           s.material.youngs_modulus, s.material.poisson_ratio, s.fixed_groups,
-                           s.contact_group, s.damping.alpha, s.damping.beta, tuple(loads),
-                           m.velocity, m.angular_velocity, m.center, at)
+    return StructureConfig(
+        name=s.name, kind=s.kind, mesh=s.mesh, params=dict(s.params), density=s.material.density,
+        youngs_modulus=s.material.youngs_modulus, poisson_ratio=s.material.poisson_ratio,
+        fixed_groups=s.fixed_groups, contact_group=s.contact_group,
+        damping_alpha=s.damping.alpha, damping_beta=s.damping.beta, loads=tuple(loads),
+        velocity=m.velocity, angular_velocity=m.angular_velocity, center=m.center, field=at)
 
 
 def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:
     """The :class:`Case` that a validated case file describes (defaults filled in)."""
     r = data.run
-    run = RunConfig(r.end_time, r.end_time / 20 if r.output_interval is None else r.output_interval,
-                    r.time_step or None, r.safety_factor, r.pd_loop, r.gravity, r.title, r.substeps,
-                    r.short_range_contact, r.allow_unstable_time_step, r.checkpoint_interval_steps,
-                    r.checkpoint_interval_minutes, r.stability_check_interval_steps,
-                    r.output_per_rank)
+    run = RunConfig(
+        end_time=r.end_time,
+        output_interval=r.end_time / 20 if r.output_interval is None else r.output_interval,
+        time_step=r.time_step or None, safety_factor=r.safety_factor, pd_loop=r.pd_loop,
+        gravity=r.gravity, title=r.title, substeps=r.substeps,
+        short_range_contact=r.short_range_contact,
+        allow_unstable_time_step=r.allow_unstable_time_step,
+        checkpoint_interval_steps=r.checkpoint_interval_steps,
+        checkpoint_interval_minutes=r.checkpoint_interval_minutes,
+        stability_check_interval_steps=r.stability_check_interval_steps,
+        output_per_rank=r.output_per_rank)
     ice = tuple(_ice(s, f"ice[{k}]") for k, s in enumerate(data.ice))
     structures = tuple(_structure(s, f"structure[{k}]") for k, s in enumerate(data.structure))
-    if data.contact:
-        contacts = tuple(ContactConfig(c.name or f"{c.ice}-{c.structure}", c.ice, c.structure,
-                                       c.friction, c.search_radius, f"contact[{k}]")
-                         for k, c in enumerate(data.contact))
-    else:  # default: every ice body meets every structure
-        contacts = tuple(ContactConfig(f"{b.name}-{s.name}", b.name, s.name) for b in ice
-                         for s in structures)
-    monitors = tuple(MonitorConfig(m.name, m.structure, m.point, f"monitor[{k}]")
+    sections = data.contact or tuple(  # default: every ice body meets every structure
+        ContactSection(ice=b.name, structure=s.name) for b in ice for s in structures)
+    contacts = tuple(ContactConfig(name=c.name or f"{c.ice}-{c.structure}", ice=c.ice,
+                                   structure=c.structure, friction=c.friction,
+                                   search_radius=c.search_radius,
+                                   field=f"contact[{k}]" if data.contact else "")
+                     for k, c in enumerate(sections))
+    monitors = tuple(MonitorConfig(name=m.name, structure=m.structure, point=m.point,
+                                   field=f"monitor[{k}]")
                      for k, m in enumerate(data.monitor))
     return Case(run=run, ice=ice, structures=structures, contacts=contacts, monitors=monitors,
                 file=file, text=text, directory=directory)
