@@ -22,20 +22,25 @@ def zero_crossings(time: np.ndarray, values: np.ndarray) -> np.ndarray:
     return t[i] - w[i] * (t[i + 1] - t[i]) / (w[i + 1] - w[i])
 
 
-def spectral_peak(time: np.ndarray, values: np.ndarray, padding: int = 32) -> float:
-    """Frequency (Hz) of the largest peak of the amplitude spectrum of a uniformly sampled signal.
-
-    The mean is removed, a Hann window applied, the FFT zero-padded to ``padding`` times the
-    length, and the peak located between bins by a parabola through the three largest values.
-    """
+def windowed_spectrum(time: np.ndarray, values: np.ndarray,
+                      padding: int = 32) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies (Hz) and magnitudes of the spectrum of a uniformly sampled signal: the mean
+    removed, a Hann window applied, the FFT zero-padded to ``padding`` times the length."""
     t = np.asarray(time, dtype=np.float64)
     w = np.asarray(values, dtype=np.float64)
     dt = (t[-1] - t[0]) / (len(t) - 1)
     n_fft = padding * len(w)
-    spectrum = np.abs(np.fft.rfft((w - w.mean()) * np.hanning(len(w)), n_fft))
+    return (np.fft.rfftfreq(n_fft, dt),
+            np.abs(np.fft.rfft((w - w.mean()) * np.hanning(len(w)), n_fft)))
+
+
+def spectral_peak(time: np.ndarray, values: np.ndarray, padding: int = 32) -> float:
+    """Frequency (Hz) of the largest peak of :func:`windowed_spectrum`, located between bins by
+    a parabola through the three largest values."""
+    f, spectrum = windowed_spectrum(time, values, padding)
     k = int(np.argmax(spectrum[1:-1])) + 1
     a, b, c = spectrum[k - 1], spectrum[k], spectrum[k + 1]
-    return float((k + 0.5 * (a - c) / (a - 2 * b + c)) / (n_fft * dt))
+    return float(f[k] + 0.5 * (a - c) / (a - 2 * b + c) * (f[1] - f[0]))
 
 
 def ice_momentum(body: dict, density: float, frame: int = -1) -> np.ndarray:

@@ -13,7 +13,7 @@ import numpy as np
 
 from pdfem.case import Case
 from pdfem.validation.case import Outcome, ValidationCase, replace_run
-from pdfem.validation.measure import spectral_peak
+from pdfem.validation.measure import spectral_peak, windowed_spectrum
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -51,10 +51,7 @@ def plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     ax.plot(t * 1e3, w * 1e6, lw=0.9)
     ax.set_xlabel("time [ms]")
     ax.set_ylabel("tip displacement u_z [µm]")
-    dt = (t[-1] - t[0]) / (len(t) - 1)
-    n = 32 * len(w)
-    f = np.fft.rfftfreq(n, dt)
-    spectrum = np.abs(np.fft.rfft((w - w.mean()) * np.hanning(len(w)), n))
+    f, spectrum = windowed_spectrum(t, w)
     keep = f < 4 * ref
     bx.plot(f[keep], spectrum[keep] / spectrum.max(), lw=0.9, label=f"pdfem peak {value:.2f} Hz")
     bx.axvline(ref, color="k", ls="--", label=f"Euler-Bernoulli {ref:.2f} Hz")
