@@ -2,7 +2,7 @@
 
 A mesh for the explicit structure solver must have no inverted or (near) zero-volume elements,
 and its smallest element limits the stable time step. This module holds the measures the model
-scripts (through :func:`pdfem.meshing.runner.finish_mesh`) report and check:
+scripts (through :func:`pdfem.meshing.finish.finish_mesh`) report and check:
 
 * :func:`tet_volumes`, :func:`triangle_areas` -- signed volumes (m^3), areas (m^2);
 * :func:`tet_min_dihedral`, :func:`triangle_min_angle` -- smallest angles (deg);
