@@ -1,21 +1,40 @@
-"""Surface-element contact between ice particles and a structure (seed paper, Eqs. 5-8).
+"""Surface-element contact between ice particles and a structure (seed paper, Eqs. 5-8, with
+the structure's inertia).
 
 After each position update of the ice, :meth:`SurfaceContact.resolve` finds the particles that
-have crossed the structure's contact surface, moves each back onto the surface (its "newly
-allocated" position, the closest point of the surface), and sets its velocity by Eq. (5),
+have crossed the structure's contact surface, moves each back onto the surface (the closest
+point of the surface: the seed paper's "newly allocated" position) and gives the particle and
+the surface point it hit equal and opposite impulses, at the same instant, with the surface
+position and velocity of that instant:
 
-    v_bar = (y_bar - y_old) / dt,
+* the impulse stops the normal relative velocity (perfectly plastic, as Eq. 5 of the seed
+  paper: the particle leaves with the surface's normal velocity), computed with the masses of
+  BOTH sides, ``j_n = -v_n / (1/m + 1/M_s)``, ``1/M_s`` the inverse mass of the surface point
+  from the lumped masses of the facet's nodes (zero for a rigid or supported surface, which
+  recovers Eq. 5 exactly);
+* optional Coulomb friction takes off tangential relative velocity, at most ``friction x j_n``;
+* the opposite impulse goes to the facet's three nodes by the barycentric weights of the
+  contact point (Eqs. 7-8), so the impulse that leaves the ice equals the impulse that reaches
+  the structure, exactly. The caller applies it to the structure as a velocity change at the
+  same instant (:meth:`pdfem.fem.base.Structure.apply_surface_impulse`).
 
-so the particle takes the impulse m (v_bar - v) (Eq. 6 times dt, with m = rho V). The opposite
-impulse goes to the facet it hit (Eqs. 7-8), shared among the facet's three nodes by the
-barycentric weights of the contact point, so the impulse that leaves the ice equals the
-impulse that reaches the structure, exactly. Optional Coulomb friction limits the tangential
-velocity change to ``friction`` times the normal one. A particle counts as inside when the
-closest surface point lies within the search radius and the particle is behind it according
-to the angle-weighted pseudo-normal of the feature (face, edge or vertex) the point lies on
-(:mod:`pdfem.coupling.facets`), which decides the side correctly at edges and vertices. On an
-open surface (e.g. the outer face of a hull panel) particles whose closest point is on the
-surface's rim are not in contact: they are beside the surface, not behind it.
+Why the structure's mass matters: with the structure taking the particle's impulse only later
+(the seed paper's load held over the next step) a node lighter than the ice that rides on it
+feels that ice's inertia one step late; the delayed feedback grows by the mass ratio every
+step, so smaller steps make it worse (energy creation, then blow-up). Taking both masses in the
+same instant makes every contact a plastic collision, which can only dissipate energy.
+
+All contacts of one step see the surface velocities before that step's contacts, and a node's
+mass is split among the contacts touching it in proportion to their barycentric weights, so
+the impulses do not depend on the order of the particles or on how they are split over MPI
+ranks, and several particles hitting one light node stop together as one plastic collision
+(by convexity of the kinetic energy the step dissipates at least the sum of what each contact
+would). A particle counts as inside when the closest surface point lies within the search
+radius and the particle is behind it according to the angle-weighted pseudo-normal of the
+feature (face, edge or vertex) the point lies on (:mod:`pdfem.coupling.facets`), which decides
+the side correctly at edges and vertices. On an open surface (e.g. the outer face of a hull
+panel) particles whose closest point is on the surface's rim are not in contact: they are
+beside the surface, not behind it.
 
 Units: m, s, kg, N s (impulses), J.
 """
@@ -98,15 +117,31 @@ def _detect(y, active, cell_start, cell_facets, origin, inv_h, dims, pts, tri, t
 
 
 @numba.njit(cache=True)
-def _respond(facet, weight, normal, y, y_old, v, mass, dt, pts, vel, tri, friction,
-             force, inv_rho, g, node_impulse, totals):
-    """Move contacting particles onto the surface, set Eq. (5) velocities, book impulses.
+def _shares(facet, weight, tri, share):
+    """Add each contact's barycentric weights to ``share`` (per surface node): how many
+    contacts, weighted, a node's mass is split among in this step."""
+    for i in range(facet.shape[0]):
+        f = facet[i]
+        if f < 0:
+            continue
+        for k in range(3):
+            share[tri[f, k]] += weight[i, k]
 
-    Serial over particles in index order, so the nodal sums are deterministic. ``totals``
-    accumulates: [0:3] impulse to the structure (N s), [3] contacts, [4] work done on the
-    particles (J). The work is that of an impulse at the step's start time t, where the
-    velocity is v(t) = v - dt/2 (force / rho + g) (velocity Verlet's first half kick undone): the
-    correction of Eq. (5) equals replacing the drift velocity, i.e. an impulse at time t.
+
+@numba.njit(cache=True)
+def _respond(facet, weight, y, y_old, v, mass, dt, pts, vel, invm, share, tri, friction,
+             force, inv_rho, g, node_impulse, totals):
+    """Give each contacting particle and the surface point it hit their impulse (Eq. 5 with the
+    structure's inertia, module docstring); move the particle with its corrected velocity.
+
+    Serial over particles in index order, so the nodal sums are deterministic. Every contact
+    uses the surface velocities ``vel`` as they were before the step's contacts, and a node's
+    mass is split among the contacts touching it in proportion to their weights (``share``),
+    so the result does not depend on the order of the particles or on how they are split over
+    MPI ranks. ``totals`` accumulates: [0:3] impulse to the structure (N s), [3] contacts, [4]
+    work done on the particles (J). That work is the one of an impulse at the step's start
+    time t, where the velocity is v(t) = v - dt/2 (force / rho + g) (velocity Verlet's first
+    half kick undone): changing the drift velocity is an impulse at time t.
     """
     inv_dt = 1.0 / dt
     for i in range(facet.shape[0]):
@@ -114,45 +149,60 @@ def _respond(facet, weight, normal, y, y_old, v, mass, dt, pts, vel, tri, fricti
         if f < 0:
             continue
         m = mass[i]
-        na, nb, nc = tri[f, 0], tri[f, 1], tri[f, 2]
-        u, w1, w2 = weight[i, 0], weight[i, 1], weight[i, 2]
-        cp = np.empty(3)
-        vw = np.empty(3)
-        vbar = np.empty(3)
-        for d in range(3):
-            cp[d] = u * pts[na, d] + w1 * pts[nb, d] + w2 * pts[nc, d]
-            vw[d] = u * vel[na, d] + w1 * vel[nb, d] + w2 * vel[nc, d]
-            vbar[d] = (cp[d] - y_old[i, d]) * inv_dt                       # Eq. (5)
+        cp = np.zeros(3)
+        vw = np.zeros(3)
+        gi = np.zeros(3)     # inverse mass of the surface point per component (1/kg)
+        for k in range(3):
+            node = tri[f, k]
+            w = weight[i, k]
+            for d in range(3):
+                cp[d] += w * pts[node, d]
+                vw[d] += w * vel[node, d]
+                gi[d] += w * share[node] * invm[node, d]
+        gap = cp - y[i]
+        depth = np.sqrt(gap[0] ** 2 + gap[1] ** 2 + gap[2] ** 2)
+        if depth == 0.0:
+            continue
+        nn = gap / depth
+        kn = 1.0 / m + nn[0] ** 2 * gi[0] + nn[1] ** 2 * gi[1] + nn[2] ** 2 * gi[2]
+        jn = depth * inv_dt / kn          # closes the gap in the step (Eq. 5 when 1/M_s = 0)
+        p = jn * nn                       # impulse on the particle, N s
         if friction > 0.0:
-            dvn = 0.0
+            rt = np.empty(3)
             for d in range(3):
-                dvn += (vbar[d] - v[i, d]) * normal[i, d]
-            rel = vbar - vw
-            rn = rel[0] * normal[i, 0] + rel[1] * normal[i, 1] + rel[2] * normal[i, 2]
-            vt = np.empty(3)
+                rt[d] = v[i, d] + p[d] / m - (vw[d] - gi[d] * p[d])
+            rn = rt[0] * nn[0] + rt[1] * nn[1] + rt[2] * nn[2]
             for d in range(3):
-                vt[d] = rel[d] - rn * normal[i, d]
-            vtn = np.sqrt(vt[0] * vt[0] + vt[1] * vt[1] + vt[2] * vt[2])
-            if vtn > 0.0 and dvn > 0.0:
-                cut = min(vtn, friction * dvn) / vtn
+                rt[d] -= rn * nn[d]
+            vt = np.sqrt(rt[0] ** 2 + rt[1] ** 2 + rt[2] ** 2)
+            if vt > 0.0:
+                kt = 1.0 / m
                 for d in range(3):
-                    vbar[d] -= cut * vt[d]
-                    cp[d] -= cut * vt[d] * dt
+                    kt += (rt[d] / vt) ** 2 * gi[d]
+                jt = min(vt / kt, friction * jn)      # Coulomb: stick, or slide at mu jn
+                for d in range(3):
+                    p[d] -= jt * rt[d] / vt
         work = 0.0
         for d in range(3):
-            dv = vbar[d] - v[i, d]
-            vt = v[i, d] - 0.5 * dt * (force[i, d] * inv_rho + g[d])
-            work += m * (vt * dv + 0.5 * dv * dv)
+            dv = p[d] / m
+            vt0 = v[i, d] - 0.5 * dt * (force[i, d] * inv_rho + g[d])
+            work += m * (vt0 * dv + 0.5 * dv * dv)
+            y[i, d] = y_old[i, d] + dt * (v[i, d] + dv)
+            v[i, d] += dv
         totals[4] += work
+        for k in range(3):
+            node = tri[f, k]
+            w = weight[i, k]
+            for d in range(3):
+                node_impulse[node, d] -= w * p[d]      # Eqs. (7)-(8), barycentric shares
         for d in range(3):
-            j = m * (v[i, d] - vbar[d])          # impulse to the structure, Eq. (6) x dt
-            node_impulse[na, d] += u * j         # Eqs. (7)-(8), barycentric shares
-            node_impulse[nb, d] += w1 * j
-            node_impulse[nc, d] += w2 * j
-            totals[d] += j
-            y[i, d] = cp[d]
-            v[i, d] = vbar[d]
+            totals[d] -= p[d]
         totals[3] += 1.0
+
+
+def _local(share: np.ndarray) -> np.ndarray:
+    """The contact weights per surface node as they are (one process holds every particle)."""
+    return share
 
 
 @dataclass
@@ -179,6 +229,9 @@ class SurfaceContact:
         Coulomb friction coefficient between ice and structure (0 = frictionless).
     name
         Name of the contact pair (for messages and results).
+    reduce
+        ``reduce(share) -> share``: sums the per-node contact weights over the processes that
+        hold parts of the ice (an MPI ``allreduce``); default: the weights as they are.
 
     Notes
     -----
@@ -188,7 +241,7 @@ class SurfaceContact:
     """
 
     def __init__(self, surface, search_radius: float, friction: float = 0.0,
-                 name: str = "contact") -> None:
+                 name: str = "contact", reduce=_local) -> None:
         if not search_radius > 0.0:
             raise ValueError(f"search_radius must be > 0, got {search_radius}")
         if friction < 0.0:
@@ -197,7 +250,9 @@ class SurfaceContact:
         self.name = name
         self.search_radius = float(search_radius)
         self.friction = float(friction)
+        self.reduce = reduce
         points = surface.surface_points()
+        self.inverse_mass = np.ascontiguousarray(surface.surface_inverse_mass(), dtype=np.float64)
         self.topology = FacetTopology.from_triangles(surface.surface_triangles, len(points))
         self.grid = FacetGrid(self.topology.triangles, self.search_radius)
         self.node_impulse = np.zeros((len(points), 3))
@@ -223,7 +278,8 @@ class SurfaceContact:
 
     def resolve(self, y: np.ndarray, y_old: np.ndarray, v: np.ndarray, mass: np.ndarray,
                 dt: float, active: np.ndarray | None = None, kick=None) -> ContactStep:
-        """Push particles that crossed the surface back onto it (in place on ``y`` and ``v``).
+        """Push particles that crossed the surface back and give each contact its impulse (in
+        place on ``y`` and ``v``; the structure's share accumulates in :attr:`node_impulse`).
 
         Parameters
         ----------
@@ -232,7 +288,7 @@ class SurfaceContact:
         y_old
             (N, 3) positions before the update (m).
         v
-            (N, 3) velocities used for the update (m/s); set to Eq. (5) for particles in contact.
+            (N, 3) velocities used for the update (m/s); corrected in place.
         mass
             (N,) particle masses rho V (kg).
         dt
@@ -256,14 +312,17 @@ class SurfaceContact:
         _detect(y, active, g.cell_start, g.cell_facets, g.origin, g.inv_h, g.dims, self._points,
                 t.triangles, t.tri_edges, nr[0], nr[1], nr[2], t.boundary_edge, t.boundary_node,
                 self.search_radius, self._facet, self._weight, self._normal)
+        share = np.zeros(len(self._points))
+        _shares(self._facet, self._weight, t.triangles, share)
+        share = self.reduce(share)
         totals = np.zeros(5)
         if kick is None:  # no half kick to undo: the work is taken at the drift velocity
             f, inv_rho, grav = np.zeros((n, 3)), 0.0, np.zeros(3)
         else:
             f, inv_rho, grav = kick[0], 1.0 / kick[1], np.asarray(kick[2], dtype=np.float64)
-        _respond(self._facet, self._weight, self._normal, y, y_old, v, mass, float(dt),
-                 self._points, self._velocities, t.triangles, self.friction, f, inv_rho, grav,
-                 self.node_impulse, totals)
+        _respond(self._facet, self._weight, y, y_old, v, mass, float(dt), self._points,
+                 self._velocities, self.inverse_mass, share, t.triangles, self.friction, f,
+                 inv_rho, grav, self.node_impulse, totals)
         impulse = totals[:3].copy()
         self.total_impulse += impulse
         return ContactStep(int(totals[3]), impulse, float(totals[4]))

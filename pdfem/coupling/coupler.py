@@ -2,21 +2,31 @@
 
 One coupling step of length ``D`` (the larger of the ice and structure steps):
 
-1. every structure takes ``structure_substeps`` steps of ``D / structure_substeps`` under the
-   contact load of the previous coupling step (impulse / D, held constant), its contact
-   surface moving from ``p0`` to ``p1``;
+1. every structure takes ``structure_substeps`` steps of ``D / structure_substeps`` under its
+   own loads, its contact surface moving from ``p0`` to ``p1`` and its surface velocity going
+   from ``v0`` to ``v1``;
 2. every ice body takes ``ice_substeps`` velocity-Verlet steps of ``D / ice_substeps``; after
    each position update the particles that crossed a structure's surface are put back on it
-   (:class:`pdfem.coupling.contact.SurfaceContact`), the surface taken at that substep's time
-   by linear interpolation between ``p0`` and ``p1`` with the chord velocity
-   ``(p1 - p0) / D``;
-3. the impulses the structures received are summed per structure and become their load for
-   the next coupling step.
+   and particle and surface exchange a plastic impulse computed with both masses
+   (:class:`pdfem.coupling.contact.SurfaceContact`). The surface is taken at that substep's
+   time by linear interpolation between ``p0`` and ``p1`` (``v0`` and ``v1``), plus the
+   velocity the impulses of the earlier substeps gave it;
+3. the impulses are applied to the structures as a velocity jump at the end of the coupling
+   step (:meth:`pdfem.fem.base.Structure.apply_surface_impulse`).
 
-One of the two substep counts is 1: the faster side subcycles. The impulse that leaves the ice
-reaches the structure exactly, one coupling step later, so the total momentum of ice and
-structures (plus the impulse in transit, :meth:`Coupler.pending_impulse`) is conserved to
-round-off when nothing else acts. Units: s, m, N, N s, J.
+One of the two substep counts is 1: the faster side subcycles. When the structure subcycles
+(one ice step per coupling step) the ice meets the structure's surface at the very instant the
+structure has reached, with its actual node velocities, and the impulse acts on both sides at
+that instant: no lag, so the contact can only dissipate energy, at any step and substep count.
+When the ice subcycles, the surface between structure steps is interpolated and the impulses
+reach the structure at the end of the step, at most one (structure-stable) step late.
+
+Momentum: the impulse that leaves the ice reaches the structure exactly, in the same coupling
+step, so the total momentum of ice and structures is conserved to round-off when nothing else
+acts. Energy: the coupler keeps the work of the contact impulses on the ice (at the velocity
+the particles hit the surface with) and on each structure (its kinetic-energy change
+``v . J + J^2 / (2 m)`` at the impulse's instant; for a prescribed motion ``v . J``, the work
+its drive does); minus their sum is the energy the contacts dissipated. Units: s, m, N, N s, J.
 """
 
 from __future__ import annotations
@@ -113,7 +123,9 @@ class Coupler:
         self.time = 0.0
         self._pairs_of = {id(b): [p for p in self.pairs if p.body is b] for b in self.bodies}
         self._mass = {id(b): b.material.density * b.vol for b in self.bodies}  # kg
-        self._load = {id(s): np.zeros((len(s.surface_points()), 3)) for s in self.structures}
+        # N s, contact impulses on each structure's surface nodes in the current coupling step
+        self._impulse = {id(s): np.zeros((len(s.surface_points()), 3)) for s in self.structures}
+        self._inverse_mass = {id(s): s.surface_inverse_mass() for s in self.structures}  # 1/kg
         # J, work of the contact loads on each structure (as it moves under them)
         self.contact_work = {id(s): 0.0 for s in self.structures}
         self.contact_work_on_ice = 0.0  # J
@@ -128,12 +140,6 @@ class Coupler:
             on_ice = self.comm.allreduce_sum(on_ice)
         return -(on_ice + sum(self.contact_work.values()))
 
-    def pending_impulse(self) -> np.ndarray:
-        """(3,) impulse (N s) taken from the ice in the last coupling step that the structures
-        receive in the next one."""
-        return sum((self._load[id(s)].sum(axis=0) * self.dt for s in self.structures),
-                   np.zeros(3))
-
     def checkpoint_state(self) -> dict[str, np.ndarray | float]:
         """The coupler's own state, for a checkpoint: ``time`` (s), per structure (in order)
         ``load_<k>`` (the pending contact load, N per surface node) and ``contact_work_<k>``
@@ -147,7 +153,6 @@ class Coupler:
         out: dict[str, np.ndarray | float] = {"time": self.time,
                                               "contact_work_on_ice": self.contact_work_on_ice}
         for k, s in enumerate(self.structures):
-            out[f"load_{k}"] = self._load[id(s)].copy()
             out[f"contact_work_{k}"] = self.contact_work[id(s)]
         for k, p in enumerate(self.pairs):
             out[f"force_{k}"] = p.force.copy()
@@ -180,11 +185,6 @@ class Coupler:
         self.time = float(state["time"])
         self.contact_work_on_ice = float(state["contact_work_on_ice"])
         for k, s in enumerate(self.structures):
-            load = np.asarray(state[f"load_{k}"], dtype=np.float64)
-            if load.shape != self._load[id(s)].shape:
-                raise ValueError(f"load_{k} has shape {load.shape}, expected "
-                                 f"{self._load[id(s)].shape}")
-            self._load[id(s)][:] = load
             self.contact_work[id(s)] = float(state[f"contact_work_{k}"])
         for k, p in enumerate(self.pairs):
             p.force = np.array(state[f"force_{k}"], dtype=np.float64)
@@ -202,38 +202,62 @@ class Coupler:
     def step(self) -> int:
         """Advance everything by one coupling step; return the number of bonds broken."""
         D = self.dt
-        p0, p1 = {}, {}
+        surface = {}
         for s in self.structures:
-            p0[id(s)] = s.surface_points().copy()
-            s.set_surface_forces(self._load[id(s)])
-            h = D / self.structure_substeps
-            for _ in range(self.structure_substeps):
-                s.step(h)
-            p1[id(s)] = s.surface_points().copy()
-            # the load is held over the substeps, so its work is load . (p1 - p0)
-            self.contact_work[id(s)] += float(np.sum(self._load[id(s)] * (p1[id(s)] - p0[id(s)])))
+            k = id(s)
+            self._impulse[k][:] = 0.0
+            p0, v0 = s.surface_points().copy(), s.surface_velocities().copy()
+            if s.prescribed_motion:   # its motion is known in advance: take it
+                self._advance(s)
+                p1 = s.surface_points().copy()
+                v0 = (p1 - p0) / D
+                surface[k] = (p0, p1 - p0, v0)
+            else:                     # predicted with its velocity now (impulses included)
+                surface[k] = (p0, None, v0)
+        pair_impulse = [np.zeros_like(self._impulse[id(p.structure)]) for p in self.pairs]
         for p in self.pairs:
             p.contacts = 0
         broken = 0
         h = D / self.ice_substeps
-        for k in range(self.ice_substeps):
-            frac = (k + 1) / self.ice_substeps
-            for p in self.pairs:
-                a, b = p0[id(p.structure)], p1[id(p.structure)]
-                p.contact.set_surface(a + frac * (b - a), (b - a) / D)
+        for n in range(self.ice_substeps):
+            frac = (n + 1) / self.ice_substeps
+            velocity = {}
+            for s in self.structures:
+                k = id(s)
+                p0, dp, v0 = surface[k]
+                velocity[k] = v0 + self._inverse_mass[k] * self._impulse[k]
+                if dp is None:
+                    dp = D * velocity[k]
+                for p in self.pairs:
+                    if p.structure is s:
+                        p.contact.set_surface(p0 + frac * dp, velocity[k])
             broken += self._ice_step(h)
+            for p, total in zip(self.pairs, pair_impulse):
+                k = id(p.structure)
+                impulse = p.contact.take_impulse()
+                if self.comm is not None:
+                    impulse = self.comm.allreduce_sum(impulse)
+                self.contact_work[k] += float(np.sum(
+                    impulse * (velocity[k] + 0.5 * self._inverse_mass[k] * impulse)))
+                self._impulse[k] += impulse
+                total += impulse
         for s in self.structures:
-            self._load[id(s)][:] = 0.0
-        for p in self.pairs:
-            impulse = p.contact.take_impulse()
+            if not s.prescribed_motion:
+                s.apply_surface_impulse(self._impulse[id(s)])
+                self._advance(s)
+        for p, impulse in zip(self.pairs, pair_impulse):
             if self.comm is not None:
-                impulse = self.comm.allreduce_sum(impulse)
                 p.contacts = int(self.comm.allreduce_sum(p.contacts))
-            self._load[id(p.structure)] += impulse / D
             p.force = impulse.sum(axis=0) / D
-            p.moment = np.cross(p1[id(p.structure)], impulse).sum(axis=0) / D
+            p.moment = np.cross(p.structure.surface_points(), impulse).sum(axis=0) / D
         self.time += D
         return broken
+
+    def _advance(self, structure) -> None:
+        """``structure_substeps`` steps of the structure over the coupling step."""
+        h = self.dt / self.structure_substeps
+        for _ in range(self.structure_substeps):
+            structure.step(h)
 
     def _ice_step(self, h: float) -> int:
         """One velocity-Verlet step of every ice body, with surface contact after the position
@@ -241,11 +265,9 @@ class Coupler:
         olds = [b.begin_step(h, keep_old=bool(self._pairs_of[id(b)])) for b in self.bodies]
         for body, y_old in zip(self.bodies, olds):
             kick = (body.f, body.material.density, body.gravity)
-            pairs = self._pairs_of[id(body)]
-            active = body.owned if pairs else None
-            for p in pairs:
+            for p in self._pairs_of[id(body)]:
                 s = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h,
-                                      active=active, kick=kick)
+                                      active=body.owned, kick=kick)
                 p.contacts += s.contacts
                 self.contact_work_on_ice += s.work
         broken = sum(b.compute_forces() for b in self.bodies)

@@ -29,6 +29,10 @@ import numpy as np
 from pdfem.fem.surface import SurfaceBody
 
 
+ENERGY_TERMS = ("load_work", "support_work", "damping_dissipated", "kinetic_correction")
+"""Keys of :meth:`Structure.energy_terms`."""
+
+
 class Structure(SurfaceBody, ABC):
     """A structure in a coupled run (SI units: m, s, N, J, Pa)."""
 
@@ -51,6 +55,17 @@ class Structure(SurfaceBody, ABC):
     def stable_time_step(self) -> float:
         """Largest stable step (s) with the structure's own safety factor; ``inf`` if none."""
         return math.inf
+
+    # -- contact impulses ----------------------------------------------------------------------
+    def surface_inverse_mass(self) -> np.ndarray:
+        """(Ns, 3) inverse lumped mass (1/kg) of each contact-surface node and component; zero
+        where the motion is prescribed (supports, a prescribed-motion body), which the contact
+        treats as infinitely heavy. Default: zeros."""
+        return np.zeros((self.n_surface_nodes, 3))
+
+    def apply_surface_impulse(self, impulse: np.ndarray) -> None:
+        """Give the contact-surface nodes the impulses ``impulse`` ((Ns, 3), N s) now, as a jump
+        of their velocity. Default: nothing (a prescribed motion does not respond)."""
 
     # -- output --------------------------------------------------------------------------------
     @abstractmethod
@@ -78,6 +93,14 @@ class Structure(SurfaceBody, ABC):
     def strain_energy(self) -> float:
         """Elastic energy (J) the structure holds (0 for a rigid body)."""
         return 0.0
+
+    def energy_terms(self) -> dict[str, float]:
+        """Energy terms (J) the structure keeps itself since the start: ``load_work`` (work of
+        its applied loads), ``support_work`` (of its supports that move), ``damping_dissipated``
+        (taken by its damping) and ``kinetic_correction`` (the time integrator's share of the
+        kinetic energy, :meth:`pdfem.fem.explicit.CentralDifference.kinetic_correction`).
+        Default: all zero."""
+        return dict.fromkeys(ENERGY_TERMS, 0.0)
 
     # -- checks --------------------------------------------------------------------------------
     def check_mesh(self) -> None:

@@ -378,3 +378,20 @@ class ElasticStructure(Structure):
     def is_finite(self) -> bool:
         """Whether every displacement is finite."""
         return bool(np.isfinite(self.displacement()).all())
+
+    # ------------------------------------------------------------------ contact impulses, energy
+    def surface_inverse_mass(self) -> np.ndarray:
+        """(Ns, 3) inverse lumped mass (1/kg) of the surface nodes; zero on supported DOFs."""
+        dofs = self._surface_dofs
+        return np.where(self.solver.free[dofs], 1.0 / self.solver.m[dofs], 0.0).reshape(-1, 3)
+
+    def apply_surface_impulse(self, impulse: np.ndarray) -> None:
+        """Give the surface nodes the impulses ((Ns, 3), N s) now, as a velocity jump."""
+        self.solver.apply_impulse(self._surface_dofs, np.asarray(impulse, dtype=np.float64).ravel())
+
+    def energy_terms(self) -> dict[str, float]:
+        """Work of the loads and of moving supports, damping loss, kinetic correction (J)."""
+        s = self.solver
+        return {"load_work": s.work_external, "support_work": s.work_supports,
+                "damping_dissipated": s.damping_dissipated,
+                "kinetic_correction": s.kinetic_correction()}

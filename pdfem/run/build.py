@@ -57,9 +57,9 @@ def check_mesh(st, cfg, file: str) -> None:
                          f"elements: {exc}; fix or re-mesh it", cfg.mesh) from None
 
 
-def contact_pairs(case: Case, bodies: list, structures: list) -> list[ContactPair]:
+def contact_pairs(case: Case, bodies: list, structures: list, comm) -> list[ContactPair]:
     """The case's contact pairs, refused if the structure has no contact surface or the ice
-    starts inside it."""
+    starts inside it; their contact weights are summed over ``comm``'s ranks."""
     by_name = {b.name: b for b in bodies} | {s.name: s for s in structures}
     pairs = []
     for c in case.contacts:
@@ -79,7 +79,8 @@ def contact_pairs(case: Case, bodies: list, structures: list) -> list[ContactPai
                              f"deep; the first at {body.x0[i].round(6).tolist()} m); move the ice "
                              "or the structure so that they start apart")
         pairs.append(ContactPair(c.name, body, st,
-                                 SurfaceContact(st, radius, c.friction, name=c.name)))
+                                 SurfaceContact(st, radius, c.friction, name=c.name,
+                                                reduce=comm.allreduce_sum)))
     return pairs
 
 
@@ -121,7 +122,7 @@ def build(case: Case, out: Path, comm, say, steps: tuple[float, int, int] | None
     counts = (sum(b.n for b in bodies), sum(b.n_bonds for b in bodies),
               sum(int(b.broken.sum()) for b in bodies))
     bodies = distribute(bodies, comm, say)
-    pairs = contact_pairs(case, bodies, structures)
+    pairs = contact_pairs(case, bodies, structures, comm)
     if steps is not None:
         dt, n_ice, n_st = steps
     end = case.run.end_time
