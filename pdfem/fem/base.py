@@ -94,6 +94,11 @@ class Structure(SurfaceBody, ABC):
         """Elastic energy (J) the structure holds (0 for a rigid body)."""
         return 0.0
 
+    def applied_load(self) -> np.ndarray:
+        """(3,) resultant (N) of the loads applied to the structure now (pressures, tractions,
+        nodal forces; not the contact). Default: zero."""
+        return np.zeros(3)
+
     def energy_terms(self) -> dict[str, float]:
         """Energy terms (J) the structure keeps itself since the start: ``load_work`` (work of
         its applied loads), ``support_work`` (of its supports that move), ``damping_dissipated``

@@ -389,6 +389,10 @@ class ElasticStructure(Structure):
         """Give the surface nodes the impulses ((Ns, 3), N s) now, as a velocity jump."""
         self.solver.apply_impulse(self._surface_dofs, np.asarray(impulse, dtype=np.float64).ravel())
 
+    def applied_load(self) -> np.ndarray:
+        """(3,) resultant (N) of the applied loads at the current time (contact excluded)."""
+        return self.dofmap.to_nodal(self.solver.f_ext).sum(axis=0)
+
     def energy_terms(self) -> dict[str, float]:
         """Work of the loads and of moving supports, damping loss, kinetic correction (J)."""
         s = self.solver

@@ -10,14 +10,14 @@ Three checks, each cheap enough to leave on:
   kernel. (Elastic structures check their own displacement every step.)
 - **energy growth without work input** (:meth:`BlowupMonitor.check_energy`, at every output
   frame): the total energy (kinetic + strain + gravity + structures + short-range potential)
-  minus what was put in (initial energy + work of constraints + work of rigid bodies) is the
-  energy *created*; it must stay below ``ENERGY_GROWTH_LIMIT`` times the energy supplied plus
-  a round-off floor, the elastic energy of a uniform strain ``FLOOR_STRAIN`` in every body
+  minus what was put in (initial energy + work of constraints, rigid bodies, loads and moving
+  supports) plus what was dissipated (contact, fracture, damping) is the energy *created*; it
+  must stay below ``ENERGY_GROWTH_LIMIT`` times the energy supplied plus a round-off floor, the elastic energy of a uniform strain ``FLOOR_STRAIN`` in every body
   (``sum 1/2 E V FLOOR_STRAIN^2``: a run at rest has energies of 1e-25 J that round-off alone
   can multiply).
-  Contact and fracture only dissipate, so this is near zero (round-off and the O(dt^2) energy
-  error of the explicit scheme) in a healthy run and grows exponentially in an unstable one.
-  Skipped when a structure carries surface loads, whose work is not counted.
+  It is minus the residual of the balance (:mod:`pdfem.run.energy`, every term computed on its
+  own): near zero (round-off and the O(dt^2) energy error of the explicit schemes) in a
+  healthy run, growing exponentially in an unstable one.
 - NaN/Inf anywhere else (short-range contact search) is turned into the same error.
 
 A failed check raises :class:`pdfem.errors.InstabilityError` (exit 3) naming the body, the
@@ -130,7 +130,7 @@ class BlowupMonitor:
             raise InstabilityError(
                 f"energy grew without work input at t = {t:.6e} s (step {step:,}): "
                 f"{created:.3e} J created against {supplied:.3e} J supplied (initial energy + "
-                f"work of constraints and rigid bodies); the fastest particles are in ice body "
+                f"work of constraints, rigid bodies, loads and supports); the fastest particles are in ice body "
                 f"'{name}'; {self._fix(name)}")
 
     def _worst(self) -> str:

@@ -145,8 +145,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     try:
         outputs.register(setup)
         monitor = BlowupMonitor(setup.bodies, setup.dt / setup.n_ice, setup.stable,
-                                case.run.stability_check_interval_steps,
-                                energy_check=not any(cfg.loads for cfg in case.structures))
+                                case.run.stability_check_interval_steps)
         state = _start(case, setup, outputs, ckpt, say)
     except BaseException:
         outputs.close()

@@ -73,8 +73,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
                 frames += 1
                 while next_out <= t * (1 + 1e-9):
                     next_out += run.output_interval
-                if e:
-                    monitor.check_energy(t, step, -e["dissipated"], e["supplied"])
+                monitor.check_energy(t, step, -e["residual"], e["supplied"])
             due = bool(every) and step % every == 0
             if minutes and not due:  # rank 0's clock decides for all ranks
                 due = comm.bcast(time.monotonic() - last_checkpoint >= 60 * minutes)

@@ -104,20 +104,21 @@ class StructureSource(Source):
 
 
 class LoadSource(Source):
-    """The ice load on a structure every coupling step (``loads/<name>``: force N, moment N m
-    about the origin, particle contacts), summed over its contact pairs."""
+    """The loads on a structure every coupling step (``loads/<name>``): the ice load (``force``
+    N, ``moment`` N m about the origin, particle ``contacts``), summed over its contact pairs,
+    and the resultant of its applied loads (``applied``, N)."""
 
     def __init__(self, structure, coupler) -> None:
         self.structure, self.coupler, self.name = structure, coupler, structure.name
 
     @classmethod
     def of_run(cls, setup, per_rank: bool) -> list[Source]:
-        return [cls(s, setup.coupler) for s in setup.structures
-                if any(p.structure is s for p in setup.pairs)]
+        return [cls(s, setup.coupler) for s in setup.structures]
 
     def step_rows(self) -> Rows:
         force, moment, n = self.coupler.structure_load(self.structure)
-        return {f"loads/{self.name}": {"force": force, "moment": moment, "contacts": n}}
+        return {f"loads/{self.name}": {"force": force, "moment": moment, "contacts": n,
+                                       "applied": self.structure.applied_load()}}
 
 
 class PairSource(Source):
@@ -173,14 +174,13 @@ class Outputs:
     sources
         The run's output sources (:func:`sources`).
     energy
-        The run's :class:`pdfem.run.energy.EnergyBalance`; no energy history without ice.
+        The run's :class:`pdfem.run.energy.EnergyBalance`.
     """
 
     def __init__(self, writer, ice_writer, sources: list, energy) -> None:
         self.writer, self.ice_writer = writer, ice_writer
         self.sources, self.energy = sources, energy
         self.per_rank = ice_writer is not writer
-        self.has_ice = any(s.mesh_kind == "ice" for s in sources)
 
     def register(self, setup) -> None:
         """Register the meshes of the ice bodies and the structures with the writers.
@@ -206,7 +206,7 @@ class Outputs:
 
     def frame(self, t: float) -> dict[str, float]:
         """Write an output frame at ``t`` (s) with its history rows; returns the energy row
-        with ``supplied`` (J) added (empty without ice). Collective under MPI."""
+        (:meth:`pdfem.run.energy.EnergyBalance.row`). Collective under MPI."""
         fields = {"ice": {}, "structure": {}}
         for s in self.sources:
             if s.mesh_kind:
@@ -217,11 +217,8 @@ class Outputs:
         self.writer.write_frame(t, fields["ice"], structures=fields["structure"])
         for s in self.sources:
             self._append(t, s.frame_rows())
-        if not self.has_ice:
-            return {}
         e = self.energy.row()
         self.writer.append_history("energy", t, e)
-        e["supplied"] = self.energy.supplied(e)
         return e
 
     def step(self, t: float) -> None:
