@@ -139,4 +139,4 @@ def test_coulomb_friction_limits_the_tangential_change():
         y = y_old + dt * v
         con.resolve(y, y_old, v, np.array([1.0]), dt)
         np.testing.assert_allclose(v[0], [vx_after, 0, 0], atol=1e-12)
-        assert y[0, 2] == 0.0
+        assert abs(y[0, 2]) < 1e-15     # back on the plate, to round-off

@@ -63,7 +63,7 @@ def _run(block_msh, youngs_modulus, density=900.0, end=6e-4, substeps=0, small_s
     forces = []
     for _ in range(int(round(end / dt))):
         c.step()
-        p = ice.momentum() + st.momentum() + c.pending_impulse()
+        p = ice.momentum() + st.momentum()
         drift = max(drift, np.abs(p - p0).max())
         forces.append(-pair.force[0])  # the ice pushes the block towards -x
         umax = max(umax, np.abs(st.displacement()).max())
@@ -78,11 +78,9 @@ def test_free_blocks_conserve_momentum_and_energy(block_msh, youngs_modulus, den
     """A free ice block (2 m/s) hits a free elastic block and rebounds. Total linear momentum
     is conserved to round-off over the whole impact, with and without subcycling of either
     side; kinetic + strain energy of both after the impact plus the contact loss equals the
-    initial kinetic energy within 2 % (nothing breaks, no friction). The contact of Eq. (5) is
-    perfectly plastic particle by particle, so some energy is lost (a few % at 8 particle
-    layers; it shrinks as the ice is refined), but never created. When the ice subcycles, the
-    structure's acoustic impedance must exceed the ice's (as steel's does, 14 times): the
-    structure answers the ice's impulses one coupling step late."""
+    initial kinetic energy within 1 % (nothing breaks, no friction). The contact of Eq. (5) is
+    perfectly plastic particle by particle, so some energy is lost (9-16 % here, with 8 particle
+    layers; it shrinks as the ice is refined), but never created."""
     r = _run(block_msh, youngs_modulus, density, substeps=1 if subcycling == "none" else 0)
     assert {"none": (1, 1), "structure": (1, r["n_st"]), "ice": (r["n_ice"], 1)}[subcycling] \
         == (r["n_ice"], r["n_st"])
@@ -91,8 +89,8 @@ def test_free_blocks_conserve_momentum_and_energy(block_msh, youngs_modulus, den
     p0 = abs(r["p0"][0])
     assert r["drift"] <= 1e-10 * p0  # round-off of the internal force sums
     assert r["st"].momentum()[0] < -0.3 * p0  # the block was really hit
-    assert 0.0 < r["lost"] < 0.15 * r["e0"]
-    assert r["e1"] + r["lost"] == pytest.approx(r["e0"], rel=0.02)
+    assert 0.0 < r["lost"] < 0.2 * r["e0"]
+    assert r["e1"] + r["lost"] == pytest.approx(r["e0"], rel=0.01)
 
 
 @pytest.fixture(scope="module")

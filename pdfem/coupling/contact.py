@@ -130,7 +130,7 @@ def _shares(facet, weight, tri, share):
 
 @numba.njit(cache=True)
 def _respond(facet, weight, y, y_old, v, mass, dt, pts, vel, invm, share, tri, friction,
-             force, inv_rho, g, node_impulse, totals):
+             force, inv_rho, g, back, node_impulse, totals):
     """Give each contacting particle and the surface point it hit their impulse (Eq. 5 with the
     structure's inertia, module docstring); move the particle with its corrected velocity.
 
@@ -139,9 +139,11 @@ def _respond(facet, weight, y, y_old, v, mass, dt, pts, vel, invm, share, tri, f
     mass is split among the contacts touching it in proportion to their weights (``share``),
     so the result does not depend on the order of the particles or on how they are split over
     MPI ranks. ``totals`` accumulates: [0:3] impulse to the structure (N s), [3] contacts, [4]
-    work done on the particles (J). That work is the one of an impulse at the step's start
-    time t, where the velocity is v(t) = v - dt/2 (force / rho + g) (velocity Verlet's first
-    half kick undone): changing the drift velocity is an impulse at time t.
+    work done on the particles (J). That work is the one of an impulse at the start of the
+    drift ``dt``, where the particle's velocity is v - back (force / rho + g): ``back`` = half
+    the velocity-Verlet step when the drift is the whole step (velocity Verlet's first half
+    kick undone; changing the drift velocity is an impulse at the step's start), less the
+    time drifted already when the step's drift is taken in parts.
     """
     inv_dt = 1.0 / dt
     for i in range(facet.shape[0]):
@@ -185,7 +187,7 @@ def _respond(facet, weight, y, y_old, v, mass, dt, pts, vel, invm, share, tri, f
         work = 0.0
         for d in range(3):
             dv = p[d] / m
-            vt0 = v[i, d] - 0.5 * dt * (force[i, d] * inv_rho + g[d])
+            vt0 = v[i, d] - back * (force[i, d] * inv_rho + g[d])
             work += m * (vt0 * dv + 0.5 * dv * dv)
             y[i, d] = y_old[i, d] + dt * (v[i, d] + dv)
             v[i, d] += dv
@@ -277,7 +279,8 @@ class SurfaceContact:
             self._normal = np.empty((n, 3))
 
     def resolve(self, y: np.ndarray, y_old: np.ndarray, v: np.ndarray, mass: np.ndarray,
-                dt: float, active: np.ndarray | None = None, kick=None) -> ContactStep:
+                dt: float, active: np.ndarray | None = None, kick=None,
+                back: float | None = None) -> ContactStep:
         """Push particles that crossed the surface back and give each contact its impulse (in
         place on ``y`` and ``v``; the structure's share accumulates in :attr:`node_impulse`).
 
@@ -299,6 +302,11 @@ class SurfaceContact:
             ``(f, rho, g)``: force density (N/m^3, (N, 3)), density (kg/m^3) and gravity
             (m/s^2, (3,)) of the velocity-Verlet half kick that preceded the update, so that the
             work done on the particles is exact (:attr:`ContactStep.work`); default none.
+        back
+            With ``kick``: the particle's velocity at the contact instant (the start of this
+            drift) is the drift velocity less ``back`` (s) times its acceleration: half the
+            velocity-Verlet step less the time drifted already in that step; default ``dt / 2``
+            (the drift is the whole step).
 
         Returns
         -------
@@ -322,7 +330,8 @@ class SurfaceContact:
             f, inv_rho, grav = kick[0], 1.0 / kick[1], np.asarray(kick[2], dtype=np.float64)
         _respond(self._facet, self._weight, y, y_old, v, mass, float(dt), self._points,
                  self._velocities, self.inverse_mass, share, t.triangles, self.friction, f,
-                 inv_rho, grav, self.node_impulse, totals)
+                 inv_rho, grav, 0.5 * dt if back is None else float(back), self.node_impulse,
+                 totals)
         impulse = totals[:3].copy()
         self.total_impulse += impulse
         return ContactStep(int(totals[3]), impulse, float(totals[4]))

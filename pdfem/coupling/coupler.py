@@ -125,7 +125,6 @@ class Coupler:
         self._mass = {id(b): b.material.density * b.vol for b in self.bodies}  # kg
         # N s, contact impulses on each structure's surface nodes in the current coupling step
         self._impulse = {id(s): np.zeros((len(s.surface_points()), 3)) for s in self.structures}
-        self._inverse_mass = {id(s): s.surface_inverse_mass() for s in self.structures}  # 1/kg
         # J, work of the contact loads on each structure (as it moves under them)
         self.contact_work = {id(s): 0.0 for s in self.structures}
         self.contact_work_on_ice = 0.0  # J
@@ -201,50 +200,16 @@ class Coupler:
 
     def step(self) -> int:
         """Advance everything by one coupling step; return the number of bonds broken."""
-        D = self.dt
-        surface = {}
         for s in self.structures:
-            k = id(s)
-            self._impulse[k][:] = 0.0
-            p0, v0 = s.surface_points().copy(), s.surface_velocities().copy()
-            if s.prescribed_motion:   # its motion is known in advance: take it
-                self._advance(s)
-                p1 = s.surface_points().copy()
-                v0 = (p1 - p0) / D
-                surface[k] = (p0, p1 - p0, v0)
-            else:                     # predicted with its velocity now (impulses included)
-                surface[k] = (p0, None, v0)
-        pair_impulse = [np.zeros_like(self._impulse[id(p.structure)]) for p in self.pairs]
+            self._impulse[id(s)][:] = 0.0
         for p in self.pairs:
             p.contacts = 0
-        broken = 0
-        h = D / self.ice_substeps
-        for n in range(self.ice_substeps):
-            frac = (n + 1) / self.ice_substeps
-            velocity = {}
-            for s in self.structures:
-                k = id(s)
-                p0, dp, v0 = surface[k]
-                velocity[k] = v0 + self._inverse_mass[k] * self._impulse[k]
-                if dp is None:
-                    dp = D * velocity[k]
-                for p in self.pairs:
-                    if p.structure is s:
-                        p.contact.set_surface(p0 + frac * dp, velocity[k])
-            broken += self._ice_step(h)
-            for p, total in zip(self.pairs, pair_impulse):
-                k = id(p.structure)
-                impulse = p.contact.take_impulse()
-                if self.comm is not None:
-                    impulse = self.comm.allreduce_sum(impulse)
-                self.contact_work[k] += float(np.sum(
-                    impulse * (velocity[k] + 0.5 * self._inverse_mass[k] * impulse)))
-                self._impulse[k] += impulse
-                total += impulse
-        for s in self.structures:
-            if not s.prescribed_motion:
-                s.apply_surface_impulse(self._impulse[id(s)])
-                self._advance(s)
+        pair_impulse = [np.zeros_like(self._impulse[id(p.structure)]) for p in self.pairs]
+        if self.ice_substeps == 1:
+            broken = self._step_with_structure_substeps(pair_impulse)
+        else:
+            broken = self._step_with_ice_substeps(pair_impulse)
+        D = self.dt
         for p, impulse in zip(self.pairs, pair_impulse):
             if self.comm is not None:
                 p.contacts = int(self.comm.allreduce_sum(p.contacts))
@@ -253,23 +218,112 @@ class Coupler:
         self.time += D
         return broken
 
-    def _advance(self, structure) -> None:
-        """``structure_substeps`` steps of the structure over the coupling step."""
-        h = self.dt / self.structure_substeps
-        for _ in range(self.structure_substeps):
-            structure.step(h)
+    def _step_with_structure_substeps(self, pair_impulse: list) -> int:
+        """One ice step of D whose drift is taken in the structures' substeps: before each
+        structure substep the particles drift over it and meet the surface predicted from the
+        structure's state at the substep's start, and the impulses act on both at that
+        instant (the ice's bond forces stay those of the step's start)."""
+        D, n = self.dt, self.structure_substeps
+        h = D / n
+        olds = [b.begin_step(D, keep_old=True) for b in self.bodies]
+        for b, y_old in zip(self.bodies, olds):
+            b.y[:] = y_old                       # the drift is taken below, in n parts
+        kicks = [(b.f, b.material.density, b.gravity) for b in self.bodies]
+        for j in range(n):
+            ends = {}
+            for s in self.structures:
+                p0 = s.surface_points().copy()
+                if s.prescribed_motion:          # known motion: the substep is taken first
+                    s.step(h)
+                    ends[id(s)] = (s.surface_points().copy(), (s.surface_points() - p0) / h)
+                else:                            # predicted from its state now
+                    v0 = s.surface_velocities().copy()
+                    ends[id(s)] = (p0 + h * v0, v0)
+            for p in self.pairs:
+                p.contact.set_surface(*ends[id(p.structure)])
+            for body, kick in zip(self.bodies, kicks):
+                before = body.y.copy()
+                body.y += h * body.v
+                for p in self._pairs_of[id(body)]:
+                    c = p.contact.resolve(body.y, before, body.v, self._mass[id(body)], h,
+                                          active=body.owned, kick=kick, back=0.5 * D - j * h)
+                    p.contacts += c.contacts
+                    self.contact_work_on_ice += c.work
+            self._hand_over(pair_impulse, {k: e[1] for k, e in ends.items()})
+            self._apply_impulses()
+            for s in self.structures:
+                if not s.prescribed_motion:
+                    s.step(h)
+        return self._finish_ice_step(D)
 
-    def _ice_step(self, h: float) -> int:
-        """One velocity-Verlet step of every ice body, with surface contact after the position
-        update and the particle forces added to the bond forces; bonds broken."""
-        olds = [b.begin_step(h, keep_old=bool(self._pairs_of[id(b)])) for b in self.bodies]
-        for body, y_old in zip(self.bodies, olds):
-            kick = (body.f, body.material.density, body.gravity)
-            for p in self._pairs_of[id(body)]:
-                s = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h,
-                                      active=body.owned, kick=kick)
-                p.contacts += s.contacts
-                self.contact_work_on_ice += s.work
+    def _step_with_ice_substeps(self, pair_impulse: list) -> int:
+        """``ice_substeps`` ice steps against the structures' surfaces predicted from their
+        state at the coupling step's start (prescribed motions: taken); the impulses of each
+        ice step act on the structures at once, at the coupling step's start, and they move
+        on with that velocity; then one structure step."""
+        D = self.dt
+        h = D / self.ice_substeps
+        known, pos = {}, {}
+        for s in self.structures:
+            pos[id(s)] = s.surface_points().copy()
+            if s.prescribed_motion:
+                s.step(D)
+                known[id(s)] = (pos[id(s)], s.surface_points() - pos[id(s)])
+        broken = 0
+        for k in range(self.ice_substeps):
+            frac = (k + 1) / self.ice_substeps
+            ends = {}
+            for s in self.structures:
+                if s.prescribed_motion:
+                    p0, dp = known[id(s)]
+                    ends[id(s)] = (p0 + frac * dp, dp / D)
+                else:
+                    v = s.surface_velocities().copy()
+                    ends[id(s)] = (pos[id(s)] + h * v, v)
+                pos[id(s)] = ends[id(s)][0]
+            for p in self.pairs:
+                p.contact.set_surface(*ends[id(p.structure)])
+            olds = [b.begin_step(h, keep_old=True) for b in self.bodies]
+            for body, y_old in zip(self.bodies, olds):
+                kick = (body.f, body.material.density, body.gravity)
+                for p in self._pairs_of[id(body)]:
+                    c = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h,
+                                          active=body.owned, kick=kick)
+                    p.contacts += c.contacts
+                    self.contact_work_on_ice += c.work
+            self._hand_over(pair_impulse, {key: e[1] for key, e in ends.items()})
+            self._apply_impulses()
+            broken += self._finish_ice_step(h)
+        for s in self.structures:
+            if not s.prescribed_motion:
+                s.step(D)
+        return broken
+
+    def _apply_impulses(self) -> None:
+        """Give each responding structure its pending impulses now (a velocity jump) and book
+        their work."""
+        for s in self.structures:
+            if not s.prescribed_motion:
+                self.contact_work[id(s)] += s.apply_surface_impulse(self._impulse[id(s)])
+                self._impulse[id(s)][:] = 0.0
+
+    def _hand_over(self, pair_impulse: list, velocity: dict) -> None:
+        """Take the impulses of the contacts just resolved (summed over ranks) into the pairs'
+        totals and the structures' pending impulses; book the work of prescribed motions (at
+        their surface velocity ``velocity``)."""
+        for p, total in zip(self.pairs, pair_impulse):
+            k = id(p.structure)
+            impulse = p.contact.take_impulse()
+            if self.comm is not None:
+                impulse = self.comm.allreduce_sum(impulse)
+            if p.structure.prescribed_motion:
+                self.contact_work[k] += float(np.sum(impulse * velocity[k]))
+            self._impulse[k] += impulse
+            total += impulse
+
+    def _finish_ice_step(self, h: float) -> int:
+        """Bond forces at the new positions, the particle forces, the second half kick; bonds
+        broken."""
         broken = sum(b.compute_forces() for b in self.bodies)
         for force in self.forces:
             force.add_forces()

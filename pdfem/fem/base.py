@@ -63,9 +63,12 @@ class Structure(SurfaceBody, ABC):
         treats as infinitely heavy. Default: zeros."""
         return np.zeros((self.n_surface_nodes, 3))
 
-    def apply_surface_impulse(self, impulse: np.ndarray) -> None:
+    def apply_surface_impulse(self, impulse: np.ndarray) -> float:
         """Give the contact-surface nodes the impulses ``impulse`` ((Ns, 3), N s) now, as a jump
-        of their velocity. Default: nothing (a prescribed motion does not respond)."""
+        of their velocity; return the work they did (J: the kinetic-energy change
+        ``v . J + J^2 / (2 m)``). Default: nothing, 0 (a prescribed motion does not respond;
+        the caller books the work its drive does)."""
+        return 0.0
 
     # -- output --------------------------------------------------------------------------------
     @abstractmethod

@@ -385,9 +385,15 @@ class ElasticStructure(Structure):
         dofs = self._surface_dofs
         return np.where(self.solver.free[dofs], 1.0 / self.solver.m[dofs], 0.0).reshape(-1, 3)
 
-    def apply_surface_impulse(self, impulse: np.ndarray) -> None:
-        """Give the surface nodes the impulses ((Ns, 3), N s) now, as a velocity jump."""
-        self.solver.apply_impulse(self._surface_dofs, np.asarray(impulse, dtype=np.float64).ravel())
+    def apply_surface_impulse(self, impulse: np.ndarray) -> float:
+        """Give the surface nodes the impulses ((Ns, 3), N s) now, as a velocity jump; their
+        work (J), the kinetic-energy change ``v . J + J^2 / (2 m)`` (zero on supports)."""
+        j = np.asarray(impulse, dtype=np.float64).ravel()
+        dofs = self._surface_dofs
+        free = self.solver.free[dofs]
+        work = float(np.sum((self.solver.v[dofs] * j + 0.5 * j * j / self.solver.m[dofs])[free]))
+        self.solver.apply_impulse(dofs, j)
+        return work
 
     def applied_load(self) -> np.ndarray:
         """(3,) resultant (N) of the applied loads at the current time (contact excluded)."""
