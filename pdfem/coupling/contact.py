@@ -264,12 +264,16 @@ class SurfaceContact:
         self._facet = self._weight = self._normal = None
         self.set_surface(points, surface.surface_velocities())
 
-    def set_surface(self, points: np.ndarray, velocities: np.ndarray) -> None:
+    def set_surface(self, points: np.ndarray, velocities: np.ndarray,
+                    normals: bool = True) -> None:
         """Use these node positions (m) and velocities (m/s) for the next contacts (e.g. the
-        structure's state interpolated to the ice substep's time)."""
+        structure's state interpolated to the ice substep's time). ``normals=False`` keeps the
+        pseudo-normals of the last call (they only decide which side a particle is on; within
+        a coupling step the surface turns by a negligible angle)."""
         self._points = np.ascontiguousarray(points, dtype=np.float64)
         self._velocities = np.ascontiguousarray(velocities, dtype=np.float64)
-        self._normals = pseudo_normals(self._points, self.topology)
+        if normals or self._normals is None:
+            self._normals = pseudo_normals(self._points, self.topology)
         self.grid.update(self._points)
 
     def _buffers(self, n: int) -> None:

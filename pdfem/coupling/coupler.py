@@ -240,7 +240,7 @@ class Coupler:
                     v0 = s.surface_velocities().copy()
                     ends[id(s)] = (p0 + h * v0, v0)
             for p in self.pairs:
-                p.contact.set_surface(*ends[id(p.structure)])
+                p.contact.set_surface(*ends[id(p.structure)], normals=j == 0)
             for body, kick in zip(self.bodies, kicks):
                 before = body.y.copy()
                 body.y += h * body.v
@@ -303,7 +303,7 @@ class Coupler:
         """Give each responding structure its pending impulses now (a velocity jump) and book
         their work."""
         for s in self.structures:
-            if not s.prescribed_motion:
+            if not s.prescribed_motion and self._impulse[id(s)].any():
                 self.contact_work[id(s)] += s.apply_surface_impulse(self._impulse[id(s)])
                 self._impulse[id(s)][:] = 0.0
 

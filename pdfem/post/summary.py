@@ -7,6 +7,9 @@ Definitions used in the summary:
 
 - *peak* of a force component: the sample of largest absolute value, reported with its sign
   and time; *peak* of the magnitude ``|F| = sqrt(Fx^2 + Fy^2 + Fz^2)``: its largest sample.
+- *windowed peak*: the largest magnitude of the load averaged over 0.1 ms
+  (:mod:`pdfem.post.windowed`): the step-by-step peak is a single particle's impact over one
+  coupling step and grows as the step shrinks; the windowed peak converges with the step.
 - *mean*: the time average over the run, ``(1 / (t_K - t_1)) * integral of F dt`` over the
   load history's whole time span, integral by the trapezoid rule (a history of one sample: that
   sample). The load history holds every coupling step, from t = 0 to the end of the run.
@@ -26,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from pdfem.post.groups import AXES, histories_of
+from pdfem.post.windowed import peak_windowed_force
 
 
 def _num(x: Any) -> float | None:
@@ -85,6 +89,8 @@ def _load_figures(h: dict) -> dict:
     i = int(np.argmax(mag))
     out["magnitude"] = {"peak": _num(mag[i]), "time": _num(t[i]),
                         "mean": _num(time_average(t, mag)), "force_at_peak": _vec(force[i])}
+    peak, when, window = peak_windowed_force(t, force)
+    out["windowed"] = {"peak": _num(peak), "time": _num(when), "window": _num(window)}
     if "contacts" in h:
         out["max_contacts"] = int(np.max(h["contacts"]))
     return out

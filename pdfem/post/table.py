@@ -35,6 +35,11 @@ def _load_lines(what: str, name: str, f: dict) -> list[str]:
     rows = [[d, _g(f[d]["peak"]), _g(f[d]["time"]), _g(f[d]["mean"])]
             for d in (*AXES, "magnitude")]
     lines += _table(["direction", "peak [N]", "at t [s]", "mean [N]"], rows)
+    w = f.get("windowed")
+    if w and w["peak"] is not None:
+        lines.append(f"  peak of |F| averaged over {_g(w['window'] * 1e3)} ms: {_g(w['peak'])} N "
+                     f"at t = {_g(w['time'])} s (converges with the time step; the per-step peak "
+                     "does not)")
     if "max_contacts" in f:
         lines.append(f"  most particles in contact at once: {f['max_contacts']}")
     return lines

@@ -1,0 +1,119 @@
+"""The coupled step at several time steps (``demo_step_sweep.toml``, the built-in demo).
+
+The demo runs at safety factors 0.9, 0.6, 0.3 and 0.15 (automatic substeps: the structure
+subcycles) and at 0.6 with ``substeps`` 1 and 2. Every run must finish; over all runs and
+frames the energy balance must close within 1 % of the energy supplied (the residual, every
+term computed on its own), no dissipation term may be negative, and the peak ice load averaged
+over 0.1 ms (:mod:`pdfem.post.windowed`) must agree within 5 % with the run at 0.9.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from pdfem.case import Case
+from pdfem.output import read_results
+from pdfem.post.windowed import peak_windowed_force, windowed_force
+from pdfem.run.driver import run_case
+from pdfem.validation.case import Outcome, ValidationCase, replace_run
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+SETTINGS = ((0.9, 0), (0.6, 0), (0.3, 0), (0.15, 0), (0.6, 1), (0.6, 2))
+"""(safety factor, substeps) of the runs; the first is the reference of the ice load."""
+
+DISSIPATION = ("contact_dissipated", "fracture_dissipated", "damping_dissipated")
+
+
+def sweep(case: Case, directory: Path) -> dict[str, Any]:
+    """Run ``case`` at every :data:`SETTINGS`; per run its energy history and load history."""
+    runs = {}
+    for safety, substeps in SETTINGS:
+        label = f"safety {safety:g}, substeps {substeps or 'auto'}"
+        out = directory / f"safety{safety:g}_substeps{substeps}"
+        run = replace_run(case, safety_factor=safety, substeps=substeps)
+        h = read_results(run_case(run, out, quiet=True).results)["histories"]
+        runs[label] = {"energy": h["energy"], "load": h["loads/panel"]}
+    return {"runs": runs}
+
+
+def residual(outcome: Outcome) -> float:
+    """Largest |residual| / supplied energy over all runs and frames."""
+    return max(float(np.max(np.abs(r["energy"]["residual"]) / r["energy"]["supplied"]))
+               for r in outcome.data["runs"].values())
+
+
+def negative_dissipation(outcome: Outcome) -> float:
+    """Most negative dissipation term over all runs and frames, / supplied energy, as a
+    positive number; 0 when no term is ever negative."""
+    least = min(float(np.min(r["energy"][k] / r["energy"]["supplied"]))
+                for r in outcome.data["runs"].values() for k in DISSIPATION)
+    return max(0.0, -least)
+
+
+def _peaks(outcome: Outcome) -> dict[str, float]:
+    return {label: peak_windowed_force(r["load"]["time"], r["load"]["force"])[0]
+            for label, r in outcome.data["runs"].items()}
+
+
+def load_spread(outcome: Outcome) -> float:
+    """Largest relative deviation of the runs' windowed peak ice load from the first run's."""
+    peaks = list(_peaks(outcome).values())
+    return max(abs(p - peaks[0]) / peaks[0] for p in peaks)
+
+
+def plot_loads(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
+    """The windowed ice load of every run (the per-step load of the reference, faint)."""
+    ax = fig.add_subplot()
+    for k, (label, r) in enumerate(outcome.data["runs"].items()):
+        t, f = r["load"]["time"], r["load"]["force"]
+        if k == 0:
+            ax.plot(t * 1e3, np.linalg.norm(f, axis=1) / 1e3, color="0.8", lw=0.6,
+                    label=f"per step ({label})")
+        tw, fw, w = windowed_force(t, f)
+        ax.plot(tw * 1e3, np.linalg.norm(fw, axis=1) / 1e3, lw=1.0, label=label)
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("ice load |F| averaged over 0.1 ms [kN]")
+    ax.legend(fontsize="small")
+
+
+def plot_energy(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
+    """Residual of the energy balance of every run, relative to the energy supplied."""
+    ax = fig.add_subplot()
+    for label, r in outcome.data["runs"].items():
+        e = r["energy"]
+        ax.plot(e["time"] * 1e3, 100 * e["residual"] / e["supplied"], label=label)
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("residual / supplied [%]")
+    ax.legend(fontsize="small")
+
+
+def quick(case: Case) -> Case:
+    """To 2.5 ms: the impact (first contact at 1.0 ms) and the peak load (near 1.9 ms)."""
+    return replace_run(case, end_time=2.5e-3)
+
+
+_COMMON = dict(case_file="demo_step_sweep.toml", execute=sweep, quick=quick, relative=False,
+               reference=lambda case: 0.0,
+               quick_note="to 2.5 ms (impact and peak load) instead of 4 ms")
+CASES = (
+    ValidationCase(
+        name="step_energy_residual", quantity="max |energy residual| / supplied", unit="-",
+        measure=residual, plot=plot_energy, tolerance=0.01, **_COMMON,
+        source="conservation of energy: kinetic + strain + dissipated = supplied, each term "
+               "computed on its own (issue target: 1 % at every frame)"),
+    ValidationCase(
+        name="step_dissipation_sign", quantity="negative part of any dissipation term / supplied",
+        unit="-", measure=negative_dissipation, tolerance=1e-9, **_COMMON,
+        source="second law: contact (plastic impulses, friction), fracture and damping only "
+               "dissipate"),
+    ValidationCase(
+        name="step_load_convergence", quantity="spread of the 0.1 ms peak ice load", unit="-",
+        measure=load_spread, plot=plot_loads, tolerance=0.05, **_COMMON,
+        source="time-step convergence: the peak ice load averaged over 0.1 ms at safety "
+               "factors 0.15-0.9 and 1, 2 or automatic substeps, against the run at 0.9"),
+)
