@@ -181,8 +181,9 @@ def test_csv_round_trips(coupled, synthetic, tmp_path, capsys):
     csv = tmp_path / "coupled.csv"
     rc, _, err = run_post(capsys, coupled, "--csv", csv)
     assert rc == 0, err
-    # time, then force, moment, contacts of the structure (loads) and of the pair (contacts)
-    assert _check_csv_against_file(csv, coupled) == 1 + 2 * (3 + 3 + 1)
+    # time, then force, moment, contacts (+ the applied load of the structure) of the structure
+    # (loads) and of the pair (contacts)
+    assert _check_csv_against_file(csv, coupled) == 1 + 2 * (3 + 3 + 1) + 3
     csv = tmp_path / "synthetic.csv"
     assert post.write_csv(post.load_results(synthetic["path"]), csv)[-1] \
         == "monitors/probe/von_mises [Pa]"

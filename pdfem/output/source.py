@@ -32,11 +32,13 @@ Rows = dict[str, dict[str, Any]]
 
 UNITS: dict[str, str] = {
     "u": "m", "v": "m/s", "damage": "1", "von_mises": "Pa",
-    "force": "N", "moment": "N m", "contacts": "1",
+    "force": "N", "moment": "N m", "contacts": "1", "applied": "N",
     "kinetic": "J", "strain": "J", "gravity_potential": "J", "external_work": "J",
     "structure_kinetic": "J", "structure_strain": "J", "short_range_potential": "J",
     "rigid_body_work": "J", "dissipated": "J", "contact_dissipated": "J",
-    "fracture_dissipated": "J", "reaction_<group>": "N",
+    "fracture_dissipated": "J", "damping_dissipated": "J", "structure_kinetic_correction": "J",
+    "load_work": "J", "support_work": "J", "supplied": "J", "stored": "J", "residual": "J",
+    "reaction_<group>": "N",
 }
 """Unit of each field or history key that pdfem writes."""
 

@@ -15,7 +15,7 @@ from pdfem.post.groups import AXES
 LOAD_PREFIXES = ("loads/", "contacts/", "monitors/")
 """History groups written at every coupling step (the CSV columns)."""
 
-UNITS = {"force": "N", "moment": "N m", "contacts": "-", "u": "m", "von_mises": "Pa"}
+UNITS = {"force": "N", "moment": "N m", "contacts": "-", "applied": "N", "u": "m", "von_mises": "Pa"}
 """Unit of each per-step history key (``-``: a count)."""
 
 
