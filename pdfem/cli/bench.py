@@ -1,4 +1,4 @@
-"""``pdfem bench {search,step,mpi,partition} [--n N] [--json]``: performance figures.
+"""``pdfem bench {search,step,mpi,partition,structure} [--n N] [--json]``: performance figures.
 
 The benchmark code (the package ``pdfem.benchmarks``) is imported only when this command runs.
 """
@@ -16,9 +16,10 @@ HELP = "performance measurements (not tests)"
 
 def add_arguments(b: argparse.ArgumentParser) -> None:
     """The options of ``pdfem bench``."""
-    b.add_argument("what", choices=["search", "step", "mpi", "partition"],
+    b.add_argument("what", choices=["search", "step", "mpi", "partition", "structure"],
                    help="search, step, mpi (strong scaling on 1 and 2 ranks), partition (the "
-                        "partition model of the 1.44M-particle plate, 2-64 ranks)")
+                        "partition model of the 1.44M-particle plate, 2-64 ranks), structure "
+                        "(the demo panel's FE cost per coupling step)")
     b.add_argument("--n", type=int, default=1_000_000, help="number of particles (default 1,000,000)")
     b.add_argument("--json", action="store_true", help="print one JSON object")
 
@@ -33,11 +34,16 @@ def run(args: argparse.Namespace) -> int:
         from pdfem.benchmarks.step import bench_step as fn
     elif args.what == "mpi":
         from pdfem.benchmarks.mpi import bench_mpi as fn
-    else:
+    elif args.what == "partition":
         from pdfem.benchmarks.partition_model import partition_model
 
         def fn(n):  # the seed's plate; n is not used
             return partition_model()
+    else:
+        from pdfem.benchmarks.structure_step import bench_structure_step
+
+        def fn(n):  # the demo's panel; n is not used
+            return bench_structure_step()
     res = fn(n=args.n)
     if args.json:
         print(json.dumps(res))
