@@ -17,7 +17,8 @@ float32 weight (``weight``) whose sign marks a broken bond (:data:`pdfem.pd.kern
 decision (:mod:`pdfem.pd.failure`; default: the material's critical stretch), which gives the
 kernels their threshold. The body implements the ice-body interface that contact, particle
 forces and output use (:class:`pdfem.pd.ice_interface.IceParticles`), as a whole body: every
-particle is owned.
+particle is owned. The strain energy that breaking bonds take with them is counted in
+``fracture_dissipated`` (:mod:`pdfem.pd.fracture`).
 
 One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (kg/m^3)::
 
@@ -41,6 +42,7 @@ from pdfem.pd import kernels
 from pdfem.pd.bonds import bond_lengths, cut_crack
 from pdfem.pd.constraints import VelocityConstraint
 from pdfem.pd.failure import CriticalStretch, FailureLaw
+from pdfem.pd.fracture import FractureLedger
 from pdfem.pd.ice_interface import WholeBody
 from pdfem.pd.family import build_family
 from pdfem.pd.influence import bond_weights, isotropy_gain
@@ -81,12 +83,16 @@ class IceBody(WholeBody):
     fixed: np.ndarray = None  # (N,) bool
     constraints: list = field(default_factory=list)
     external_work: float = 0.0
+    # energy (J) released by the bonds broken in the steps so far (pdfem.pd.fracture)
+    fracture_dissipated: float = 0.0
     time: float = 0.0
     failure: FailureLaw | None = None  # default: critical stretch of the material at delta
     # Optional (P,) uint8 broken flags. Without them (how the builders make bodies) a broken
     # bond is a negative weight. Given (e.g. by dataclasses.replace(body, flags=...)), the body
     # keeps them as a separate array that the kernels update in place, and ``broken`` is it.
     flags: np.ndarray | None = field(default=None, repr=False, compare=False)
+    _ledger: FractureLedger = field(default_factory=FractureLedger, init=False, repr=False,
+                                    compare=False)
 
     def __post_init__(self) -> None:
         if self.failure is None:
@@ -196,6 +202,7 @@ class IceBody(WholeBody):
 
     @broken.setter
     def broken(self, flags: np.ndarray) -> None:
+        self._ledger.forget()  # set from outside the time loop: no dissipation
         if self.flags is None:
             self.weight[:] = kernels.signed_weights(self.weight, flags)
         else:
@@ -230,23 +237,26 @@ class IceBody(WholeBody):
 
     # -- physics -------------------------------------------------------------------------------
     def compute_forces(self) -> int:
-        """Dilatation, then force density and bond breaking at the current positions.
-
-        Returns the number of bonds that broke.
-        """
+        """Dilatation, then force density and bond breaking at the current positions; the
+        strain energy the broken bonds held goes to :attr:`fracture_dissipated`
+        (:mod:`pdfem.pd.fracture`). Returns the number of bonds that broke."""
+        self._ledger.prepare(self)
         mat = self.material
         br = self._broken_arg()
         if self.loop == "pairs":
-            return kernels.dilatation_and_forces(self.y, self.row_ptr, self.nbr, self.xi_len,
-                                                 self.weight, br, self.vol, self.m, mat.K,
-                                                 mat.mu, self.s0, self.nofail, self.theta, self.f,
-                                                 self._ws)
-        fam_ptr, fam_nbr, fam_bond = self._family
-        kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.weight,
-                                  br, self.vol, self.m, self.theta)
-        return kernels.forces_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len, self.weight,
-                                     br, self.vol, self.m, self.theta, mat.K, mat.mu,
-                                     self.s0, self.nofail, self.f)
+            nb = kernels.dilatation_and_forces(self.y, self.row_ptr, self.nbr, self.xi_len,
+                                               self.weight, br, self.vol, self.m, mat.K, mat.mu,
+                                               self.s0, self.nofail, self.theta, self.f, self._ws)
+        else:
+            fam_ptr, fam_nbr, fam_bond = self._family
+            kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
+                                      self.weight, br, self.vol, self.m, self.theta)
+            nb = kernels.forces_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
+                                       self.weight, br, self.vol, self.m, self.theta, mat.K,
+                                       mat.mu, self.s0, self.nofail, self.f)
+        if nb:
+            self.fracture_dissipated += self._ledger.released(self)
+        return nb
 
     def _apply_constraints(self, t: float) -> None:
         self.v[self.fixed] = 0.0
@@ -281,17 +291,18 @@ class IceBody(WholeBody):
                    kernels.stable_time_step(*args, mat.mu, self._ws))
 
     def start(self) -> None:
-        """Compute the forces of the initial state (call once before the first step)."""
+        """Compute the forces of the initial state (call once before the first step); bonds
+        breaking here are no dissipation of the run (the run starts from the state after)."""
         self._apply_constraints(self.time)
+        before = self.fracture_dissipated
         self.compute_forces()
+        self.fracture_dissipated = before
 
     def begin_step(self, dt: float, keep_old: bool = False) -> np.ndarray | None:
         """First half of a velocity-Verlet step: half kick, constraints, position update.
-
         Returns the positions before the update if ``keep_old`` (contact needs them), else
         ``None``. Follow with :meth:`compute_forces` (plus any extra force density added to
-        ``f``) and :meth:`end_step`.
-        """
+        ``f``) and :meth:`end_step`."""
         half = 0.5 * dt
         t0 = self.time
         self._power0 = self._constraint_force(t0) if self.constraints else 0.0
@@ -313,10 +324,8 @@ class IceBody(WholeBody):
 
     def step(self, dt: float, after_drift=None) -> int:
         """Advance by ``dt`` (s) with velocity Verlet; returns the number of bonds broken.
-
         ``after_drift(y_old)``, if given, is called right after the position update with the
-        positions before it; it may correct ``y`` and ``v`` in place (contact does).
-        """
+        positions before it; it may correct ``y`` and ``v`` in place (contact does)."""
         y_old = self.begin_step(dt, keep_old=after_drift is not None)
         if after_drift is not None:
             after_drift(y_old)
@@ -357,7 +366,7 @@ class IceBody(WholeBody):
     def checkpoint_state(self) -> dict:
         """Copies of the state that a restart needs: arrays :data:`STATE_ARRAYS` (``y`` m,
         ``v`` m/s, ``f`` N/m^3, ``broken`` uint8 per bond, ``theta``) and scalars
-        :data:`STATE_SCALARS` (``time`` s, ``external_work`` J)."""
+        :data:`STATE_SCALARS` (``time`` s, ``external_work`` J, ``fracture_dissipated`` J)."""
         out = {k: np.array(getattr(self, k)) for k in STATE_ARRAYS}
         out.update({k: float(getattr(self, k)) for k in STATE_SCALARS})
         return out
@@ -387,5 +396,5 @@ class IceBody(WholeBody):
 STATE_ARRAYS = ("y", "v", "f", "broken", "theta")
 """Per-particle (and per-bond: ``broken``) state arrays of an ice body, for checkpoints."""
 
-STATE_SCALARS = ("time", "external_work")
-"""Scalar state of an ice body (s, J), for checkpoints."""
+STATE_SCALARS = ("time", "external_work", "fracture_dissipated")
+"""Scalar state of an ice body (s, J, J), for checkpoints."""

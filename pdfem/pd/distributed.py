@@ -122,7 +122,7 @@ class DistributedIce:
             weight=kernels.signed_weights(body.weight[pairs], body.broken[pairs]),
             flags=None,  # broken bonds are negative weights (replace would copy the flags)
             fixed=body.fixed[loc].copy(), constraints=[],
-            loop="pairs", external_work=0.0)
+            loop="pairs", external_work=0.0, fracture_dissipated=0.0)
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
@@ -150,8 +150,11 @@ class DistributedIce:
 
     def _compute_forces(self) -> int:
         """Positions exchanged, then the fused dilatation and force passes with the exchange of
-        the dilatations between them; returns the bonds this rank counts as newly broken."""
+        the dilatations between them; returns the bonds this rank counts as newly broken. The
+        energy the broken bonds held at the owned particles goes to the rank's part of
+        :attr:`fracture_dissipated` (:mod:`pdfem.pd.fracture`)."""
         b, mat = self.body, self.body.material
+        b._ledger.prepare(b)
         self._exchange(b.y)
         broke = kernels.dilatation_and_forces(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight,
                                               b._broken_arg(), b.vol, b.m, mat.K, mat.mu, b.s0,
@@ -159,6 +162,7 @@ class DistributedIce:
                                               between=self._exchange)
         if broke == 0:  # the usual step: no recount over the bonds
             return 0
+        b.fracture_dissipated += b._ledger.released(b, self.plan.owned)
         before, self._counted_broken = self._counted_broken, self._broken_count()
         return self._counted_broken - before
 
@@ -166,7 +170,9 @@ class DistributedIce:
     def start(self) -> None:
         """Initial forces (call once before the first step)."""
         self.body._apply_constraints(self.body.time)
+        before = self.body.fracture_dissipated
         self._compute_forces()
+        self.body.fracture_dissipated = before  # breaks before the start: not the run's
 
     def step(self, dt: float) -> int:
         """One velocity-Verlet step of every rank's part; bonds broken on all ranks together."""
@@ -232,6 +238,11 @@ class DistributedIce:
     def external_work(self, value: float) -> None:
         self.body.external_work = value if self.comm.rank == 0 else 0.0
 
+    @property
+    def fracture_dissipated(self) -> float:
+        """Energy (J) released by the bonds broken since the start, all ranks (collective)."""
+        return float(self.comm.allreduce_sum(self.body.fracture_dissipated))
+
     def kinetic_energy(self) -> float:
         b = self.body
         return 0.5 * b.material.density * float(self._sum(b.vol * np.einsum("ij,ij->i", b.v, b.v)))
@@ -289,23 +300,23 @@ class DistributedIce:
     def checkpoint_state(self) -> dict | None:
         """The state of the whole body in global order on rank 0, as the serial body's
         :meth:`~pdfem.pd.body.IceBody.checkpoint_state` (``None`` on the other ranks; every
-        rank must call it). ``external_work`` is the sum over ranks; ``external_work_ranks``
-        keeps each rank's part, so a restart on as many ranks continues bit for bit."""
+        rank must call it). ``external_work`` and ``fracture_dissipated`` are sums over ranks;
+        ``<key>_ranks`` keeps each rank's part, so a restart on as many ranks continues bit for
+        bit."""
         b = self.body
         arrays = {k: self.gather(getattr(b, k)) for k in ("y", "v", "f", "theta")}
         counted = self._counted
         bonds = self.comm.gather((self.plan.pairs[counted], b.broken[counted]))
         work = self.comm.gather(float(b.external_work))
+        frac = self.comm.gather(float(b.fracture_dissipated))
         if bonds is None:
             return None
         broken = np.zeros(len(self.global_body.nbr), dtype=np.uint8)
         for idx, flags in bonds:
             broken[idx] = flags
-        total = 0.0
-        for w in work:  # rank order, as external_work sums
-            total = total + w
-        return {**arrays, "broken": broken, "time": float(b.time), "external_work": total,
-                "external_work_ranks": np.array(work)}
+        return {**arrays, "broken": broken, "time": float(b.time),
+                "external_work": _rank_sum(work), "external_work_ranks": np.array(work),
+                "fracture_dissipated": _rank_sum(frac), "fracture_dissipated_ranks": np.array(frac)}
 
     def restore_state(self, state: dict) -> None:
         """Take this rank's part of a whole-body state (from a checkpoint written on any number
@@ -322,17 +333,30 @@ class DistributedIce:
                 raise ValueError(f"ice body '{self.name}': {k} has {len(state[k])} entries in "
                                  f"the checkpoint, {size} in the case")
         loc, pairs = self.plan.local, self.plan.pairs
-        ranks = state.get("external_work_ranks")
-        if ranks is not None and len(ranks) == self.comm.size:
-            work = float(ranks[self.comm.rank])
-        else:  # another rank count: rank 0 carries the total
-            work = float(state["external_work"]) if self.comm.rank == 0 else 0.0
         self.body.restore_state({"y": state["y"][loc], "v": state["v"][loc],
                                  "f": state["f"][loc], "theta": state["theta"][loc],
                                  "broken": state["broken"][pairs], "time": state["time"],
-                                 "external_work": work})
+                                 "external_work": self._rank_part(state, "external_work"),
+                                 "fracture_dissipated":
+                                     self._rank_part(state, "fracture_dissipated")})
         self._counted_broken = self._broken_count()
+
+    def _rank_part(self, state: dict, key: str) -> float:
+        """This rank's part of a counter summed over ranks: its own from ``<key>_ranks`` if the
+        checkpoint was written on as many ranks, else the total on rank 0 and 0 elsewhere."""
+        ranks = state.get(f"{key}_ranks")
+        if ranks is not None and len(ranks) == self.comm.size:
+            return float(ranks[self.comm.rank])
+        return float(state[key]) if self.comm.rank == 0 else 0.0
 
     def damage(self) -> np.ndarray:
         """Local damage (right for owned particles)."""
         return self.body.damage()
+
+
+def _rank_sum(values) -> float:
+    """``values[0] + values[1] + ...`` in rank order, as the counters' allreduce sums them."""
+    total = 0.0
+    for v in values:
+        total = total + v
+    return total

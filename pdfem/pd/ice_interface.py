@@ -47,6 +47,13 @@ class IceParticles(Protocol):
 
     def end_step(self, dt: float) -> None: ...
 
+    @property
+    def fracture_dissipated(self) -> float:
+        """Energy (J) the bonds broken since the start held when they broke: at the positions
+        y of their step, W(y; bonds before) - W(y; bonds after), summed over the steps
+        (:mod:`pdfem.pd.fracture`); over all ranks (collective under MPI), kept in checkpoints."""
+        ...
+
     def owned_sum(self, values: np.ndarray):
         """Sum of a local per-particle array over the owned particles of all ranks."""
         ...
