@@ -130,7 +130,7 @@ def _shares(facet, weight, tri, share):
 
 @numba.njit(cache=True)
 def _respond(facet, weight, y, y_old, v, mass, dt, pts, vel, invm, share, tri, friction,
-             force, inv_rho, g, back, node_impulse, totals):
+             node_impulse, particle_impulse, totals):
     """Give each contacting particle and the surface point it hit their impulse (Eq. 5 with the
     structure's inertia, module docstring); move the particle with its corrected velocity.
 
@@ -138,12 +138,9 @@ def _respond(facet, weight, y, y_old, v, mass, dt, pts, vel, invm, share, tri, f
     uses the surface velocities ``vel`` as they were before the step's contacts, and a node's
     mass is split among the contacts touching it in proportion to their weights (``share``),
     so the result does not depend on the order of the particles or on how they are split over
-    MPI ranks. ``totals`` accumulates: [0:3] impulse to the structure (N s), [3] contacts, [4]
-    work done on the particles (J). That work is the one of an impulse at the start of the
-    drift ``dt``, where the particle's velocity is v - back (force / rho + g): ``back`` = half
-    the velocity-Verlet step when the drift is the whole step (velocity Verlet's first half
-    kick undone; changing the drift velocity is an impulse at the step's start), less the
-    time drifted already when the step's drift is taken in parts.
+    MPI ranks. ``totals`` accumulates: [0:3] impulse to the structure (N s), [3] contacts;
+    ``particle_impulse`` gets each particle's impulse (N s; rows of other particles are left
+    alone).
     """
     inv_dt = 1.0 / dt
     for i in range(facet.shape[0]):
@@ -184,14 +181,11 @@ def _respond(facet, weight, y, y_old, v, mass, dt, pts, vel, invm, share, tri, f
                 jt = min(vt / kt, friction * jn)      # Coulomb: stick, or slide at mu jn
                 for d in range(3):
                     p[d] -= jt * rt[d] / vt
-        work = 0.0
         for d in range(3):
             dv = p[d] / m
-            vt0 = v[i, d] - back * (force[i, d] * inv_rho + g[d])
-            work += m * (vt0 * dv + 0.5 * dv * dv)
             y[i, d] = y_old[i, d] + dt * (v[i, d] + dv)
             v[i, d] += dv
-        totals[4] += work
+            particle_impulse[i, d] = p[d]
         for k in range(3):
             node = tri[f, k]
             w = weight[i, k]
@@ -213,7 +207,7 @@ class ContactStep:
 
     contacts: int
     impulse: np.ndarray        # (3,) impulse given to the structure, N s
-    work: float                # work done on the particles, J
+    particle_impulse: np.ndarray  # (N, 3) impulse given to each particle, N s
 
 
 class SurfaceContact:
@@ -283,8 +277,7 @@ class SurfaceContact:
             self._normal = np.empty((n, 3))
 
     def resolve(self, y: np.ndarray, y_old: np.ndarray, v: np.ndarray, mass: np.ndarray,
-                dt: float, active: np.ndarray | None = None, kick=None,
-                back: float | None = None) -> ContactStep:
+                dt: float, active: np.ndarray | None = None) -> ContactStep:
         """Push particles that crossed the surface back and give each contact its impulse (in
         place on ``y`` and ``v``; the structure's share accumulates in :attr:`node_impulse`).
 
@@ -302,15 +295,6 @@ class SurfaceContact:
             The step (s) from ``y_old`` to ``y``.
         active
             (N,) bool, particles that may touch this surface (default all).
-        kick
-            ``(f, rho, g)``: force density (N/m^3, (N, 3)), density (kg/m^3) and gravity
-            (m/s^2, (3,)) of the velocity-Verlet half kick that preceded the update, so that the
-            work done on the particles is exact (:attr:`ContactStep.work`); default none.
-        back
-            With ``kick``: the particle's velocity at the contact instant (the start of this
-            drift) is the drift velocity less ``back`` (s) times its acceleration: half the
-            velocity-Verlet step less the time drifted already in that step; default ``dt / 2``
-            (the drift is the whole step).
 
         Returns
         -------
@@ -327,18 +311,14 @@ class SurfaceContact:
         share = np.zeros(len(self._points))
         _shares(self._facet, self._weight, t.triangles, share)
         share = self.reduce(share)
-        totals = np.zeros(5)
-        if kick is None:  # no half kick to undo: the work is taken at the drift velocity
-            f, inv_rho, grav = np.zeros((n, 3)), 0.0, np.zeros(3)
-        else:
-            f, inv_rho, grav = kick[0], 1.0 / kick[1], np.asarray(kick[2], dtype=np.float64)
+        totals = np.zeros(4)
+        per_particle = np.zeros((n, 3))
         _respond(self._facet, self._weight, y, y_old, v, mass, float(dt), self._points,
-                 self._velocities, self.inverse_mass, share, t.triangles, self.friction, f,
-                 inv_rho, grav, 0.5 * dt if back is None else float(back), self.node_impulse,
-                 totals)
+                 self._velocities, self.inverse_mass, share, t.triangles, self.friction,
+                 self.node_impulse, per_particle, totals)
         impulse = totals[:3].copy()
         self.total_impulse += impulse
-        return ContactStep(int(totals[3]), impulse, float(totals[4]))
+        return ContactStep(int(totals[3]), impulse, per_particle)
 
     def take_impulse(self) -> np.ndarray:
         """The nodal impulses (Ns, 3) (N s) accumulated since the last call, and reset them."""

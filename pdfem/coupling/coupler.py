@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pdfem.coupling.contact import SurfaceContact
+from pdfem.coupling.impulse_work import ImpulseWork
 
 
 @dataclass
@@ -225,10 +226,10 @@ class Coupler:
         instant (the ice's bond forces stay those of the step's start)."""
         D, n = self.dt, self.structure_substeps
         h = D / n
+        works = [ImpulseWork(b) for b in self.bodies]
         olds = [b.begin_step(D, keep_old=True) for b in self.bodies]
         for b, y_old in zip(self.bodies, olds):
             b.y[:] = y_old                       # the drift is taken below, in n parts
-        kicks = [(b.f, b.material.density, b.gravity) for b in self.bodies]
         for j in range(n):
             ends = {}
             for s in self.structures:
@@ -241,20 +242,23 @@ class Coupler:
                     ends[id(s)] = (p0 + h * v0, v0)
             for p in self.pairs:
                 p.contact.set_surface(*ends[id(p.structure)], normals=j == 0)
-            for body, kick in zip(self.bodies, kicks):
-                before = body.y.copy()
-                body.y += h * body.v
+            for body, work in zip(self.bodies, works):
+                y = body.y                       # in place: the body keeps its array
+                before = y.copy()
+                y += h * body.v
                 for p in self._pairs_of[id(body)]:
                     c = p.contact.resolve(body.y, before, body.v, self._mass[id(body)], h,
-                                          active=body.owned, kick=kick, back=0.5 * D - j * h)
+                                          active=body.owned)
                     p.contacts += c.contacts
-                    self.contact_work_on_ice += c.work
+                    work.add(c.particle_impulse, j * h)
             self._hand_over(pair_impulse, {k: e[1] for k, e in ends.items()})
             self._apply_impulses()
             for s in self.structures:
                 if not s.prescribed_motion:
                     s.step(h)
-        return self._finish_ice_step(D)
+        broken = self._finish_ice_step(D)
+        self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies))
+        return broken
 
     def _step_with_ice_substeps(self, pair_impulse: list) -> int:
         """``ice_substeps`` ice steps against the structures' surfaces predicted from their
@@ -283,17 +287,18 @@ class Coupler:
                 pos[id(s)] = ends[id(s)][0]
             for p in self.pairs:
                 p.contact.set_surface(*ends[id(p.structure)])
+            works = [ImpulseWork(b) for b in self.bodies]
             olds = [b.begin_step(h, keep_old=True) for b in self.bodies]
-            for body, y_old in zip(self.bodies, olds):
-                kick = (body.f, body.material.density, body.gravity)
+            for body, y_old, work in zip(self.bodies, olds, works):
                 for p in self._pairs_of[id(body)]:
                     c = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h,
-                                          active=body.owned, kick=kick)
+                                          active=body.owned)
                     p.contacts += c.contacts
-                    self.contact_work_on_ice += c.work
+                    work.add(c.particle_impulse, 0.0)
             self._hand_over(pair_impulse, {key: e[1] for key, e in ends.items()})
             self._apply_impulses()
             broken += self._finish_ice_step(h)
+            self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies))
         for s in self.structures:
             if not s.prescribed_motion:
                 s.step(D)
