@@ -11,13 +11,7 @@ clamped, per component, prescribed) and the contact surface (each face split int
 triangles over all its nodes), which the contact code reaches through the
 :class:`pdfem.fem.surface.ContactSurface` interface shared with rigid bodies.
 
-Forces on the structure in a step are the sum of
-
-- constant nodal forces (N) set with :meth:`ElasticStructure.set_nodal_forces`,
-- surface tractions / pressures (Pa) added with :meth:`ElasticStructure.add_surface_load`,
-- the contact forces (N) accumulated on the surface nodes with
-  :meth:`ElasticStructure.add_surface_forces`. They stay applied in every later step until
-  :meth:`ElasticStructure.clear_surface_forces` (so a contact load can be held over FE substeps).
+Forces: the applied loads of :class:`pdfem.fem.loads.AppliedLoads` plus the contact forces.
 
 Small displacements: stiffness, loads and stresses use the reference configuration; surface
 positions and normals reported to the contact code use the current one (reference + u).
@@ -33,9 +27,10 @@ import numpy as np
 from pdfem.errors import InstabilityError
 from pdfem.fem.base import Structure
 from pdfem.fem.elasticity import (DofMap, ElasticMaterial, element_volumes, lumped_mass,
-                                  stiffness_matrix, surface_load)
+                                  stiffness_matrix)
 from pdfem.fem.explicit import CentralDifference
 from pdfem.fem.fe_space import fe_space, hrz_mass
+from pdfem.fem.loads import AppliedLoads
 from pdfem.fem.mesh import FEMesh, load_mesh
 from pdfem.fem.probe import Probe, make_probe, probe_values
 from pdfem.fem.stress import (centre_basis, element_stress, kinetic_energy, nodal_average,
@@ -45,7 +40,7 @@ from pdfem.fem.supports import (constrained_dofs, prescribed_values, support_rea
 from pdfem.meshing.quality import check_cells
 
 
-class ElasticStructure(Structure):
+class ElasticStructure(AppliedLoads, Structure):
     """A linear-elastic FE structure advanced by explicit central differences (a
     :class:`pdfem.fem.base.Structure`).
 
@@ -192,48 +187,6 @@ class ElasticStructure(Structure):
         self.solver.initialize(u, v, self.external_force_dofs(), time=self.solver.time)
 
     # ------------------------------------------------------------------ loads
-    def set_nodal_forces(self, forces: np.ndarray) -> None:
-        """Set constant external nodal forces (N), (Nn, 3) (replaces earlier ones)."""
-        forces = np.asarray(forces, dtype=np.float64)
-        if forces.shape != (self.n_nodes, 3):
-            raise ValueError(f"nodal forces must have shape ({self.n_nodes}, 3), got "
-                             f"{forces.shape}")
-        self._nodal_forces = forces.copy()
-        self._load_dofs = self.dofmap.to_dofs(self._nodal_forces) + self._pressure_dofs
-
-    def add_surface_load(self, group: str, traction=(0.0, 0.0, 0.0), pressure: float = 0.0,
-                         history=None) -> None:
-        """Add a uniform traction (Pa, (3,)) and/or pressure (Pa, positive pushing into the
-        structure) on a named surface group.
-
-        ``history`` (optional) is a callable ``t -> factor`` (t in s) that scales this load in
-        time, e.g. a pressure pulse; without it the load is constant.
-        """
-        f = surface_load(self.mesh, group, traction, pressure, self.space.element,
-                         self.space.intorder)
-        if history is not None:
-            self._timed_loads.append((f, history))
-            return
-        self._pressure_dofs = self._pressure_dofs + f
-        self._load_dofs = self._load_dofs + f
-
-    def clear_loads(self) -> None:
-        """Remove the nodal forces and surface loads (not the contact forces)."""
-        self._nodal_forces = np.zeros((self.n_nodes, 3))
-        self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
-        self._load_dofs = np.zeros(self.dofmap.n_dofs)
-        self._timed_loads = []
-
-    def external_force_dofs(self, time: float | None = None) -> np.ndarray:
-        """(3 Nn,) total external force (N) at ``time`` (s; default the current time): loads
-        (time histories evaluated at ``time``) plus the accumulated contact forces."""
-        f = self._load_dofs.copy()
-        t = self.solver.time if time is None else time
-        for dofs, history in self._timed_loads:
-            f += float(history(t)) * dofs
-        f[self._surface_dofs] += self._surface_forces.ravel()
-        return f
-
     def set_surface_forces(self, forces: np.ndarray) -> None:
         """Replace the contact forces (N), (Ns, 3), effective from the current time on.
 
