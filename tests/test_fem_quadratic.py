@@ -233,3 +233,25 @@ def test_second_order_gmsh_file_is_read_by_its_corners(tmp_path, gmsh_box):
     np.testing.assert_allclose(key(s.points), key(raw.points[used]), atol=1e-9)
     assert "raised straight-sided" in s.describe()
     assert s.cell_type == "tetra10"
+
+
+def test_case_supports_and_element_order():
+    """The case fields: supports per component resolve to (group, components); a component
+    other than x, y, z and an element_order other than 1 or 2 are refused naming the field."""
+    from pathlib import Path
+
+    from pdfem.case.loader import parse_case
+    from pdfem.errors import InputError
+    models = Path(__file__).resolve().parents[1] / "models"
+    text = (models / "demo_ice_sheet_panel.toml").read_text()
+    old = 'fixed_groups = ["fixed"]'
+
+    def case(extra: str):
+        return parse_case(text.replace(old, f"{old}\n{extra}"), "demo.toml", models)
+
+    cfg = case('supports = [{ group = "contact", components = ["z", "x"] }]').structures[0]
+    assert cfg.supports == (("contact", ("z", "x")),) and cfg.element_order == 2
+    with pytest.raises(InputError, match=r"supports\[0\]\.components.*\"x\", \"y\", \"z\""):
+        case('supports = [{ group = "contact", components = ["w"] }]')
+    with pytest.raises(InputError, match="element_order.*1 .*or 2"):
+        case("element_order = 3")
