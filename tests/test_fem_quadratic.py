@@ -235,6 +235,27 @@ def test_second_order_gmsh_file_is_read_by_its_corners(tmp_path, gmsh_box):
     assert s.cell_type == "tetra10"
 
 
+def test_hexahedron27_file_is_read_by_its_corners(tmp_path, gmsh_box):
+    """A gmsh hexahedron27 mesh with quad9 faces loads as HexS2: its FE nodes are the file's
+    corner and edge nodes (face and body centres dropped) and the contact group has 8 nodes per
+    face."""
+    path = gmsh_box(tmp_path / "h27.msh", (0.3, 0.2, 0.1), volume_groups=["block"],
+                    face_groups={"contact": ["z1"], "fixed": ["x0"]}, divisions=(3, 2, 1),
+                    order=2)
+    mesh = load_mesh(path)
+    raw = meshio.read(path)
+    assert "hexahedron27" in raw.cells_dict and mesh.file_order == 2
+    s = ElasticStructure(mesh, STEEL, fixed_groups=["fixed"], contact_group="contact",
+                         max_eigenvalue=OMEGA2)
+    used = np.unique(raw.cells_dict["hexahedron27"])
+    assert s.cell_type == "hexahedron20"
+    assert s.n_nodes == len(used) - mesh.mesh.facets.shape[1] - mesh.n_elements
+    file_pts = {tuple(x) for x in np.round(raw.points[used], 9)}
+    assert all(tuple(x) in file_pts for x in np.round(s.points, 9))
+    # top face, 3 x 2 quads: 4 x 3 corners + (3 x 3 + 2 x 4) edge midpoints
+    assert len(s.surface_nodes) == len(s.group_nodes("contact")) == 12 + 17
+
+
 def test_case_supports_and_element_order():
     """The case fields: supports per component resolve to (group, components); a component
     other than x, y, z and an element_order other than 1 or 2 are refused naming the field."""
