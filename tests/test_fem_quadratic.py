@@ -276,3 +276,17 @@ def test_case_supports_and_element_order():
         case('supports = [{ group = "contact", components = ["w"] }]')
     with pytest.raises(InputError, match="element_order.*1 .*or 2"):
         case("element_order = 3")
+
+
+def test_quadratic_element_stress_of_a_uniaxial_stretch(plate_mesh):
+    """A uniaxial stress state (u_x = e x, u_y = u_z = -nu e y, -nu e z) interpolated exactly
+    by HexS2 gives sigma_xx = E e and von Mises E e in every element (Hooke's law)."""
+    s = _plate(plate_mesh, "clamped")
+    e, nu = 1e-4, STEEL.poisson_ratio
+    x = s.points
+    s.solver.u[:] = s.dofmap.to_dofs(np.column_stack([e * x[:, 0], -nu * e * x[:, 1],
+                                                      -nu * e * x[:, 2]]))
+    sig = s.stresses()
+    assert sig[:, 0, 0] == pytest.approx(np.full(len(sig), STEEL.youngs_modulus * e), rel=1e-9)
+    assert s.von_mises() == pytest.approx(np.full(len(sig), STEEL.youngs_modulus * e), rel=1e-9)
+    assert s.nodal_von_mises().shape == (s.n_nodes,)
