@@ -217,9 +217,9 @@ def test_xdmf_of_quadratic_mesh_round_trips(plate_mesh, tmp_path):
         np.testing.assert_array_equal(pd[name], fields[name])
 
 
-def test_second_order_gmsh_file_is_read_by_its_corners(tmp_path, gmsh_box):
-    """A gmsh tetra10 mesh loads; the structure's FE nodes are the file's nodes (straight-sided
-    box: the midside nodes are edge midpoints) and describe() says how it was read."""
+def test_second_order_gmsh_tet_file_is_isoparametric(tmp_path, gmsh_box):
+    """A gmsh tetra10 mesh loads isoparametric; the structure's FE nodes are the file's nodes
+    and describe() says how it was read."""
     path = gmsh_box(tmp_path / "p2.msh", (0.3, 0.2, 0.1), volume_groups=["block"],
                     face_groups={"contact": ["z1"], "fixed": ["x0"]}, size=0.05, order=2)
     mesh = load_mesh(path)
@@ -231,8 +231,38 @@ def test_second_order_gmsh_file_is_read_by_its_corners(tmp_path, gmsh_box):
     key = lambda x: np.round(x, 9)[np.lexsort(np.round(x, 9).T)]  # noqa: E731
     assert s.n_nodes == len(used)
     np.testing.assert_allclose(key(s.points), key(raw.points[used]), atol=1e-9)
-    assert "raised straight-sided" in s.describe()
+    assert mesh.isoparametric and "isoparametric" in s.describe()
     assert s.cell_type == "tetra10"
+
+
+def test_isoparametric_tetra10_keeps_a_curved_boundary(tmp_path):
+    """A sphere of radius 1 m meshed by gmsh with tetra10: the isoparametric volume is much
+    closer to 4/3 pi than the straight-sided corner mesh's (reference: sphere volume)."""
+    import gmsh
+
+    from pdfem.fem.elasticity import element_volumes
+    path = str(tmp_path / "sphere.msh")
+    gmsh.initialize(["-v", "0"])
+    try:
+        gmsh.model.occ.addSphere(0, 0, 0, 1.0)
+        gmsh.model.occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [1], name="ball")
+        gmsh.model.addPhysicalGroup(2, [1], name="skin")
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(2)
+        gmsh.write(path)
+    finally:
+        gmsh.finalize()
+    mesh = load_mesh(path)
+    exact = 4.0 / 3.0 * np.pi
+    iso = element_volumes(mesh).sum()
+    flat = skfem.Basis(skfem.MeshTet1(mesh.points.T, mesh.mesh.t), skfem.ElementTetP1()).dx.sum()
+    print(f"sphere volume: isoparametric {iso:.5f}, straight {flat:.5f}, exact {exact:.5f}")
+    assert abs(iso - exact) < 0.1 * abs(flat - exact)
+    s = ElasticStructure(mesh, STEEL, contact_group="skin", max_eigenvalue=OMEGA2)
+    r = np.linalg.norm(s.points[s.surface_nodes], axis=1)
+    assert r == pytest.approx(np.ones_like(r), abs=1e-6)       # midside nodes on the sphere
 
 
 def test_hexahedron27_file_is_read_by_its_corners(tmp_path, gmsh_box):
