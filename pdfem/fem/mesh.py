@@ -30,6 +30,9 @@ import numpy as np
 import skfem
 from skfem.io.meshio import INV_HEX_MAPPING
 
+from pdfem.fem.mesh_orientation import check_orientation
+from pdfem.fem.mesh_second_order import CORNERS, corners, isoparametric_tet
+
 # meshio cell types and their topological dimension (first- and higher-order).
 _CELL_DIM = {
     "vertex": 0,
@@ -40,11 +43,9 @@ _CELL_DIM = {
     "pyramid14": 3,
 }
 
-SUPPORTED = ("first-order tetrahedra (gmsh element type 4) or first-order hexahedra "
-             "(gmsh element type 5), one kind per mesh")
+SUPPORTED = ("tetrahedra (gmsh element types 4 and 11: tetra, tetra10) or hexahedra (types 5, 17 "
+             "and 12: hexahedron, hexahedron20, hexahedron27), one kind per mesh")
 
-# Relative size below which an element's volume counts as zero: |corner Jacobian| / l_max^3.
-_DEGENERATE = 1e-10
 
 
 @dataclass
@@ -142,60 +143,6 @@ def _row_lookup(table: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return where[inv[len(a):]]
 
 
-def _tet_orientation(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Relative signed volume 6 V / l_max^3 of each tetrahedron (t in gmsh order, (n, 4))."""
-    x = p[t]
-    e = x[:, 1:] - x[:, :1]
-    det = np.einsum("ij,ij->i", e[:, 0], np.cross(e[:, 1], e[:, 2]))
-    edges = np.concatenate([e, x[:, [2, 3, 3]] - x[:, [1, 1, 2]]], axis=1)
-    lmax = np.sqrt(np.max(np.einsum("ijk,ijk->ij", edges, edges), axis=1))
-    return det / lmax**3
-
-
-def _hex_corner_jacobians(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Relative corner Jacobians (n, 8) of trilinear hexahedra in gmsh/VTK node order.
-
-    Bottom face 0-1-2-3 (counter-clockwise seen from the top), top face 4-5-6-7 above it. At a
-    corner the Jacobian columns are the two face edges leaving it (next, previous around its face)
-    and the edge from the bottom node to the top node; all are positive for a valid element.
-    """
-    x = p[t]
-    nxt = np.array([1, 2, 3, 0])
-    prv = np.array([3, 0, 1, 2])
-    up = x[:, 4:] - x[:, :4]                                        # (n, 4, 3)
-    jb = np.einsum("nij,nij->ni", x[:, nxt] - x[:, :4],
-                   np.cross(x[:, prv] - x[:, :4], up))
-    jt = np.einsum("nij,nij->ni", x[:, nxt + 4] - x[:, 4:],
-                   np.cross(x[:, prv + 4] - x[:, 4:], up))
-    edges = np.concatenate([x[:, nxt] - x[:, :4], x[:, nxt + 4] - x[:, 4:], up], axis=1)
-    lmax = np.sqrt(np.max(np.einsum("nij,nij->ni", edges, edges), axis=1))
-    return np.hstack([jb, jt]) / lmax[:, None] ** 3
-
-
-def _check_orientation(path: str, p: np.ndarray, t: np.ndarray, kind: str) -> np.ndarray:
-    """Return ``t`` (gmsh order) with simply inverted elements renumbered; refuse bad ones."""
-    t = t.copy()
-    if kind == "tet":
-        rel = _tet_orientation(p, t)[:, None]
-    else:
-        rel = _hex_corner_jacobians(p, t)
-    bad = np.abs(rel).min(axis=1) <= _DEGENERATE
-    mixed = (rel.max(axis=1) > 0) & (rel.min(axis=1) < 0)
-    for mask, what in ((bad, "degenerate (zero volume)"), (mixed, "partly inverted (tangled)")):
-        if mask.any():
-            e = int(np.flatnonzero(mask)[0])
-            raise ValueError(
-                f"{path}: {int(mask.sum())} {kind} element(s) are {what}, e.g. element {e} with "
-                f"nodes at {np.round(p[t[e]], 9).tolist()}; remesh the model")
-    flip = rel.max(axis=1) < 0
-    if flip.any():
-        if kind == "tet":
-            t[flip] = t[flip][:, [0, 2, 1, 3]]
-        else:
-            t[flip] = t[flip][:, [4, 5, 6, 7, 0, 1, 2, 3]]
-    return t
-
-
 @dataclass
 class FEMesh:
     """A scikit-fem volume mesh with the named groups of the gmsh file it came from.
@@ -216,6 +163,13 @@ class FEMesh:
         ``{surface group: (F,) int32 scikit-fem facet indices}``, row for row with ``facet_sets``.
     element_sets
         ``{volume group: (n,) int32 element indices}``.
+    line_sets
+        ``{line group: (n, 2) int32 corner node pairs}`` (the group's mesh edges).
+    file_order
+        Order of the elements in the file (1, or 2 for tetra10 / hexahedron20 / hexahedron27).
+    isoparametric
+        True for a tetra10 file: ``mesh`` is a :class:`skfem.MeshTet2` keeping the file's
+        midside node positions (curved elements); hexahedron20 / 27 files keep their corners only.
     """
 
     mesh: skfem.Mesh
@@ -225,16 +179,19 @@ class FEMesh:
     facet_sets: dict[str, np.ndarray] = field(default_factory=dict)
     facet_indices: dict[str, np.ndarray] = field(default_factory=dict)
     element_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    line_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    file_order: int = 1
+    isoparametric: bool = False
 
     @property
     def points(self) -> np.ndarray:
         """(Nn, 3) reference node coordinates (m)."""
-        return np.ascontiguousarray(self.mesh.p.T)
+        return np.ascontiguousarray(self.mesh.p[:, :self.mesh.nvertices].T)
 
     @property
     def n_nodes(self) -> int:
         """Number of nodes."""
-        return int(self.mesh.p.shape[1])
+        return int(self.mesh.nvertices)
 
     @property
     def n_elements(self) -> int:
@@ -321,8 +278,12 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
     Parameters
     ----------
     path
-        A gmsh ``.msh`` file (format 4.1 or 2.2) holding first-order tetrahedra or first-order
-        hexahedra, with named physical groups (coordinates in metres).
+        A gmsh ``.msh`` file (format 4.1 or 2.2) holding tetrahedra or hexahedra, first or second
+        order (tetra10, hexahedron20, hexahedron27 with triangle6 / quad8 / quad9 faces), with
+        named physical groups (coordinates in metres). tetra10 elements are kept isoparametric
+        (:class:`skfem.MeshTet2` with the file's midside node positions, curved geometry);
+        hexahedron20 / 27 elements are read by their corner nodes (the structure adds
+        straight-sided midside nodes again, so a curved boundary becomes flat faces).
 
     Returns
     -------
@@ -332,8 +293,8 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
     Raises
     ------
     ValueError
-        If the file has no volume elements, mixes element kinds or has higher-order elements
-        (the message says what is supported), if a surface group has faces that are not faces of
+        If the file has no volume elements, mixes element kinds or has other elements (the
+        message says what is supported), if a surface group has faces that are not faces of
         the volume mesh, or if an element is degenerate or tangled.
     """
     raw = read_msh_groups(path)
@@ -342,39 +303,46 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
     if not kinds:
         raise ValueError(f"{path} has no volume elements; pdfem needs a 3-D mesh of {SUPPORTED} "
                          "in a named volume physical group")
-    if len(kinds) > 1 or kinds[0] not in ("tetra", "hexahedron"):
+    if len(kinds) > 1 or kinds[0] not in CORNERS:
         raise ValueError(f"{path} has volume elements of type(s) {', '.join(kinds)}; "
                          f"supported are {SUPPORTED}")
-    cell_type = kinds[0]
-    kind = "tet" if cell_type == "tetra" else "hex"
-    conn_all = raw.volume_cells[cell_type]
-    conn = conn_all[_unique_rows(conn_all)]
+    file_type = kinds[0]
+    kind, nc = CORNERS[file_type]
+    cell_type = "tetra" if kind == "tet" else "hexahedron"
+    full = raw.volume_cells[file_type]
+    full = full[_unique_rows(full[:, :nc])]
+    conn = full[:, :nc]
 
     used = np.unique(conn)
     renum = np.full(len(raw.points), -1, dtype=np.int64)
     renum[used] = np.arange(len(used))
     p = raw.points[used]
-    t = _check_orientation(path, p, renum[conn], kind)
+    t = check_orientation(path, p, renum[conn], kind)
 
     t_sk = t if kind == "tet" else t[:, INV_HEX_MAPPING[:8]]
     mesh_type = skfem.MeshTet1 if kind == "tet" else skfem.MeshHex1
     mesh = mesh_type(np.ascontiguousarray(p.T), np.ascontiguousarray(t_sk.T, dtype=np.int32))
 
     face_type = "triangle" if kind == "tet" else "quad"
-    femesh = FEMesh(mesh=mesh, path=path, kind=kind)
+    if file_type == "tetra10":
+        mesh = isoparametric_tet(mesh, raw.points, renum, full)
+    femesh = FEMesh(mesh=mesh, path=path, kind=kind, file_order=1 if nc == full.shape[1] else 2,
+                    isoparametric=file_type == "tetra10")
+    members_of = {name: (dim, [corners(ct, c) for ct, c in members])
+                  for name, (dim, members) in raw.groups.items()}
     centres = p[t].mean(axis=1)
     mesh_facets = np.ascontiguousarray(mesh.facets.T)
-    for name, (dim, members) in raw.groups.items():
+    for name, (dim, members) in members_of.items():
         nodes = [renum[c].ravel() for _, c in members]
         nodes = np.concatenate(nodes) if nodes else np.zeros(0, dtype=np.int64)
         femesh.node_sets[name] = np.unique(nodes[nodes >= 0]).astype(np.int32)
         if dim == 3:
-            cells = [c for ct, c in members if ct == cell_type]
+            cells = [c for ct, c in members if ct == kind]
             cells = np.vstack(cells) if cells else np.zeros((0, t.shape[1]), dtype=np.int64)
             idx = _row_lookup(t, renum[cells])
             femesh.element_sets[name] = np.unique(idx[idx >= 0]).astype(np.int32)
         elif dim == 2:
-            others = sorted({ct for ct, _ in members if ct != face_type})
+            others = sorted({ct for ct, _ in members if ct != ("tri" if kind == "tet" else "quad")})
             if others:
                 raise ValueError(f"{path}: surface group '{name}' has {', '.join(others)} "
                                  f"elements, but faces of a {cell_type} mesh are {face_type}s")
@@ -395,4 +363,8 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
             elem = mesh.f2t[0, fidx]
             femesh.facet_sets[name] = _outward_faces(p, faces, centres[elem]).astype(np.int32)
             femesh.facet_indices[name] = fidx.astype(np.int32)
+        elif dim == 1:
+            lines = [renum[c] for ct, c in members if ct == "line"]
+            lines = np.vstack(lines) if lines else np.zeros((0, 2), dtype=np.int64)
+            femesh.line_sets[name] = lines[(lines >= 0).all(axis=1)].astype(np.int32)
     return femesh
