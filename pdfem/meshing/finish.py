@@ -247,7 +247,9 @@ def _finish_mesh(path: Path, model: str, parameters: dict[str, Any], dim: int, c
         _orient_closed_surface(gmsh, top, etype, index, xyz)
 
     sicn = np.asarray(gmsh.model.mesh.getElementQualities(etags, "minSICN"))
-    gamma = np.asarray(gmsh.model.mesh.getElementQualities(etags, "gamma"))
+    # gmsh's gamma is defined for simplices only (0 for hexahedra): use its isotropy measure there
+    simplex = et.corners == dim + 1
+    gamma = np.asarray(gmsh.model.mesh.getElementQualities(etags, "gamma" if simplex else "minIsotropy"))
     if dim == 3 and sicn.min() <= 0:
         raise MeshQualityError(f"gmsh reports inverted {et.name} elements (min SICN {sicn.min():.3g})")
 

@@ -40,7 +40,9 @@ class MeshReport:
     min_sicn
         gmsh's smallest signed inverse condition number (1 ideal, <= 0 inverted).
     min_gamma
-        gmsh's smallest inscribed/circumscribed radius ratio (normalised, 1 ideal).
+        gmsh's smallest inscribed/circumscribed radius ratio (normalised, 1 ideal) of
+        tetrahedra and triangles; gmsh's smallest isotropy measure ``minIsotropy`` (1 ideal) of
+        hexahedra and quadrilaterals.
     min_inradius
         Smallest inscribed-sphere (circle) radius, m: the length that limits an explicit
         solver's stable time step.
