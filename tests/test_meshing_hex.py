@@ -183,3 +183,22 @@ def test_finish_mesh_refuses_triangles_on_a_hexahedral_mesh(tmp_path):
         with pytest.raises(MeshQualityError, match="quad"):
             finish_mesh(tmp_path / "h.msh", "h", {}, 3)
     assert not (tmp_path / "h.msh").exists()
+
+
+def test_model_meshes_load_in_the_structure_reader(panel, tmp_path):
+    """End to end: the hexahedral panel and the second-order blade load with pdfem.fem.mesh
+    (hexahedra, resp. tetrahedra with their mid-side nodes), with every group; the panel's
+    contact facets are its quadrilaterals of total area length x breadth."""
+    from pdfem.fem.mesh import load_mesh
+    from pdfem.models import propeller_blade
+    report, mesh = panel
+    fm = load_mesh(report.path)
+    assert fm.kind == "hex" and set(fm.facet_sets) >= {"contact", "fixed"}
+    q = fm.facet_sets["contact"]
+    p = fm.points
+    area = 0.5 * np.linalg.norm(np.cross(p[q[:, 2]] - p[q[:, 0]], p[q[:, 3]] - p[q[:, 1]]), axis=1).sum()
+    assert area == pytest.approx(PANEL["length"] * PANEL["breadth"], rel=1e-12)
+    blade = propeller_blade.build(tmp_path / "b.msh", element_size=0.06)
+    assert set(blade.elements) == {"tetra10", "triangle6"}
+    fb = load_mesh(blade.path)
+    assert fb.kind == "tet" and set(fb.facet_sets) == {"contact", "root"}
