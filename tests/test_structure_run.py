@@ -28,7 +28,7 @@ output_interval = 5.0e-4
 [[structure]]
 name = "panel"
 mesh = "hull_panel"
-params = {{ element_size = 0.1 }}
+params = {{ element_size = 0.1, element_type = "tet" }}
 material = {{ density = 7850.0, youngs_modulus = 210e9, poisson_ratio = 0.3 }}
 fixed_groups = ["fixed"]
 element_order = 1   # first-order tetrahedra: this file pins their layout (tetra cells)
