@@ -12,6 +12,8 @@ The kernels live in modules with one concept each:
   dilatation, forces and bond breaking, the fused step, strain energy, damage), over the numba
   loops of :mod:`pdfem.pd.pair_step_kernels` and :mod:`pdfem.pd.pair_sum_kernels`;
 - :mod:`pdfem.pd.family_kernels`: the per-particle full-family reference loops;
+- :mod:`pdfem.pd.fracture_kernels`: the strain energy released by the bonds broken in a step
+  (used by :mod:`pdfem.pd.fracture`);
 - :mod:`pdfem.pd.integrate`: the velocity-Verlet kick and drift;
 - :mod:`pdfem.pd.timestep`: stable time steps.
 
