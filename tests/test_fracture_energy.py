@@ -139,24 +139,19 @@ def _run_bar(dt_factor: float, steps_at_08: int = 400):
 
 def test_energy_balance_of_a_bar_torn_apart():
     """A notched bar pulled apart until it separates: strain before + work of the grips =
-    strain + kinetic + fracture_dissipated at every step, to within Verlet's energy error.
-    That error is first order in dt where forces jump: a breaking bond's force acts for half of
-    its last step, so the balance is off by about sum F dr / 2 over the breaking bonds (F its
-    force, dr its extension in that step), which the test computes; the rest (Verlet's smooth
-    O(dt^2) error and that of the grips' trapezoidal work, largest where the ramp starts) is
-    allowed 1 % of the total work put in (measured: 0.5 %). Halving dt must about halve the
-    residual (first order), and the fracture increments are never negative. Without the
-    fracture term the balance would miss about half of the work put in."""
-    coarse = _run_bar(0.8)
-    res, inc, bound, work, frac = coarse.T
-    assert np.all(inc >= 0.0)
-    assert frac[-1] > 0.4 * work[-1]
-    assert np.all(np.abs(res) <= bound + 0.01 * work[-1])
-    fine = _run_bar(0.4)
-    assert np.all(fine[:, 1] >= 0.0)
-    ratio = abs(fine[-1, 0]) / abs(res[-1])
-    assert 0.25 < ratio < 0.6
-    assert np.all(np.abs(fine[:, 0]) <= fine[:, 2] + 0.01 * fine[-1, 3])
+    strain + kinetic + fracture_dissipated at every step, within 1 % of the work put in, at
+    two time steps. A bond that breaks at the end of a step still acts in both half kicks
+    around it and the next step starts with the forces without it, so no first-order error
+    appears where forces jump (before that change the balance was off by about the sum of
+    F dr / 2 over the breaking bonds, 6.5 % of the work here); what is left is Verlet's smooth
+    O(dt^2) error and the grips' trapezoidal work (measured 0.2 % and 0.7 %). The fracture
+    increments are never negative, and without the fracture term the balance would miss
+    about half of the work put in."""
+    for dt_factor in (0.8, 0.4):
+        res, inc, bound, work, frac = _run_bar(dt_factor).T
+        assert np.all(inc >= 0.0)
+        assert frac[-1] > 0.4 * work[-1]
+        assert np.all(np.abs(res) <= 0.01 * work[-1])
 
 
 def test_pair_and_full_family_loops_dissipate_alike():

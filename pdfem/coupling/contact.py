@@ -129,7 +129,7 @@ def _shares(facet, weight, tri, share):
 
 
 @numba.njit(cache=True)
-def _respond(facet, weight, y, y_old, v, mass, dt, pts, vel, invm, share, tri, friction,
+def _respond(facet, weight, y, y_old, v, mass, dt, pts, pts0, vel, invm, share, tri, friction,
              node_impulse, particle_impulse, totals):
     """Give each contacting particle and the surface point it hit their impulse (Eq. 5 with the
     structure's inertia, module docstring); move the particle with its corrected velocity.
@@ -163,8 +163,19 @@ def _respond(facet, weight, y, y_old, v, mass, dt, pts, vel, invm, share, tri, f
         if depth == 0.0:
             continue
         nn = gap / depth
+        # how far the particle was already behind the surface at the drift's start (the
+        # surface moved otherwise than predicted): no impulse for that part, which would
+        # push the particle out faster than it came in and create energy
+        before = 0.0
+        for k in range(3):
+            node = tri[f, k]
+            for d in range(3):
+                before += weight[i, k] * (pts0[node, d] - y_old[i, d]) * nn[d]
+        closing = depth - max(before, 0.0)
+        if closing <= 0.0:
+            continue
         kn = 1.0 / m + nn[0] ** 2 * gi[0] + nn[1] ** 2 * gi[1] + nn[2] ** 2 * gi[2]
-        jn = depth * inv_dt / kn          # closes the gap in the step (Eq. 5 when 1/M_s = 0)
+        jn = closing * inv_dt / kn        # closes the gap in the step (Eq. 5 when 1/M_s = 0)
         p = jn * nn                       # impulse on the particle, N s
         if friction > 0.0:
             rt = np.empty(3)
@@ -253,19 +264,22 @@ class SurfaceContact:
         self.grid = FacetGrid(self.topology.triangles, self.search_radius)
         self.node_impulse = np.zeros((len(points), 3))
         self.total_impulse = np.zeros(3)
-        self._points = self._velocities = None
+        self._points = self._velocities = self._start = None
         self._normals = None
         self._facet = self._weight = self._normal = None
         self.set_surface(points, surface.surface_velocities())
 
     def set_surface(self, points: np.ndarray, velocities: np.ndarray,
-                    normals: bool = True) -> None:
+                    normals: bool = True, start: np.ndarray | None = None) -> None:
         """Use these node positions (m) and velocities (m/s) for the next contacts (e.g. the
         structure's state interpolated to the ice substep's time). ``normals=False`` keeps the
         pseudo-normals of the last call (they only decide which side a particle is on; within
-        a coupling step the surface turns by a negligible angle)."""
+        a coupling step the surface turns by a negligible angle). ``start``: the node positions
+        at the start of the particles' drift (default ``points``: a surface at rest)."""
         self._points = np.ascontiguousarray(points, dtype=np.float64)
         self._velocities = np.ascontiguousarray(velocities, dtype=np.float64)
+        self._start = (self._points if start is None
+                       else np.ascontiguousarray(start, dtype=np.float64))
         if normals or self._normals is None:
             self._normals = pseudo_normals(self._points, self.topology)
         self.grid.update(self._points)
@@ -314,7 +328,7 @@ class SurfaceContact:
         totals = np.zeros(4)
         per_particle = np.zeros((n, 3))
         _respond(self._facet, self._weight, y, y_old, v, mass, float(dt), self._points,
-                 self._velocities, self.inverse_mass, share, t.triangles, self.friction,
+                 self._start, self._velocities, self.inverse_mass, share, t.triangles, self.friction,
                  self.node_impulse, per_particle, totals)
         impulse = totals[:3].copy()
         self.total_impulse += impulse

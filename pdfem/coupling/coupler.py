@@ -231,9 +231,10 @@ class Coupler:
         for b, y_old in zip(self.bodies, olds):
             b.y[:] = y_old                       # the drift is taken below, in n parts
         for j in range(n):
-            ends = {}
+            ends, starts = {}, {}
             for s in self.structures:
                 p0 = s.surface_points().copy()
+                starts[id(s)] = p0
                 if s.prescribed_motion:          # known motion: the substep is taken first
                     s.step(h)
                     ends[id(s)] = (s.surface_points().copy(), (s.surface_points() - p0) / h)
@@ -241,7 +242,8 @@ class Coupler:
                     v0 = s.surface_velocities().copy()
                     ends[id(s)] = (p0 + h * v0, v0)
             for p in self.pairs:
-                p.contact.set_surface(*ends[id(p.structure)], normals=j == 0)
+                p.contact.set_surface(*ends[id(p.structure)], normals=j == 0,
+                                      start=starts[id(p.structure)])
             for body, work in zip(self.bodies, works):
                 y = body.y                       # in place: the body keeps its array
                 before = y.copy()
@@ -258,6 +260,7 @@ class Coupler:
                     s.step(h)
         broken = self._finish_ice_step(D)
         self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies))
+        self._after_breaking(broken)
         return broken
 
     def _step_with_ice_substeps(self, pair_impulse: list) -> int:
@@ -276,7 +279,7 @@ class Coupler:
         broken = 0
         for k in range(self.ice_substeps):
             frac = (k + 1) / self.ice_substeps
-            ends = {}
+            ends, starts = {}, dict(pos)
             for s in self.structures:
                 if s.prescribed_motion:
                     p0, dp = known[id(s)]
@@ -286,7 +289,7 @@ class Coupler:
                     ends[id(s)] = (pos[id(s)] + h * v, v)
                 pos[id(s)] = ends[id(s)][0]
             for p in self.pairs:
-                p.contact.set_surface(*ends[id(p.structure)])
+                p.contact.set_surface(*ends[id(p.structure)], start=starts[id(p.structure)])
             works = [ImpulseWork(b) for b in self.bodies]
             olds = [b.begin_step(h, keep_old=True) for b in self.bodies]
             for body, y_old, work in zip(self.bodies, olds, works):
@@ -297,8 +300,10 @@ class Coupler:
                     work.add(c.particle_impulse, 0.0)
             self._hand_over(pair_impulse, {key: e[1] for key, e in ends.items()})
             self._apply_impulses()
-            broken += self._finish_ice_step(h)
+            now = self._finish_ice_step(h)
             self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies))
+            self._after_breaking(now)
+            broken += now
         for s in self.structures:
             if not s.prescribed_motion:
                 s.step(D)
@@ -325,6 +330,17 @@ class Coupler:
                 self.contact_work[k] += float(np.sum(impulse * velocity[k]))
             self._impulse[k] += impulse
             total += impulse
+
+    def _after_breaking(self, broken: int) -> None:
+        """After a step in which bonds broke: the forces again, without them, for the next
+        step's first half kick. A bond that breaks at the step's end still acted in that step
+        (both half kicks around it used its force), so the integrator's work matches the
+        energy balance, and the energy it held leaves with it (the fracture term)."""
+        if broken:
+            for b in self.bodies:
+                b.compute_forces()
+            for force in self.forces:
+                force.add_forces()
 
     def _finish_ice_step(self, h: float) -> int:
         """Bond forces at the new positions, the particle forces, the second half kick; bonds

@@ -331,6 +331,8 @@ class IceBody(WholeBody):
             after_drift(y_old)
         nbroken = self.compute_forces()
         self.end_step(dt)
+        if nbroken:  # bonds that broke acted in this step; the next starts without them
+            self.compute_forces()
         return nbroken
 
     # -- diagnostics ---------------------------------------------------------------------------

@@ -177,9 +177,11 @@ class DistributedIce:
     def step(self, dt: float) -> int:
         """One velocity-Verlet step of every rank's part; bonds broken on all ranks together."""
         self.body.begin_step(dt)
-        broken = self._compute_forces()
+        broken = int(self.comm.allreduce_sum(self._compute_forces()))
         self.body.end_step(dt)
-        return int(self.comm.allreduce_sum(broken))
+        if broken:  # bonds that broke acted in this step; the next starts without them
+            self._compute_forces()
+        return broken
 
     # -- the IceParticles interface (pdfem.pd.ice_interface) ----------------------------------
     # Arrays are the local ones (owned and halo particles); sums are over owned particles and

@@ -56,15 +56,12 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
     y = y2.reshape(y2.size)
     coef = coef2.reshape(coef2.size)
     f = fout.reshape(fout.size)
-    nb = 0
     for i in prange(fam_ptr.shape[0] - 1):
         yi0 = y[3 * i]
         yi1 = y[3 * i + 1]
         yi2 = y[3 * i + 2]
         ai = coef[2 * i]
         bi = coef[2 * i + 1]
-        can_i = nofail[i] == 0
-        iu = U64(i)
         fx = 0.0
         fy = 0.0
         fz = 0.0
@@ -78,14 +75,6 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
             d0, d1, d2 = bond_vector(y, U64(3) * j, yi0, yi1, yi2)
             r = bond_length(d0, d1, d2)
             e = r - l
-            if breaks(e, l, s0, can_i, nofail, j):
-                # Both ends reach the same decision from the same stretch; only the smaller
-                # index marks and counts the bond, so the count is exact. (The larger end may
-                # read the flag before or after that write: it skips the bond either way.)
-                if iu < j:
-                    mark_broken(signed, wt, w, broken, k)
-                    nb += 1
-                continue
             j2 = U64(2) * j
             g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
             g *= vol[j]
@@ -95,6 +84,29 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
         f[3 * i] = fx
         f[3 * i + 1] = fy
         f[3 * i + 2] = fz
+
+
+@numba.njit(cache=True)
+def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, s0, nofail):
+    """Mark the bonds that break at these positions (after the forces, in which they still
+    acted), each once from its smaller-index end; the number marked."""
+    y = y2.reshape(y2.size)
+    nb = 0
+    for i in range(fam_ptr.shape[0] - 1):
+        can_i = nofail[i] == 0
+        for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
+            j = U64(fam_nbr[q])
+            if j <= U64(i):
+                continue
+            k = U64(fam_bond[q])
+            w = wt[k]
+            if is_broken(signed, w, broken, k):
+                continue
+            l = xi_len[k]
+            d0, d1, d2 = bond_vector(y, U64(3) * j, y[3 * i], y[3 * i + 1], y[3 * i + 2])
+            if breaks(bond_length(d0, d1, d2) - l, l, s0, can_i, nofail, j):
+                mark_broken(signed, wt, w, broken, k)
+                nb += 1
     return nb
 
 
@@ -140,8 +152,10 @@ def forces_family(
     """Force density by the per-particle full-family loop (reference for the pair loop).
 
     Every bond is evaluated from both ends; each particle writes only its own force. A bond
-    breaking in this call is marked by its smaller-index end (both ends reach the same decision
-    from the same stretch, so the larger end needs no write and the count is exact).
+    that breaks at these positions still acts in this evaluation (as in the pair loop: the
+    step's force is that of the bonds intact at its start, so the time integration stays
+    energy-consistent and the energy the bond held is the fracture's) and is marked afterwards,
+    once, by its smaller-index end.
 
     Parameters
     ----------
@@ -161,9 +175,10 @@ def forces_family(
     if coef is None:
         coef = np.empty((n, 2))
     force_coefficients(True, m, theta, K, mu, coef)
-    return int(_forces_family(c_contiguous(y, "y"), fam_ptr, fam_nbr, fam_bond, xi_len, broken,
-                              check_broken(broken, xi_len), vol, c_contiguous(coef, "coef"),
-                              check_weight(weight, xi_len),
-                              float(s0), nofail, c_contiguous(f_out, "f_out")))
+    yc, signed, wt = c_contiguous(y, "y"), check_broken(broken, xi_len), check_weight(weight, xi_len)
+    _forces_family(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol,
+                   c_contiguous(coef, "coef"), wt, float(s0), nofail, c_contiguous(f_out, "f_out"))
+    return int(_mark_breaks(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, float(s0),
+                            nofail))
 
 

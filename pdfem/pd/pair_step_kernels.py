@@ -134,10 +134,9 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, n
         else:
             r = bond_length(d0, d1, d2)
         e = r - l
-        if breaks(e, l, s0, can_i, nofail, j):
+        if breaks(e, l, s0, can_i, nofail, j):   # it still acts in this force evaluation
             mark_broken(signed, wt, w, broken, k)
             nb += 1
-            continue
         j2 = U64(2) * j
         g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
         gi = g * vol[j]
