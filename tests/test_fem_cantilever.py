@@ -69,7 +69,7 @@ def static_tip_load(s: ElasticStructure) -> np.ndarray:
 
 
 def tip_deflection(s: ElasticStructure, u: np.ndarray) -> float:
-    return float(-u[s.mesh.group_nodes("tip"), 2].mean())
+    return float(-u[s.group_nodes("tip"), 2].mean())
 
 
 def lowest_and_highest_eigenvalues(s: ElasticStructure) -> tuple[float, float, np.ndarray]:
@@ -125,7 +125,7 @@ def test_first_bending_frequency_from_free_vibration(cantilever):
     s.clear_loads()
     s.set_state(displacement=u0)
     dt = s.stable_time_step()
-    tip = s.mesh.group_nodes("tip")
+    tip = s.group_nodes("tip")
     steps = int(6.0 / F1_EULER_BERNOULLI / dt)
     w = np.empty(steps + 1)
     w[0] = s.solver.u[s.dofmap.dofs_of(tip, (2,))].mean()
@@ -197,7 +197,7 @@ def test_stable_step_is_sharp(cantilever):
     assert lam <= lam_max * (1 + 1e-9)
     assert lam >= 0.99 * lam_max
     assert s.solver.power_iterations <= 200
-    u0 = 1e-6 * np.random.default_rng(1).standard_normal((s.mesh.n_nodes, 3))
+    u0 = 1e-6 * np.random.default_rng(1).standard_normal((s.n_nodes, 3))
 
     def peak(dt, steps=600):
         s.set_state(displacement=u0)
@@ -226,7 +226,7 @@ def test_rayleigh_mass_damping_decay(cantilever):
     w1 = math.sqrt(lam1)
     xi = 0.02
     s = ElasticStructure(s0.mesh, STEEL, fixed_groups=["root"], rayleigh_alpha=2 * xi * w1)
-    z = s.dofmap.dofs_of(s.mesh.group_nodes("tip"), (2,))
+    z = s.dofmap.dofs_of(s.group_nodes("tip"), (2,))
     s.set_state(displacement=-1e-3 * mode / s.dofmap.to_dofs(mode)[z].mean())  # tip at -1 mm
     dt = s.stable_time_step()
     wmax = math.sqrt(s.max_eigenvalue())
@@ -257,10 +257,10 @@ def test_prescribed_displacement_reaches_static_solution(cantilever):
     s = ElasticStructure(s0.mesh, STEEL, fixed_groups=["root"], rayleigh_alpha=2.0e3,
                          prescribed={"tip": lambda t: (delta * min(t / ramp, 1.0), 0.0, 0.0)})
     fixed = s.solver.fixed
-    tip_x = s.dofmap.dofs_of(s.mesh.group_nodes("tip"), (0,))
+    tip_x = s.dofmap.dofs_of(s.group_nodes("tip"), (0,))
     target = np.where(np.isin(fixed, tip_x), delta, 0.0)
     dt = s.stable_time_step()
-    for _ in range(int(6e-3 / dt)):
+    for _ in range(int(9e-3 / dt)):  # transient decays as exp(-alpha t / 2): 1e-4 at 9 ms
         s.step(dt)
     u_ref = np.zeros(s.dofmap.n_dofs)
     u_ref[fixed] = target

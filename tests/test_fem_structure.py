@@ -38,15 +38,16 @@ def mesh(request, tmp_path_factory, gmsh_box):
 
 def test_surface_geometry_and_outward_normals(mesh):
     """Surface nodes are the contact face's nodes at their reference positions; triangles cover
-    the face area LX LY (quads split in two); normals are +z (outward); the structure satisfies
-    the ContactSurface protocol."""
+    the face area LX LY (quads split in two; quadratic faces: 6-node triangles into 4, 8-node
+    quads into 6); normals are +z (outward); the structure satisfies the ContactSurface
+    protocol."""
     s = ElasticStructure(mesh, STEEL, fixed_groups=["fixed"], contact_group="contact")
     assert isinstance(s, ContactSurface)
     x = s.surface_points()
-    assert np.array_equal(np.sort(s.surface_nodes), mesh.group_nodes("contact"))
+    assert np.array_equal(np.sort(s.surface_nodes), s.group_nodes("contact"))
     assert np.all(x[:, 2] == pytest.approx(W))
     faces = mesh.group_facets("contact")
-    assert len(s.surface_triangles) == len(faces) * (1 if mesh.kind == "tet" else 2)
+    assert len(s.surface_triangles) == len(faces) * (4 if mesh.kind == "tet" else 6)
     tri = x[s.surface_triangles]
     area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     assert area.sum() == pytest.approx(LX * LY, rel=1e-12)
@@ -70,8 +71,10 @@ def test_normals_and_points_follow_the_current_configuration(mesh):
 def test_contact_forces_match_consistent_traction_load(mesh):
     """Nodal contact forces t A/3 per triangle node equal the consistent load of a uniform
     traction on linear triangles (tetrahedral mesh, to round-off); on any mesh their total is
-    t LX LY and they enter the next step's force vector (reference: consistent load vector)."""
-    s = ElasticStructure(mesh, STEEL, fixed_groups=["fixed"], contact_group="contact")
+    t LX LY and they enter the next step's force vector (reference: consistent load vector).
+    First-order elements (element_order = 1): the t A/3 rule is the linear triangle's load."""
+    s = ElasticStructure(mesh, STEEL, fixed_groups=["fixed"], contact_group="contact",
+                         element_order=1)
     t = np.array([1.0e5, -2.0e5, -3.0e6])
     x = s.surface_points()
     tri = s.surface_triangles

@@ -131,6 +131,8 @@ class StructureConfig:
     youngs_modulus: float
     poisson_ratio: float
     fixed_groups: tuple[str, ...]
+    supports: tuple[tuple[str, tuple[str, ...]], ...]
+    element_order: int
     contact_group: str
     damping_alpha: float
     damping_beta: float
@@ -206,7 +208,9 @@ def _structure(s: StructureSection, at: str) -> StructureConfig:
     return StructureConfig(
         name=s.name, kind=s.kind, mesh=s.mesh, params=dict(s.params), density=s.material.density,
         youngs_modulus=s.material.youngs_modulus, poisson_ratio=s.material.poisson_ratio,
-        fixed_groups=s.fixed_groups, contact_group=s.contact_group,
+        fixed_groups=s.fixed_groups,
+        supports=tuple((r.group, tuple(r.components)) for r in s.supports),
+        element_order=s.element_order, contact_group=s.contact_group,
         damping_alpha=s.damping.alpha, damping_beta=s.damping.beta, loads=tuple(loads),
         velocity=m.velocity, angular_velocity=m.angular_velocity, center=m.center, field=at)
 

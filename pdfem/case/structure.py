@@ -12,7 +12,7 @@ from typing import Annotated, Any
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from pdfem.case.fields import (Choice, Name, Names, Number, Positive, Section, Tables, Vec3, Vector,
-                               fail)
+                               Whole, fail)
 from pdfem.case.shapes import directory
 
 #: Structural steel (SI): density and elastic constants of carbon steel as used for ship hulls
@@ -71,6 +71,24 @@ class LoadSection(Section):
                                             "Default: on from t = 0.")
 
 
+class SupportSection(Section):
+    """A support holding only some displacement components of a mesh group (roller, symmetry
+    plane)."""
+
+    group: Name = Field(description="Mesh group whose nodes are supported. Required.")
+    components: Names = Field(
+        description='Components held at zero, a list of "x", "y", "z" (e.g. ["z"] for a roller, '
+                    '["x"] for a symmetry plane x = const). Required.')
+
+    @field_validator("components")
+    @classmethod
+    def _xyz(cls, components: tuple[str, ...]) -> tuple[str, ...]:
+        bad = [c for c in components if c not in ("x", "y", "z")]
+        if bad or not components:
+            raise fail('expected a non-empty list of "x", "y", "z"', list(components))
+        return components
+
+
 class MotionSection(Section):
     """Prescribed rigid-body motion."""
 
@@ -109,7 +127,17 @@ class StructureSection(Section):
         default_factory=SteelSection,
         description="`density` (kg/m^3), `youngs_modulus` (Pa), `poisson_ratio`. "
                     "Default: steel (7850, 210e9, 0.3).")
-    fixed_groups: Names = Field((), description="Mesh groups clamped in place. Default: [].")
+    fixed_groups: Names = Field((), description="Mesh groups clamped in place (all three "
+                                                "components). Default: [].")
+    supports: Tables(SupportSection) = Field(
+        (), description='List of `{group, components = ["x", "z"]}`: only the named displacement '
+                        "components of the group held at zero (rollers, symmetry planes); a "
+                        "reaction per support and component is written. Default: none.")
+    element_order: Annotated[int, Whole(1)] = Field(
+        2, description="Elastic structures: 2 = quadratic elements (10-node tetrahedra, 20-node "
+                       "hexahedra) raised from the mesh; 1 = linear elements, which lock in "
+                       "bending (a 12 mm plate 1.5 to 3.6 times too stiff, see "
+                       "docs/structures_convergence.md). Default: 2.")
     contact_group: Name = Field("contact", description='Mesh group facing the ice. '
                                                       'Default: "contact".')
     damping: DampingSection = Field(default_factory=DampingSection,
@@ -148,9 +176,13 @@ class StructureSection(Section):
         if self.params and self.mesh.endswith(".msh"):
             raise fail("model parameters apply to a model (name or .py), not to a .msh file",
                        key="params")
-        if self.kind == "rigid" and (self.fixed_groups or self.loads):
+        if self.element_order > 2:
+            raise fail("element_order must be 1 (linear) or 2 (quadratic)", self.element_order,
+                       key="element_order")
+        if self.kind == "rigid" and (self.fixed_groups or self.loads or self.supports):
+            key = "fixed_groups" if self.fixed_groups else "supports" if self.supports else "loads"
             raise fail("a rigid structure moves as prescribed by 'motion'; it takes no supports "
-                       "or loads", key="fixed_groups" if self.fixed_groups else "loads")
+                       "or loads", key=key)
         if self.kind == "elastic" and "motion" in self.model_fields_set:
             raise fail("only a rigid structure (kind = \"rigid\") takes a motion", key="motion")
         return self

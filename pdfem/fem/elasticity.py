@@ -1,14 +1,16 @@
 """Linear elasticity on a scikit-fem mesh: material, stiffness, lumped mass, surface loads.
 
-Small-strain isotropic elasticity with first-order elements, ``ElementVector(ElementTetP1())``
-on tetrahedra and ``ElementVector(ElementHex1())`` on hexahedra (2 x 2 x 2 Gauss points, which
-integrate the stiffness and the consistent mass of an undistorted hexahedron exactly).
+Small-strain isotropic elasticity. :func:`vector_basis` gives the first-order elements,
+``ElementVector(ElementTetP1())`` on tetrahedra and ``ElementVector(ElementHex1())`` on hexahedra
+(2 x 2 x 2 Gauss points, which integrate the stiffness and the consistent mass of an undistorted
+hexahedron exactly); the quadratic elements and their HRZ lumped mass, which a structure uses by
+default, are in :mod:`pdfem.fem.fe_space`. The assembly functions here take any basis.
 
 - stiffness ``K`` (N/m): ``int sigma(u) : eps(v) dV`` with ``sigma = lambda tr(eps) I + 2 mu eps``,
   assembled once into scipy CSR;
 - lumped mass ``m`` (kg): row sums of the consistent mass ``int rho u . v dV``. For first-order
-  elements every row sum is strictly positive (this is checked); it is not for P2 tetrahedra,
-  which is why those are not offered;
+  elements every row sum is strictly positive (this is checked); it is not for P2 tetrahedra
+  or serendipity hexahedra, which use HRZ lumping (:func:`pdfem.fem.fe_space.hrz_mass`);
 - surface loads: a traction (Pa) or a pressure (Pa, positive pushing into the body) on a named
   surface group, integrated consistently into nodal forces (N).
 
@@ -190,7 +192,8 @@ def element_volumes(mesh: FEMesh) -> np.ndarray:
 
 
 def surface_load(mesh: FEMesh, group: str, traction=(0.0, 0.0, 0.0),
-                 pressure: float = 0.0) -> np.ndarray:
+                 pressure: float = 0.0, element: skfem.Element | None = None,
+                 intorder: int | None = None) -> np.ndarray:
     """Consistent nodal forces (N) of a uniform surface load on a named surface group.
 
     Parameters
@@ -203,15 +206,17 @@ def surface_load(mesh: FEMesh, group: str, traction=(0.0, 0.0, 0.0),
         (3,) traction vector t (Pa) acting on the surface.
     pressure
         Pressure p (Pa), positive pushing into the body (adds ``-p n``, n the outward normal).
+    element, intorder
+        Vector element and Gauss order (default: the first-order ones of :func:`vector_basis`).
 
     Returns
     -------
     numpy.ndarray
-        (3 Nn,) force vector in the DOF order of :func:`vector_basis`.
+        (3 Nn,) force vector in the DOF order of a basis of ``element``.
     """
     facets = mesh.group_facet_indices(group)
-    fb = skfem.FacetBasis(mesh.mesh, element_for(mesh), facets=facets,
-                          intorder=_intorder(mesh))
+    fb = skfem.FacetBasis(mesh.mesh, element or element_for(mesh), facets=facets,
+                          intorder=intorder or _intorder(mesh))
     t = np.asarray(traction, dtype=np.float64).reshape(3)
     p = float(pressure)
 

@@ -30,6 +30,8 @@ import numpy as np
 import skfem
 from skfem.io.meshio import INV_HEX_MAPPING
 
+from pdfem.fem.mesh_orientation import check_orientation
+
 # meshio cell types and their topological dimension (first- and higher-order).
 _CELL_DIM = {
     "vertex": 0,
@@ -40,11 +42,16 @@ _CELL_DIM = {
     "pyramid14": 3,
 }
 
-SUPPORTED = ("first-order tetrahedra (gmsh element type 4) or first-order hexahedra "
-             "(gmsh element type 5), one kind per mesh")
+SUPPORTED = ("tetrahedra (gmsh element types 4 and 11: tetra, tetra10) or hexahedra (types 5, 17 "
+             "and 12: hexahedron, hexahedron20, hexahedron27), one kind per mesh")
 
-# Relative size below which an element's volume counts as zero: |corner Jacobian| / l_max^3.
-_DEGENERATE = 1e-10
+#: meshio cell type -> (kind, number of corner nodes first in the cell). Second-order cells are
+#: read by their corners (meshio and gmsh both list the corners first); the structure raises the
+#: corner mesh to quadratic elements again (straight-sided, :mod:`pdfem.fem.fe_space`).
+_CORNERS = {"tetra": ("tet", 4), "tetra10": ("tet", 4), "hexahedron": ("hex", 8),
+            "hexahedron20": ("hex", 8), "hexahedron27": ("hex", 8),
+            "triangle": ("tri", 3), "triangle6": ("tri", 3), "quad": ("quad", 4),
+            "quad8": ("quad", 4), "quad9": ("quad", 4), "line": ("line", 2), "line3": ("line", 2)}
 
 
 @dataclass
@@ -142,60 +149,6 @@ def _row_lookup(table: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return where[inv[len(a):]]
 
 
-def _tet_orientation(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Relative signed volume 6 V / l_max^3 of each tetrahedron (t in gmsh order, (n, 4))."""
-    x = p[t]
-    e = x[:, 1:] - x[:, :1]
-    det = np.einsum("ij,ij->i", e[:, 0], np.cross(e[:, 1], e[:, 2]))
-    edges = np.concatenate([e, x[:, [2, 3, 3]] - x[:, [1, 1, 2]]], axis=1)
-    lmax = np.sqrt(np.max(np.einsum("ijk,ijk->ij", edges, edges), axis=1))
-    return det / lmax**3
-
-
-def _hex_corner_jacobians(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Relative corner Jacobians (n, 8) of trilinear hexahedra in gmsh/VTK node order.
-
-    Bottom face 0-1-2-3 (counter-clockwise seen from the top), top face 4-5-6-7 above it. At a
-    corner the Jacobian columns are the two face edges leaving it (next, previous around its face)
-    and the edge from the bottom node to the top node; all are positive for a valid element.
-    """
-    x = p[t]
-    nxt = np.array([1, 2, 3, 0])
-    prv = np.array([3, 0, 1, 2])
-    up = x[:, 4:] - x[:, :4]                                        # (n, 4, 3)
-    jb = np.einsum("nij,nij->ni", x[:, nxt] - x[:, :4],
-                   np.cross(x[:, prv] - x[:, :4], up))
-    jt = np.einsum("nij,nij->ni", x[:, nxt + 4] - x[:, 4:],
-                   np.cross(x[:, prv + 4] - x[:, 4:], up))
-    edges = np.concatenate([x[:, nxt] - x[:, :4], x[:, nxt + 4] - x[:, 4:], up], axis=1)
-    lmax = np.sqrt(np.max(np.einsum("nij,nij->ni", edges, edges), axis=1))
-    return np.hstack([jb, jt]) / lmax[:, None] ** 3
-
-
-def _check_orientation(path: str, p: np.ndarray, t: np.ndarray, kind: str) -> np.ndarray:
-    """Return ``t`` (gmsh order) with simply inverted elements renumbered; refuse bad ones."""
-    t = t.copy()
-    if kind == "tet":
-        rel = _tet_orientation(p, t)[:, None]
-    else:
-        rel = _hex_corner_jacobians(p, t)
-    bad = np.abs(rel).min(axis=1) <= _DEGENERATE
-    mixed = (rel.max(axis=1) > 0) & (rel.min(axis=1) < 0)
-    for mask, what in ((bad, "degenerate (zero volume)"), (mixed, "partly inverted (tangled)")):
-        if mask.any():
-            e = int(np.flatnonzero(mask)[0])
-            raise ValueError(
-                f"{path}: {int(mask.sum())} {kind} element(s) are {what}, e.g. element {e} with "
-                f"nodes at {np.round(p[t[e]], 9).tolist()}; remesh the model")
-    flip = rel.max(axis=1) < 0
-    if flip.any():
-        if kind == "tet":
-            t[flip] = t[flip][:, [0, 2, 1, 3]]
-        else:
-            t[flip] = t[flip][:, [4, 5, 6, 7, 0, 1, 2, 3]]
-    return t
-
-
 @dataclass
 class FEMesh:
     """A scikit-fem volume mesh with the named groups of the gmsh file it came from.
@@ -216,6 +169,11 @@ class FEMesh:
         ``{surface group: (F,) int32 scikit-fem facet indices}``, row for row with ``facet_sets``.
     element_sets
         ``{volume group: (n,) int32 element indices}``.
+    line_sets
+        ``{line group: (n, 2) int32 corner node pairs}`` (the group's mesh edges).
+    file_order
+        Order of the elements in the file (1, or 2 for tetra10 / hexahedron20 / hexahedron27:
+        their midside nodes were dropped, the corner mesh is kept).
     """
 
     mesh: skfem.Mesh
@@ -225,6 +183,8 @@ class FEMesh:
     facet_sets: dict[str, np.ndarray] = field(default_factory=dict)
     facet_indices: dict[str, np.ndarray] = field(default_factory=dict)
     element_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    line_sets: dict[str, np.ndarray] = field(default_factory=dict)
+    file_order: int = 1
 
     @property
     def points(self) -> np.ndarray:
@@ -315,14 +275,25 @@ def _outward_faces(p: np.ndarray, faces: np.ndarray, centres: np.ndarray) -> np.
     return out
 
 
+def _corners(cell_type: str, cells: np.ndarray) -> tuple[str, np.ndarray]:
+    """``(kind, corner connectivity)`` of a block of cells (other types: as they are)."""
+    if cell_type not in _CORNERS:
+        return cell_type, cells
+    kind, nc = _CORNERS[cell_type]
+    return kind, cells[:, :nc]
+
+
 def load_mesh(path: str | os.PathLike) -> FEMesh:
     """Load a gmsh volume mesh into scikit-fem with its named groups.
 
     Parameters
     ----------
     path
-        A gmsh ``.msh`` file (format 4.1 or 2.2) holding first-order tetrahedra or first-order
-        hexahedra, with named physical groups (coordinates in metres).
+        A gmsh ``.msh`` file (format 4.1 or 2.2) holding tetrahedra or hexahedra, first or second
+        order (tetra10, hexahedron20, hexahedron27 with triangle6 / quad8 / quad9 faces), with
+        named physical groups (coordinates in metres). Second-order elements are read by their
+        corner nodes: the file's midside node positions are not used (the structure adds
+        straight-sided midside nodes again), so a curved boundary is represented by flat faces.
 
     Returns
     -------
@@ -332,8 +303,8 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
     Raises
     ------
     ValueError
-        If the file has no volume elements, mixes element kinds or has higher-order elements
-        (the message says what is supported), if a surface group has faces that are not faces of
+        If the file has no volume elements, mixes element kinds or has other elements (the
+        message says what is supported), if a surface group has faces that are not faces of
         the volume mesh, or if an element is degenerate or tangled.
     """
     raw = read_msh_groups(path)
@@ -342,39 +313,43 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
     if not kinds:
         raise ValueError(f"{path} has no volume elements; pdfem needs a 3-D mesh of {SUPPORTED} "
                          "in a named volume physical group")
-    if len(kinds) > 1 or kinds[0] not in ("tetra", "hexahedron"):
+    if len(kinds) > 1 or kinds[0] not in _CORNERS:
         raise ValueError(f"{path} has volume elements of type(s) {', '.join(kinds)}; "
                          f"supported are {SUPPORTED}")
-    cell_type = kinds[0]
-    kind = "tet" if cell_type == "tetra" else "hex"
-    conn_all = raw.volume_cells[cell_type]
+    file_type = kinds[0]
+    kind, nc = _CORNERS[file_type]
+    cell_type = "tetra" if kind == "tet" else "hexahedron"
+    conn_all = raw.volume_cells[file_type][:, :nc]
     conn = conn_all[_unique_rows(conn_all)]
 
     used = np.unique(conn)
     renum = np.full(len(raw.points), -1, dtype=np.int64)
     renum[used] = np.arange(len(used))
     p = raw.points[used]
-    t = _check_orientation(path, p, renum[conn], kind)
+    t = check_orientation(path, p, renum[conn], kind)
 
     t_sk = t if kind == "tet" else t[:, INV_HEX_MAPPING[:8]]
     mesh_type = skfem.MeshTet1 if kind == "tet" else skfem.MeshHex1
     mesh = mesh_type(np.ascontiguousarray(p.T), np.ascontiguousarray(t_sk.T, dtype=np.int32))
 
     face_type = "triangle" if kind == "tet" else "quad"
-    femesh = FEMesh(mesh=mesh, path=path, kind=kind)
+    femesh = FEMesh(mesh=mesh, path=path, kind=kind, file_order=1 if nc == len(
+        raw.volume_cells[file_type][0]) else 2)
+    members_of = {name: (dim, [_corners(ct, c) for ct, c in members])
+                  for name, (dim, members) in raw.groups.items()}
     centres = p[t].mean(axis=1)
     mesh_facets = np.ascontiguousarray(mesh.facets.T)
-    for name, (dim, members) in raw.groups.items():
+    for name, (dim, members) in members_of.items():
         nodes = [renum[c].ravel() for _, c in members]
         nodes = np.concatenate(nodes) if nodes else np.zeros(0, dtype=np.int64)
         femesh.node_sets[name] = np.unique(nodes[nodes >= 0]).astype(np.int32)
         if dim == 3:
-            cells = [c for ct, c in members if ct == cell_type]
+            cells = [c for ct, c in members if ct == kind]
             cells = np.vstack(cells) if cells else np.zeros((0, t.shape[1]), dtype=np.int64)
             idx = _row_lookup(t, renum[cells])
             femesh.element_sets[name] = np.unique(idx[idx >= 0]).astype(np.int32)
         elif dim == 2:
-            others = sorted({ct for ct, _ in members if ct != face_type})
+            others = sorted({ct for ct, _ in members if ct != ("tri" if kind == "tet" else "quad")})
             if others:
                 raise ValueError(f"{path}: surface group '{name}' has {', '.join(others)} "
                                  f"elements, but faces of a {cell_type} mesh are {face_type}s")
@@ -395,4 +370,8 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
             elem = mesh.f2t[0, fidx]
             femesh.facet_sets[name] = _outward_faces(p, faces, centres[elem]).astype(np.int32)
             femesh.facet_indices[name] = fidx.astype(np.int32)
+        elif dim == 1:
+            lines = [renum[c] for ct, c in members if ct == "line"]
+            lines = np.vstack(lines) if lines else np.zeros((0, 2), dtype=np.int64)
+            femesh.line_sets[name] = lines[(lines >= 0).all(axis=1)].astype(np.int32)
     return femesh

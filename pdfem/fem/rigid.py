@@ -186,8 +186,9 @@ class RigidBody(Structure):
         return self.x0, self.surface_triangles, "triangle"
 
     def output_fields(self) -> dict[str, np.ndarray]:
-        """``u`` (Ns, 3): displacement of the surface nodes (m)."""
-        return {"u": self.surface_points() - self.x0}
+        """``u`` (Ns, 3): displacement (m) and ``v`` (Ns, 3): velocity (m/s) of the surface
+        nodes."""
+        return {"u": self.surface_points() - self.x0, "v": self.surface_velocities()}
 
     def describe(self) -> str:
         """Surface nodes."""

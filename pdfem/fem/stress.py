@@ -1,7 +1,8 @@
 """Stress recovery, energies and support reactions of a linear-elastic FE model.
 
 - element stress (Pa): ``sigma = lambda tr(eps) I + 2 mu eps`` from the displacement gradient at
-  the element centre (exact and constant for P1 tetrahedra; the centre value for hexahedra);
+  the element centre (exact and constant for P1 tetrahedra; the centre value for hexahedra and
+  for the quadratic elements);
 - von Mises stress (Pa) per element, and volume-weighted nodal averages for output;
 - strain energy ``1/2 u . K u`` and kinetic energy ``1/2 v . M v`` (J) with the lumped mass;
 - the reaction (N) at a support: ``K u + C v + M a - f_ext`` summed over the support's DOFs, i.e.
@@ -20,10 +21,11 @@ from pdfem.fem.mesh import FEMesh
 _CENTRE = {"tet": (0.25, 0.25, 0.25), "hex": (0.5, 0.5, 0.5)}
 
 
-def centre_basis(mesh: FEMesh) -> skfem.CellBasis:
-    """Vector basis with one evaluation point at each element's centre (for stresses)."""
+def centre_basis(mesh: FEMesh, element: skfem.Element | None = None) -> skfem.CellBasis:
+    """Vector basis of ``element`` (default: first order, :func:`element_for`) with one
+    evaluation point at each element's centre (for stresses)."""
     X = np.array(_CENTRE[mesh.kind], dtype=np.float64).reshape(3, 1)
-    return skfem.Basis(mesh.mesh, element_for(mesh), quadrature=(X, np.ones(1)))
+    return skfem.Basis(mesh.mesh, element or element_for(mesh), quadrature=(X, np.ones(1)))
 
 
 def element_stress(basis: skfem.CellBasis, u: np.ndarray, material: ElasticMaterial) -> np.ndarray:
@@ -60,7 +62,8 @@ def von_mises(sigma: np.ndarray) -> np.ndarray:
     return np.sqrt(1.5 * np.einsum("...ij,...ij->...", s, s))
 
 
-def nodal_average(mesh: FEMesh, values: np.ndarray, volumes: np.ndarray) -> np.ndarray:
+def nodal_average(mesh: FEMesh, values: np.ndarray, volumes: np.ndarray,
+                  cells: np.ndarray | None = None) -> np.ndarray:
     """Volume-weighted average at the nodes of a per-element field.
 
     Parameters
@@ -71,6 +74,9 @@ def nodal_average(mesh: FEMesh, values: np.ndarray, volumes: np.ndarray) -> np.n
         (Ne, ...) element values.
     volumes
         (Ne,) element volumes (m^3), the weights.
+    cells
+        (Ne, k) connectivity over FE nodes (default: the mesh's corners), e.g. with midside
+        nodes; the result has one row per node ``0 .. cells.max()``.
 
     Returns
     -------
@@ -78,16 +84,17 @@ def nodal_average(mesh: FEMesh, values: np.ndarray, volumes: np.ndarray) -> np.n
         (Nn, ...) averages over the elements around each node.
     """
     values = np.asarray(values, dtype=np.float64)
-    t = mesh.mesh.t                                        # (k, Ne)
+    t = mesh.mesh.t if cells is None else np.asarray(cells).T     # (k, Ne)
     k, ne = t.shape
+    n_nodes = mesh.n_nodes if cells is None else int(t.max()) + 1
     flat = values.reshape(ne, -1)
     idx = t.T.ravel()
     w = np.repeat(volumes, k)
-    num = np.zeros((mesh.n_nodes, flat.shape[1]))
+    num = np.zeros((n_nodes, flat.shape[1]))
     for c in range(flat.shape[1]):
-        num[:, c] = np.bincount(idx, weights=w * np.repeat(flat[:, c], k), minlength=mesh.n_nodes)
-    den = np.bincount(idx, weights=w, minlength=mesh.n_nodes)
-    return (num / den[:, None]).reshape((mesh.n_nodes,) + values.shape[1:])
+        num[:, c] = np.bincount(idx, weights=w * np.repeat(flat[:, c], k), minlength=n_nodes)
+    den = np.bincount(idx, weights=w, minlength=n_nodes)
+    return (num / den[:, None]).reshape((n_nodes,) + values.shape[1:])
 
 
 def strain_energy(stiffness: sp.spmatrix, u: np.ndarray) -> float:

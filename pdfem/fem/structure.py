@@ -2,18 +2,16 @@
 
 :class:`ElasticStructure` ties together a mesh (:mod:`pdfem.fem.mesh`), the assembled stiffness
 and lumped mass (:mod:`pdfem.fem.elasticity`), the central-difference solver
-(:mod:`pdfem.fem.explicit`) and stress recovery (:mod:`pdfem.fem.stress`). Named groups of the
-mesh give the clamped supports (all three displacement components held at zero) and the contact
-surface, which the contact code reaches through the :class:`pdfem.fem.surface.ContactSurface`
-interface shared with rigid bodies.
+(:mod:`pdfem.fem.explicit`) and stress recovery (:mod:`pdfem.fem.stress`). The elements are
+quadratic by default (``element_order = 2``: 10-node tetrahedra or 20-node serendipity
+hexahedra with HRZ lumped mass, :mod:`pdfem.fem.fe_space`; first-order elements lock in bending,
+docs/structures_convergence.md). Nodes are FE nodes: every DOF location (mesh vertices first,
+then the midside nodes). Named groups of the mesh give the supports (:mod:`pdfem.fem.supports`:
+clamped, per component, prescribed) and the contact surface (each face split into linear
+triangles over all its nodes), which the contact code reaches through the
+:class:`pdfem.fem.surface.ContactSurface` interface shared with rigid bodies.
 
-Forces on the structure in a step are the sum of
-
-- constant nodal forces (N) set with :meth:`ElasticStructure.set_nodal_forces`,
-- surface tractions / pressures (Pa) added with :meth:`ElasticStructure.add_surface_load`,
-- the contact forces (N) accumulated on the surface nodes with
-  :meth:`ElasticStructure.add_surface_forces`. They stay applied in every later step until
-  :meth:`ElasticStructure.clear_surface_forces` (so a contact load can be held over FE substeps).
+Forces: the applied loads of :class:`pdfem.fem.loads.AppliedLoads` plus the contact forces.
 
 Small displacements: stiffness, loads and stresses use the reference configuration; surface
 positions and normals reported to the contact code use the current one (reference + u).
@@ -25,22 +23,24 @@ import os
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-from skfem.io.meshio import HEX_MAPPING
 
 from pdfem.errors import InstabilityError
-from pdfem.fem.elasticity import (DofMap, ElasticMaterial, element_volumes, lumped_mass, stiffness_matrix,
-                         surface_load, vector_basis)
+from pdfem.fem.base import Structure
+from pdfem.fem.elasticity import (DofMap, ElasticMaterial, element_volumes, lumped_mass,
+                                  stiffness_matrix)
 from pdfem.fem.explicit import CentralDifference
+from pdfem.fem.fe_space import fe_space, hrz_mass
+from pdfem.fem.loads import AppliedLoads
 from pdfem.fem.mesh import FEMesh, load_mesh
 from pdfem.fem.probe import Probe, make_probe, probe_values
-from pdfem.fem.stress import (centre_basis, element_stress, kinetic_energy, nodal_average, reaction_force,
-                     strain_energy, von_mises)
-from pdfem.fem.base import Structure
-from pdfem.fem.surface import split_quads
+from pdfem.fem.stress import (centre_basis, element_stress, kinetic_energy, nodal_average,
+                              strain_energy, von_mises)
+from pdfem.fem.supports import (constrained_dofs, prescribed_values, support_reaction,
+                                support_table)
 from pdfem.meshing.quality import check_cells
 
 
-class ElasticStructure(Structure):
+class ElasticStructure(AppliedLoads, Structure):
     """A linear-elastic FE structure advanced by explicit central differences (a
     :class:`pdfem.fem.base.Structure`).
 
@@ -52,6 +52,9 @@ class ElasticStructure(Structure):
         Density (kg/m^3), Young's modulus (Pa), Poisson's ratio.
     fixed_groups
         Names of groups whose nodes are clamped (u = 0).
+    supports
+        ``{group: components}``: only the named components (``"x"``, ``"y"``, ``"z"``) of the
+        group's nodes held at zero (rollers, symmetry planes).
     contact_group
         Name of the surface group the contact code sees (``None``: no contact surface).
     prescribed
@@ -66,6 +69,9 @@ class ElasticStructure(Structure):
         Factor on the critical step in :meth:`stable_time_step`.
     max_eigenvalue
         A known ``omega_max^2`` (1/s^2) of the constrained system, to skip the power iteration.
+    element_order
+        2 (default): 10-node tetrahedra / 20-node serendipity hexahedra on the (first-order)
+        mesh; 1: 4-node tetrahedra / 8-node hexahedra (they lock in bending).
 
     Raises
     ------
@@ -77,11 +83,13 @@ class ElasticStructure(Structure):
                  contact_group: str | None = None, prescribed: Mapping | None = None,
                  name: str = "structure",
                  rayleigh_alpha: float = 0.0, rayleigh_beta: float = 0.0,
-                 safety_factor: float = 0.9, max_eigenvalue: float | None = None):
+                 safety_factor: float = 0.9, max_eigenvalue: float | None = None,
+                 supports: Mapping[str, Sequence[str]] | None = None, element_order: int = 2):
         if isinstance(fixed_groups, str):
             fixed_groups = [fixed_groups]
         prescribed = dict(prescribed or {})
-        for g in list(fixed_groups) + list(prescribed):  # check names before the assembly
+        self.supports = support_table(fixed_groups, supports, prescribed)
+        for g in self.supports:  # check names before the assembly
             mesh.group_nodes(g)
         if contact_group is not None:
             mesh.group_facets(contact_group)
@@ -89,61 +97,42 @@ class ElasticStructure(Structure):
         self.mesh = mesh
         self.material = material
         self.fixed_groups = list(fixed_groups)
+        self._component_supports = set(supports or {})
         self.contact_group = contact_group
-        self.basis = vector_basis(mesh)
-        self.dofmap = DofMap(self.basis.nodal_dofs)
+        self.space = fe_space(mesh, element_order)
+        self.basis = self.space.basis
+        self.dofmap = DofMap(self.space.nodal_dofs)
         self.K = stiffness_matrix(self.basis, material)
-        self.mass = lumped_mass(self.basis, material.density)
-        fixed_nodes = [mesh.group_nodes(g) for g in self.fixed_groups + list(prescribed)]
-        self.fixed_nodes = (np.unique(np.concatenate(fixed_nodes)).astype(np.int32)
-                            if fixed_nodes else np.zeros(0, dtype=np.int32))
-        self.solver = CentralDifference(self.K, self.mass, self.dofmap.dofs_of(self.fixed_nodes),
+        self.mass = (lumped_mass(self.basis, material.density) if element_order == 1
+                     else hrz_mass(self.basis, material.density))
+        fixed = constrained_dofs(self.dofmap, self.group_nodes, self.supports)
+        self.solver = CentralDifference(self.K, self.mass, fixed,
                                         rayleigh_alpha=rayleigh_alpha, rayleigh_beta=rayleigh_beta,
                                         safety_factor=safety_factor, max_eigenvalue=max_eigenvalue)
         if prescribed:
-            self.solver.prescribe(self._prescribed_values(prescribed))
-        self._x0 = mesh.points
-        self._stress_basis = centre_basis(mesh)
+            self.solver.prescribe(prescribed_values(self.solver.fixed, self.dofmap,
+                                                    self.group_nodes, prescribed))
+        self._x0 = self.space.points
+        self._stress_basis = centre_basis(mesh, self.space.element)
         self._volumes = element_volumes(mesh)
-        if contact_group is not None:
-            faces = mesh.group_facets(contact_group)
-            nodes, local = np.unique(faces, return_inverse=True)
-            self.surface_nodes = nodes.astype(np.int32)
-            self.surface_triangles = split_quads(local.reshape(faces.shape))
-        else:
-            self.surface_nodes = np.zeros(0, dtype=np.int32)
-            self.surface_triangles = np.zeros((0, 3), dtype=np.int32)
+        faces = (mesh.group_facets(contact_group) if contact_group is not None
+                 else np.zeros((0, 3), dtype=np.int32))
+        nodes, local = np.unique(self.space.face_triangles(faces), return_inverse=True)
+        self.surface_nodes = nodes.astype(np.int32)
+        self.surface_triangles = local.reshape(-1, 3).astype(np.int32)
         self._surface_forces = np.zeros((len(self.surface_nodes), 3))
         # DOF index of (surface node, component), node-major like _surface_forces.ravel()
         self._surface_dofs = self.dofmap.nodal_dofs[:, self.surface_nodes].T.ravel()
-        self._nodal_forces = np.zeros((mesh.n_nodes, 3))
+        self._nodal_forces = np.zeros((self.n_nodes, 3))
         self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
         self._load_dofs = np.zeros(self.dofmap.n_dofs)   # nodal forces + surface loads, as DOFs
         self._timed_loads: list = []                      # (DOF vector, t -> factor)
         self.solver.initialize()
 
-    def _prescribed_values(self, prescribed: Mapping):
-        """Callable ``t -> values on the Dirichlet DOFs`` for the prescribed groups."""
-        fixed = self.solver.fixed
-        parts = []
-        for group, disp in prescribed.items():
-            for c in range(3):
-                dofs = self.dofmap.dofs_of(self.mesh.group_nodes(group), (c,))
-                pos = np.searchsorted(fixed, dofs)
-                parts.append((pos, c, disp))
-        for _, _, disp in parts:
-            if not callable(disp) and np.asarray(disp, dtype=np.float64).shape != (3,):
-                raise ValueError("a prescribed displacement must be a (3,) vector or a callable "
-                                 "t -> (3,)")
-
-        def values(t: float) -> np.ndarray:
-            out = np.zeros(fixed.size)
-            for pos, c, disp in parts:
-                d = disp(t) if callable(disp) else disp
-                out[pos] = float(np.asarray(d, dtype=np.float64).reshape(3)[c])
-            return out
-
-        return values
+    def group_nodes(self, name: str) -> np.ndarray:
+        """Sorted int32 FE nodes of a named group, midside nodes on its edges, faces and
+        elements included (:meth:`pdfem.fem.fe_space.FESpace.group_nodes`)."""
+        return self.space.group_nodes(name)
 
     @classmethod
     def from_file(cls, path: str | os.PathLike, material: ElasticMaterial,
@@ -154,21 +143,23 @@ class ElasticStructure(Structure):
     # ------------------------------------------------------------------ geometry
     @property
     def points(self) -> np.ndarray:
-        """(Nn, 3) reference node coordinates (m)."""
+        """(Nn, 3) reference FE node coordinates (m)."""
         return self._x0
 
     @property
+    def n_nodes(self) -> int:
+        """Number of FE nodes Nn."""
+        return self.space.n_nodes
+
+    @property
     def cell_type(self) -> str:
-        """meshio cell type of the elements: ``"tetra"`` or ``"hexahedron"``."""
-        return "tetra" if self.mesh.kind == "tet" else "hexahedron"
+        """meshio cell type: ``tetra``, ``tetra10``, ``hexahedron`` or ``hexahedron20``."""
+        return self.space.cell_type
 
     @property
     def cells(self) -> np.ndarray:
-        """(Ne, 4 or 8) int32 element connectivity in meshio / VTK node order (for output)."""
-        t = self.mesh.mesh.t
-        if self.mesh.kind == "hex":
-            t = t[HEX_MAPPING[:8]]
-        return np.ascontiguousarray(t.T, dtype=np.int32)
+        """(Ne, 4, 10, 8 or 20) int32 connectivity over FE nodes in meshio / VTK node order."""
+        return self.space.cells()
 
     @property
     def time(self) -> float:
@@ -197,47 +188,6 @@ class ElasticStructure(Structure):
         self.solver.initialize(u, v, self.external_force_dofs(), time=self.solver.time)
 
     # ------------------------------------------------------------------ loads
-    def set_nodal_forces(self, forces: np.ndarray) -> None:
-        """Set constant external nodal forces (N), (Nn, 3) (replaces earlier ones)."""
-        forces = np.asarray(forces, dtype=np.float64)
-        if forces.shape != (self.mesh.n_nodes, 3):
-            raise ValueError(f"nodal forces must have shape ({self.mesh.n_nodes}, 3), got "
-                             f"{forces.shape}")
-        self._nodal_forces = forces.copy()
-        self._load_dofs = self.dofmap.to_dofs(self._nodal_forces) + self._pressure_dofs
-
-    def add_surface_load(self, group: str, traction=(0.0, 0.0, 0.0), pressure: float = 0.0,
-                         history=None) -> None:
-        """Add a uniform traction (Pa, (3,)) and/or pressure (Pa, positive pushing into the
-        structure) on a named surface group.
-
-        ``history`` (optional) is a callable ``t -> factor`` (t in s) that scales this load in
-        time, e.g. a pressure pulse; without it the load is constant.
-        """
-        f = surface_load(self.mesh, group, traction, pressure)
-        if history is not None:
-            self._timed_loads.append((f, history))
-            return
-        self._pressure_dofs = self._pressure_dofs + f
-        self._load_dofs = self._load_dofs + f
-
-    def clear_loads(self) -> None:
-        """Remove the nodal forces and surface loads (not the contact forces)."""
-        self._nodal_forces = np.zeros((self.mesh.n_nodes, 3))
-        self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
-        self._load_dofs = np.zeros(self.dofmap.n_dofs)
-        self._timed_loads = []
-
-    def external_force_dofs(self, time: float | None = None) -> np.ndarray:
-        """(3 Nn,) total external force (N) at ``time`` (s; default the current time): loads
-        (time histories evaluated at ``time``) plus the accumulated contact forces."""
-        f = self._load_dofs.copy()
-        t = self.solver.time if time is None else time
-        for dofs, history in self._timed_loads:
-            f += float(history(t)) * dofs
-        f[self._surface_dofs] += self._surface_forces.ravel()
-        return f
-
     def set_surface_forces(self, forces: np.ndarray) -> None:
         """Replace the contact forces (N), (Ns, 3), effective from the current time on.
 
@@ -331,7 +281,7 @@ class ElasticStructure(Structure):
 
     def nodal_von_mises(self) -> np.ndarray:
         """(Nn,) volume-weighted nodal average of the element von Mises stress (Pa)."""
-        return nodal_average(self.mesh, self.von_mises(), self._volumes)
+        return nodal_average(self.mesh, self.von_mises(), self._volumes, self.cells)
 
     def probe(self, point) -> Probe:
         """A probe at ``point`` (m) (:func:`pdfem.fem.probe.make_probe`)."""
@@ -342,11 +292,11 @@ class ElasticStructure(Structure):
         return probe_values(self, probe)
 
     def reaction(self, group: str) -> np.ndarray:
-        """(3,) force (N) that the supports at the named group's nodes exert on the structure
-        (``K u + C v + M a - f_ext`` summed over those nodes; zero for a group that is not
-        clamped)."""
-        nodes = self.mesh.group_nodes(group)
-        return reaction_force(self.solver.residual_force(), self.dofmap, nodes)
+        """(3,) force (N) that the support at the named group exerts on the structure
+        (``K u + C v + M a - f_ext`` summed over its nodes; 0 for the components it does not
+        hold, :func:`pdfem.fem.supports.support_reaction`)."""
+        return support_reaction(self.solver.residual_force(), self.dofmap,
+                                self.group_nodes(group), self.supports.get(group, ()))
 
     # ------------------------------------------------------------------ run interface
     def output_mesh(self) -> tuple[np.ndarray, np.ndarray, str]:
@@ -354,26 +304,31 @@ class ElasticStructure(Structure):
         return self.points, self.cells, self.cell_type
 
     def output_fields(self) -> dict[str, np.ndarray]:
-        """``u`` (Nn, 3) m and ``von_mises`` (Ne,) Pa."""
-        return {"u": self.displacement(), "von_mises": self.von_mises()}
+        """``u`` (Nn, 3) m, ``v`` (Nn, 3) m/s and ``von_mises`` (Ne,) Pa."""
+        return {"u": self.displacement(), "v": self.velocity(), "von_mises": self.von_mises()}
 
     def frame_history(self) -> dict[str, float | np.ndarray]:
-        """``kinetic``, ``strain`` (J) and ``reaction_<group>`` (N) of each clamped group."""
+        """``kinetic``, ``strain`` (J) and ``reaction_<group>`` (N, (3,)) of each support
+        (clamped or per component; components it does not hold are 0)."""
         hist = {"kinetic": self.kinetic_energy(), "strain": self.strain_energy()}
-        for g in self.fixed_groups:
-            hist[f"reaction_{g}"] = self.reaction(g)
+        for g, comps in self.supports.items():
+            if g in self.fixed_groups or g in self._component_supports:
+                hist[f"reaction_{g}"] = self.reaction(g)
         return hist
 
     def describe(self) -> str:
-        """Nodes, elements and critical step."""
-        return (f"structure '{self.name}': {self.mesh.n_nodes:,} nodes, "
-                f"{self.mesh.n_elements:,} {self.cell_type} elements, critical step "
-                f"{self.critical_time_step():.3e} s")
+        """Nodes, DOFs, elements (which element) and critical step."""
+        note = ("; the file's second-order elements were read by their corners and raised "
+                "straight-sided" if self.mesh.file_order == 2 else "")
+        return (f"structure '{self.name}': {self.n_nodes:,} nodes, {self.dofmap.n_dofs:,} DOFs, "
+                f"{self.mesh.n_elements:,} {self.space.element_name}, critical step "
+                f"{self.critical_time_step():.3e} s{note}")
 
     def check_mesh(self) -> None:
-        """Refuse inverted or degenerate tetrahedra (:func:`pdfem.meshing.quality.check_cells`)."""
-        if self.cell_type == "tetra":
-            check_cells(self.points, self.cells, 3)
+        """Refuse inverted or degenerate tetrahedra by their corners
+        (:func:`pdfem.meshing.quality.check_cells`)."""
+        if self.mesh.kind == "tet":
+            check_cells(self.points, self.cells[:, :4], 3)
 
     def is_finite(self) -> bool:
         """Whether every displacement is finite."""

@@ -2,7 +2,8 @@
 
 ``<stem>.xdmf`` (XDMF 3) has one temporal collection per body; each frame is a uniform grid:
 for an ice body Polyvertex topology over its particles and geometry ``x0``, for a structure
-its elements (Tetrahedron, Hexahedron, Triangle or Quadrilateral) and geometry ``points``;
+its elements (Tetrahedron, Hexahedron, Triangle, Quadrilateral, Tetrahedron_10 or
+Hexahedron_20) and geometry ``points``;
 one attribute per field (Scalar or Vector, centred on the nodes or, for fields such as
 ``von_mises``, on the cells). The HDF5 file is named relative to the XDMF file, so the two
 can be moved together. Each attribute references a per-frame dataset
@@ -27,7 +28,10 @@ if TYPE_CHECKING:
     from pdfem.output.frames import FrameSeries
 
 XDMF_TOPOLOGY = {"tetra": ("Tetrahedron", 4), "hexahedron": ("Hexahedron", 8),
-                 "triangle": ("Triangle", 3), "quad": ("Quadrilateral", 4)}
+                 "triangle": ("Triangle", 3), "quad": ("Quadrilateral", 4),
+                 # quadratic cells, XDMF TopologyType names (xdmf.org, "XDMF Model and Format"),
+                 # node order as meshio / VTK (corners, then edge midpoints)
+                 "tetra10": ("Tetrahedron_10", 10), "hexahedron20": ("Hexahedron_20", 20)}
 """meshio cell type -> (XDMF topology type, nodes per cell); node order as in VTK."""
 
 _ATTRIBUTE_TYPE = {(): "Scalar", (3,): "Vector"}

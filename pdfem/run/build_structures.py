@@ -45,9 +45,11 @@ def _rigid(cfg: StructureConfig, path: Path, file: str) -> RigidBody:
 
 
 def _elastic(cfg: StructureConfig, path: Path, file: str) -> ElasticStructure:
-    """An elastic FE structure with its supports, damping and surface loads."""
+    """An elastic FE structure of the case's element order with its supports (clamped and per
+    component), damping and surface loads."""
     material = ElasticMaterial(cfg.density, cfg.youngs_modulus, cfg.poisson_ratio)
     s = ElasticStructure.from_file(path, material, fixed_groups=cfg.fixed_groups,
+                                   supports=dict(cfg.supports), element_order=cfg.element_order,
                                    contact_group=cfg.contact_group, name=cfg.name,
                                    rayleigh_alpha=cfg.damping_alpha, rayleigh_beta=cfg.damping_beta)
     for load in cfg.loads:
