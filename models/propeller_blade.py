@@ -26,7 +26,11 @@ point at radius r and angle psi around the shaft is (x, r sin psi, r cos psi).
 smooth), with one extra section just inside the hub and one just outside the tip; the loft is
 then cut by the cylinders r = r_h and r = R. Physical groups: ``blade`` (3-D), ``root`` (2-D,
 the face on the hub cylinder; fix it), ``contact`` (2-D, every other face: suction and pressure
-sides with the leading and trailing edges, and the tip). First-order tetrahedra.
+sides with the leading and trailing edges, and the tip). Hexahedra do not fit a thin twisted
+loft, so the blade is meshed with tetrahedra, by default second-order (``element_order = 2``:
+gmsh's 10-node tetrahedra with 6-node triangle faces, mid-side nodes on the curved surfaces),
+which bend correctly with one or two elements through the thickness where first-order
+tetrahedra lock; ``element_order = 1`` gives first-order tetrahedra.
 """
 
 from __future__ import annotations
@@ -52,6 +56,7 @@ PARAMETERS: dict[str, tuple] = {
     "skew_angle": (0.35, "rad", "skew angle at the tip (skew-back > 0), linear in radius from 0 at the hub"),
     "sections": (10, "-", "number of NACA sections lofted from hub to tip"),
     "element_size": (0.02, "m", "target edge length of the tetrahedra"),
+    "element_order": (2, "-", "2: 10-node tetrahedra (default), 1: 4-node tetrahedra"),
 }
 
 _POINTS_PER_SIDE = 31           # cosine-spaced profile points on each side, LE and TE included
@@ -95,6 +100,7 @@ def _check(p: dict) -> np.ndarray:
             f"must not exceed max_chord ({p['max_chord']:g} m)")
     require_range(p, "skew_angle", -1.0, 1.0, unit="rad")
     require_range(p, "sections", 4, 40)
+    require_range(p, "element_order", 1, 2)
     radii = np.linspace(rh, R, p["sections"])
     c, t = _chord(radii, p), _thickness(radii, p)
     require(c[0] > 0.05 * p["max_chord"], "max_chord_radius", p["max_chord_radius"],
@@ -177,6 +183,8 @@ def build(path: str | Path, **params) -> MeshReport:
         Number of lofted sections, 4..40.
     element_size : float, default 0.02
         Target tetrahedron edge length, m.
+    element_order : int, default 2
+        2: second-order (10-node) tetrahedra with 6-node triangle faces; 1: first-order.
 
     Returns
     -------
@@ -230,7 +238,7 @@ def build(path: str | Path, **params) -> MeshReport:
         gmsh.option.setNumber("Mesh.Optimize", 1)
         generate_mesh(3)
 
-        # the root is the face whose mesh nodes all lie on the hub cylinder
+        # the root is the face whose (first-order) mesh nodes all lie on the hub cylinder
         root, contact = [], []
         for _, s in gmsh.model.getEntities(2):
             _, xyz, _ = gmsh.model.mesh.getNodes(2, s, includeBoundary=True, returnParametricCoord=False)
@@ -239,11 +247,32 @@ def build(path: str | Path, **params) -> MeshReport:
             (root if np.max(np.abs(radial - rh)) < 1e-6 * R else contact).append(s)
         if not root:
             raise RuntimeError("no blade face lies on the hub cylinder")
+        straight = p["element_order"] == 2 and _second_order(gmsh)
         gmsh.model.addPhysicalGroup(3, volumes, name="blade")
         gmsh.model.addPhysicalGroup(2, contact, name="contact")
         gmsh.model.addPhysicalGroup(2, root, name="root")
         report = finish_mesh(path, "propeller_blade", p, dim=3)
+    if straight:
+        report.notes.append("some curved 10-node tetrahedra were inverted at the thin edges: all mid-side "
+                            "nodes were put on the straight edges instead (the faceted first-order shape)")
     phi_h, phi_t = (math.degrees(math.atan(p["pitch"] / (2 * math.pi * r))) for r in (rh, R))
     report.notes.append(f"chord {float(_chord(np.asarray(rh), p)):.3g} m at the hub, {p['tip_chord']:.3g} m at "
                         f"the tip; pitch angle {phi_h:.1f} deg at the hub, {phi_t:.1f} deg at the tip")
     return report
+
+
+def _second_order(gmsh) -> bool:
+    """Raise the open session's tetrahedra to second order, mid-side nodes on the curved
+    geometry (gmsh's high-order optimiser untangles what it can). If some curved elements stay
+    inverted (thin trailing edges), put all mid-side nodes on the straight edges instead: valid
+    wherever the first-order mesh is. Returns True in that case."""
+    gmsh.option.setNumber("Mesh.HighOrderOptimize", 2)
+    gmsh.model.mesh.setOrder(2)
+    tags = np.concatenate([np.asarray(t) for t in gmsh.model.mesh.getElements(3)[1]])
+    if np.min(gmsh.model.mesh.getElementQualities(tags, "minSICN")) > 0:
+        return False
+    gmsh.model.mesh.setOrder(1)
+    gmsh.option.setNumber("Mesh.SecondOrderLinear", 1)
+    gmsh.option.setNumber("Mesh.HighOrderOptimize", 0)
+    gmsh.model.mesh.setOrder(2)
+    return True

@@ -25,9 +25,12 @@ from pdfem.models import hull_panel, indenters, propeller_blade
 # ------------------------------------------------------------------------------------- helpers
 
 def _cells(mesh: meshio.Mesh, group: str, cell_type: str) -> np.ndarray:
-    blocks = [b.data[idx] for b, idx in zip(mesh.cells, mesh.cell_sets[group])
-              if b.type == cell_type and idx is not None and len(idx)]
-    return np.concatenate(blocks) if blocks else np.zeros((0, 3 if cell_type == "triangle" else 4), int)
+    """Corner connectivity of the group's cells of ``cell_type`` or its quadratic variants
+    (tetra10 for tetra, triangle6 for triangle: gmsh lists the corners first)."""
+    n = {"triangle": 3, "tetra": 4, "quad": 4, "hexahedron": 8}[cell_type]
+    blocks = [b.data[idx][:, :n] for b, idx in zip(mesh.cells, mesh.cell_sets[group])
+              if b.type.rstrip("0123456789") == cell_type and idx is not None and len(idx)]
+    return np.concatenate(blocks) if blocks else np.zeros((0, n), int)
 
 
 def _tet_volumes(p: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -36,9 +39,19 @@ def _tet_volumes(p: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 
 def _tri_normals(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Area-weighted normals (length = 2 x area), right-hand rule on the node order."""
+    """Area-weighted normals (length = 2 x area), right-hand rule on the node order; of a planar
+    quadrilateral (4 columns), the cross product of its diagonals (also 2 x area)."""
+    if t.shape[1] == 4:
+        a, b, c, d = (p[t[:, k]] for k in range(4))
+        return np.cross(c - a, d - b)
     a, b, c = (p[t[:, k]] for k in range(3))
     return np.cross(b - a, c - a)
+
+
+def _box_volumes(p: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Volumes of axis-aligned box hexahedra in gmsh order: (x1-x0)(y3-y0)(z4-z0), signed."""
+    return ((p[h[:, 1], 0] - p[h[:, 0], 0]) * (p[h[:, 3], 1] - p[h[:, 0], 1])
+            * (p[h[:, 4], 2] - p[h[:, 0], 2]))
 
 
 def _divergence_volume(p: np.ndarray, t: np.ndarray) -> float:
@@ -102,11 +115,14 @@ def test_every_model_meshes_coarsely_with_all_its_groups(name, built):
     groups = MODEL_CASES[name][1]
     assert _groups(mesh) == groups
     assert report.groups == groups
+    hexa = any(t.startswith("hexahedron") for t in report.elements)
     for group, dim in groups.items():
-        cells = _cells(mesh, group, "tetra" if dim == 3 else "triangle")
+        cells = _cells(mesh, group, ("hexahedron" if hexa else "tetra") if dim == 3 else ("quad" if hexa else "triangle"))
         assert len(cells) > 0, group
-        if dim == 3:
+        if dim == 3 and not hexa:
             assert np.all(_tet_volumes(mesh.points, cells) > 0)
+        elif dim == 3:
+            assert np.all(_box_volumes(mesh.points, cells) > 0)
         else:
             assert np.all(np.linalg.norm(_tri_normals(mesh.points, cells), axis=1) > 0)
     assert report.min_volume > 0 and report.min_sicn > 0
@@ -114,7 +130,8 @@ def test_every_model_meshes_coarsely_with_all_its_groups(name, built):
 
 # ------------------------------------------------------------------------------------- hull panel
 
-def test_hull_panel_volume_areas_and_groups(built):
+@pytest.mark.parametrize("element_type", ["hex", "tet"])
+def test_hull_panel_volume_areas_and_groups(built, tmp_path, element_type):
     """Reference: analytic volumes and areas of the boxes the panel is made of.
 
     hull volume = plate + stiffeners + frames (web and flange) - stiffener/frame crossings;
@@ -122,13 +139,18 @@ def test_hull_panel_volume_areas_and_groups(built):
     fixed area = plate edges + stiffener and frame end faces.
     """
     p = HULL_PARAMS
-    report, mesh = built("hull_panel")
+    if element_type == "hex":
+        report, mesh = built("hull_panel")
+    else:
+        report = hull_panel.build(tmp_path / "tet.msh", **HULL_PARAMS, element_type="tet")
+        mesh = meshio.read(report.path)
+    vtype, ftype = ("hexahedron", "quad") if element_type == "hex" else ("tetra", "triangle")
     assert _groups(mesh) == {"hull": 3, "contact": 2, "fixed": 2}
     assert report.groups == {"hull": 3, "contact": 2, "fixed": 2}
 
     pts = mesh.points
-    tets = _cells(mesh, "hull", "tetra")
-    vol = _tet_volumes(pts, tets)
+    tets = _cells(mesh, "hull", vtype)
+    vol = (_box_volumes if element_type == "hex" else _tet_volumes)(pts, tets)
     assert np.all(vol > 0)
     n_s, n_f = 2, 1                                   # stiffeners at y = 0.25, 0.55; frame at x = 0.5
     L, B = p["length"], p["breadth"]
@@ -140,14 +162,14 @@ def test_hull_panel_volume_areas_and_groups(built):
     assert vol.sum() == pytest.approx(expected, rel=1e-6)
     assert report.total_volume == pytest.approx(expected, rel=1e-6)
     assert report.nodes == len(np.unique(tets))
-    assert report.elements["tetra"] == len(tets)
+    assert report.elements[vtype] == len(tets)
 
-    contact = _tri_normals(pts, _cells(mesh, "contact", "triangle"))
+    contact = _tri_normals(pts, _cells(mesh, "contact", ftype))
     assert 0.5 * np.linalg.norm(contact, axis=1).sum() == pytest.approx(L * B, rel=1e-9)
     assert np.all(contact[:, 2] > 0)                  # the ice side z = 0, normals out of the steel
-    assert np.all(np.abs(pts[_cells(mesh, "contact", "triangle")][..., 2]) < 1e-12)
+    assert np.all(np.abs(pts[_cells(mesh, "contact", ftype)][..., 2]) < 1e-12)
 
-    fixed = _tri_normals(pts, _cells(mesh, "fixed", "triangle"))
+    fixed = _tri_normals(pts, _cells(mesh, "fixed", ftype))
     fixed_area = (2 * (L + B) * p["plate_thickness"] + 2 * n_s * p["stiffener_thickness"] * p["stiffener_height"]
                   + 2 * n_f * (p["frame_thickness"] * p["frame_height"]
                                + p["frame_flange_width"] * p["frame_flange_thickness"]))
@@ -169,6 +191,8 @@ def test_hull_panel_without_stiffeners_is_a_plate(tmp_path):
     (dict(element_size=1e-4), "element_size"),
     (dict(length="2"), "length"),
     (dict(width=1.0), "width"),
+    (dict(element_type="quad"), "element_type"),
+    (dict(layers=0), "layers"),
 ])
 def test_hull_panel_bad_parameters(tmp_path, bad, param):
     """Bad or inconsistent parameters raise ModelParameterError naming the parameter; no file."""
@@ -213,8 +237,10 @@ def test_blade_root_area_groups_and_closed_surface(built):
     surface = np.concatenate([root, _cells(mesh, "contact", "triangle")])
     _assert_closed_and_oriented(surface)
     assert _divergence_volume(pts, surface) == pytest.approx(vol.sum(), rel=1e-9)
-    # the tip face lies on the cylinder r = R, nothing beyond it
-    assert np.hypot(pts[:, 1], pts[:, 2]).max() == pytest.approx(p["radius"], rel=1e-9)
+    # the tip face lies on the cylinder r = R, nothing beyond it (mid-side nodes of the default
+    # second-order mesh are projected onto the OCC surface, to its 1e-8 tolerance)
+    assert np.hypot(pts[:, 1], pts[:, 2]).max() == pytest.approx(p["radius"], rel=1e-8)
+    assert {b.type for b in mesh.cells} == {"tetra10", "triangle6"}
     assert report.min_sicn > 0 and report.min_angle > 0
 
 

@@ -20,24 +20,29 @@ class MeshReport:
     parameters
         The parameter values used (SI).
     dim
-        Dimension of the mesh's cells: 3 (tetrahedra) or 2 (a surface of triangles).
+        Dimension of the mesh's cells: 3 (tetrahedra or hexahedra, first or second order) or 2
+        (a surface of triangles or quadrilaterals).
     nodes
-        Number of mesh nodes.
+        Number of mesh nodes (of quadratic elements: corner and mid-side nodes).
     elements
         Number of elements written, by meshio cell type (``"tetra"``, ``"triangle"``, ...).
     groups
         Physical group name -> dimension.
     min_volume, max_volume
-        Smallest and largest cell volume (m^3), or area (m^2) for a surface mesh.
+        Smallest and largest cell volume (m^3), or area (m^2) for a surface mesh; of quadratic
+        elements, the straight-sided element through their corners.
     total_volume
         Sum of the cell volumes (m^3), or areas (m^2) for a surface mesh.
     min_angle
-        Smallest dihedral angle of a tetrahedron (deg), or smallest interior angle of a
-        triangle for a surface mesh.
+        Smallest dihedral angle of a tetrahedron, smallest angle between two edges at a corner
+        of a hexahedron (90 for a box), or smallest interior angle of a triangle or
+        quadrilateral for a surface mesh (deg).
     min_sicn
         gmsh's smallest signed inverse condition number (1 ideal, <= 0 inverted).
     min_gamma
-        gmsh's smallest inscribed/circumscribed radius ratio (normalised, 1 ideal).
+        gmsh's smallest inscribed/circumscribed radius ratio (normalised, 1 ideal) of
+        tetrahedra and triangles; gmsh's smallest isotropy measure ``minIsotropy`` (1 ideal) of
+        hexahedra and quadrilaterals.
     min_inradius
         Smallest inscribed-sphere (circle) radius, m: the length that limits an explicit
         solver's stable time step.
@@ -71,7 +76,8 @@ class MeshReport:
         """A few lines for the terminal."""
         what = "volume" if self.dim == 3 else "area"
         unit = "m^3" if self.dim == 3 else "m^2"
-        angle = "dihedral angle" if self.dim == 3 else "triangle angle"
+        hexa = any(t.startswith("hexahedron") for t in self.elements)
+        angle = ("corner edge angle" if hexa else "dihedral angle") if self.dim == 3 else "face angle"
         lines = [
             f"wrote {self.path} (model {self.model}, MSH 4.1)",
             f"  nodes: {self.nodes}",
