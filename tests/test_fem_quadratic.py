@@ -217,9 +217,9 @@ def test_xdmf_of_quadratic_mesh_round_trips(plate_mesh, tmp_path):
         np.testing.assert_array_equal(pd[name], fields[name])
 
 
-def test_second_order_gmsh_file_is_read_by_its_corners(tmp_path, gmsh_box):
-    """A gmsh tetra10 mesh loads; the structure's FE nodes are the file's nodes (straight-sided
-    box: the midside nodes are edge midpoints) and describe() says how it was read."""
+def test_second_order_gmsh_tet_file_is_isoparametric(tmp_path, gmsh_box):
+    """A gmsh tetra10 mesh loads isoparametric; the structure's FE nodes are the file's nodes
+    and describe() says how it was read."""
     path = gmsh_box(tmp_path / "p2.msh", (0.3, 0.2, 0.1), volume_groups=["block"],
                     face_groups={"contact": ["z1"], "fixed": ["x0"]}, size=0.05, order=2)
     mesh = load_mesh(path)
@@ -231,8 +231,59 @@ def test_second_order_gmsh_file_is_read_by_its_corners(tmp_path, gmsh_box):
     key = lambda x: np.round(x, 9)[np.lexsort(np.round(x, 9).T)]  # noqa: E731
     assert s.n_nodes == len(used)
     np.testing.assert_allclose(key(s.points), key(raw.points[used]), atol=1e-9)
-    assert "raised straight-sided" in s.describe()
+    assert mesh.isoparametric and "isoparametric" in s.describe()
     assert s.cell_type == "tetra10"
+
+
+def test_isoparametric_tetra10_keeps_a_curved_boundary(tmp_path):
+    """A sphere of radius 1 m meshed by gmsh with tetra10: the isoparametric volume is much
+    closer to 4/3 pi than the straight-sided corner mesh's (reference: sphere volume)."""
+    import gmsh
+
+    from pdfem.fem.elasticity import element_volumes
+    path = str(tmp_path / "sphere.msh")
+    gmsh.initialize(["-v", "0"])
+    try:
+        gmsh.model.occ.addSphere(0, 0, 0, 1.0)
+        gmsh.model.occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [1], name="ball")
+        gmsh.model.addPhysicalGroup(2, [1], name="skin")
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(2)
+        gmsh.write(path)
+    finally:
+        gmsh.finalize()
+    mesh = load_mesh(path)
+    exact = 4.0 / 3.0 * np.pi
+    iso = element_volumes(mesh).sum()
+    flat = skfem.Basis(skfem.MeshTet1(mesh.points.T, mesh.mesh.t), skfem.ElementTetP1()).dx.sum()
+    print(f"sphere volume: isoparametric {iso:.5f}, straight {flat:.5f}, exact {exact:.5f}")
+    assert abs(iso - exact) < 0.1 * abs(flat - exact)
+    s = ElasticStructure(mesh, STEEL, contact_group="skin", max_eigenvalue=OMEGA2)
+    r = np.linalg.norm(s.points[s.surface_nodes], axis=1)
+    assert r == pytest.approx(np.ones_like(r), abs=1e-6)       # midside nodes on the sphere
+
+
+def test_hexahedron27_file_is_read_by_its_corners(tmp_path, gmsh_box):
+    """A gmsh hexahedron27 mesh with quad9 faces loads as HexS2: its FE nodes are the file's
+    corner and edge nodes (face and body centres dropped) and the contact group has 8 nodes per
+    face."""
+    path = gmsh_box(tmp_path / "h27.msh", (0.3, 0.2, 0.1), volume_groups=["block"],
+                    face_groups={"contact": ["z1"], "fixed": ["x0"]}, divisions=(3, 2, 1),
+                    order=2)
+    mesh = load_mesh(path)
+    raw = meshio.read(path)
+    assert "hexahedron27" in raw.cells_dict and mesh.file_order == 2
+    s = ElasticStructure(mesh, STEEL, fixed_groups=["fixed"], contact_group="contact",
+                         max_eigenvalue=OMEGA2)
+    used = np.unique(raw.cells_dict["hexahedron27"])
+    assert s.cell_type == "hexahedron20"
+    assert s.n_nodes == len(used) - mesh.mesh.facets.shape[1] - mesh.n_elements
+    file_pts = {tuple(x) for x in np.round(raw.points[used], 9)}
+    assert all(tuple(x) in file_pts for x in np.round(s.points, 9))
+    # top face, 3 x 2 quads: 4 x 3 corners + (3 x 3 + 2 x 4) edge midpoints
+    assert len(s.surface_nodes) == len(s.group_nodes("contact")) == 12 + 17
 
 
 def test_case_supports_and_element_order():
@@ -255,3 +306,17 @@ def test_case_supports_and_element_order():
         case('supports = [{ group = "contact", components = ["w"] }]')
     with pytest.raises(InputError, match="element_order.*1 .*or 2"):
         case("element_order = 3")
+
+
+def test_quadratic_element_stress_of_a_uniaxial_stretch(plate_mesh):
+    """A uniaxial stress state (u_x = e x, u_y = u_z = -nu e y, -nu e z) interpolated exactly
+    by HexS2 gives sigma_xx = E e and von Mises E e in every element (Hooke's law)."""
+    s = _plate(plate_mesh, "clamped")
+    e, nu = 1e-4, STEEL.poisson_ratio
+    x = s.points
+    s.solver.u[:] = s.dofmap.to_dofs(np.column_stack([e * x[:, 0], -nu * e * x[:, 1],
+                                                      -nu * e * x[:, 2]]))
+    sig = s.stresses()
+    assert sig[:, 0, 0] == pytest.approx(np.full(len(sig), STEEL.youngs_modulus * e), rel=1e-9)
+    assert s.von_mises() == pytest.approx(np.full(len(sig), STEEL.youngs_modulus * e), rel=1e-9)
+    assert s.nodal_von_mises().shape == (s.n_nodes,)

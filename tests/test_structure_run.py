@@ -31,6 +31,7 @@ mesh = "hull_panel"
 params = {{ element_size = 0.1 }}
 material = {{ density = 7850.0, youngs_modulus = 210e9, poisson_ratio = 0.3 }}
 fixed_groups = ["fixed"]
+element_order = 1   # first-order tetrahedra: this file pins their layout (tetra cells)
 contact_group = "contact"
 damping = {{ alpha = 8000.0 }}   # 1/s, about critical for the panel's first mode (~600 Hz)
 loads = [ {{ group = "contact", pressure = {P}, pulse = {{ start = 0.0, rise = 1.0e-3, hold = 10.0, fall = 1.0e-3 }} }} ]

@@ -7,6 +7,9 @@ built by scikit-fem on the corner mesh (edge-midpoint DOFs, straight-sided eleme
 integration: Gauss order 4 for the quadratic elements (exact mass of an affine element); the
 first-order elements (``order = 1``: ``ElementTetP1`` / ``ElementHex1``) keep orders 2 / 3.
 
+On an isoparametric mesh (a tetra10 file, :class:`skfem.MeshTet2`) the elements keep the
+file's curved geometry and the midside nodes sit at the file's positions.
+
 FE nodes are every DOF location: the mesh vertices (same indices as in the mesh), then one node
 per edge, then per facet and per element where the element has DOFs there. :class:`FESpace`
 gives their positions (m), the (3, N) DOF table for :class:`pdfem.fem.elasticity.DofMap`, the
@@ -29,6 +32,7 @@ import skfem
 from skfem.io.meshio import HEX_MAPPING
 
 from pdfem.fem.mesh import FEMesh
+from pdfem.fem.mesh_second_order import edge_lookup
 
 #: mesh kind -> order -> (scalar element class, Gauss order, meshio cell type)
 ELEMENTS = {
@@ -45,18 +49,6 @@ _VTK_EDGES = {
     "hex": [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
             (0, 4), (1, 5), (2, 6), (3, 7)],
 }
-
-
-def _edge_lookup(edges: np.ndarray, n_vertices: int, pairs: np.ndarray) -> np.ndarray:
-    """Index in ``edges`` (2, Ned) of each corner pair of ``pairs`` (..., 2); -1 if absent."""
-    e = np.sort(edges, axis=0).astype(np.int64)
-    keys = e[0] * n_vertices + e[1]
-    order = np.argsort(keys)
-    p = np.sort(np.asarray(pairs, dtype=np.int64), axis=-1)
-    q = p[..., 0] * n_vertices + p[..., 1]
-    pos = np.clip(np.searchsorted(keys[order], q), 0, len(keys) - 1)
-    found = keys[order][pos] == q
-    return np.where(found, order[pos], -1)
 
 
 @dataclass
@@ -109,7 +101,7 @@ class FESpace:
     def edge_nodes(self, pairs: np.ndarray) -> np.ndarray:
         """FE node on the mesh edge between each corner pair of ``pairs`` (..., 2) (order 2)."""
         m = self.mesh.mesh
-        e = _edge_lookup(m.edges, m.p.shape[1], pairs)
+        e = edge_lookup(m.edges, m.nvertices, pairs)
         if (e < 0).any():
             raise ValueError("a corner pair is not an edge of the mesh")
         return self.node_of_dof[self.basis.edge_dofs[0, e]]

@@ -31,6 +31,7 @@ import skfem
 from skfem.io.meshio import INV_HEX_MAPPING
 
 from pdfem.fem.mesh_orientation import check_orientation
+from pdfem.fem.mesh_second_order import CORNERS, corners, isoparametric_tet
 
 # meshio cell types and their topological dimension (first- and higher-order).
 _CELL_DIM = {
@@ -45,13 +46,6 @@ _CELL_DIM = {
 SUPPORTED = ("tetrahedra (gmsh element types 4 and 11: tetra, tetra10) or hexahedra (types 5, 17 "
              "and 12: hexahedron, hexahedron20, hexahedron27), one kind per mesh")
 
-#: meshio cell type -> (kind, number of corner nodes first in the cell). Second-order cells are
-#: read by their corners (meshio and gmsh both list the corners first); the structure raises the
-#: corner mesh to quadratic elements again (straight-sided, :mod:`pdfem.fem.fe_space`).
-_CORNERS = {"tetra": ("tet", 4), "tetra10": ("tet", 4), "hexahedron": ("hex", 8),
-            "hexahedron20": ("hex", 8), "hexahedron27": ("hex", 8),
-            "triangle": ("tri", 3), "triangle6": ("tri", 3), "quad": ("quad", 4),
-            "quad8": ("quad", 4), "quad9": ("quad", 4), "line": ("line", 2), "line3": ("line", 2)}
 
 
 @dataclass
@@ -172,8 +166,10 @@ class FEMesh:
     line_sets
         ``{line group: (n, 2) int32 corner node pairs}`` (the group's mesh edges).
     file_order
-        Order of the elements in the file (1, or 2 for tetra10 / hexahedron20 / hexahedron27:
-        their midside nodes were dropped, the corner mesh is kept).
+        Order of the elements in the file (1, or 2 for tetra10 / hexahedron20 / hexahedron27).
+    isoparametric
+        True for a tetra10 file: ``mesh`` is a :class:`skfem.MeshTet2` keeping the file's
+        midside node positions (curved elements); hexahedron20 / 27 files keep their corners only.
     """
 
     mesh: skfem.Mesh
@@ -185,16 +181,17 @@ class FEMesh:
     element_sets: dict[str, np.ndarray] = field(default_factory=dict)
     line_sets: dict[str, np.ndarray] = field(default_factory=dict)
     file_order: int = 1
+    isoparametric: bool = False
 
     @property
     def points(self) -> np.ndarray:
         """(Nn, 3) reference node coordinates (m)."""
-        return np.ascontiguousarray(self.mesh.p.T)
+        return np.ascontiguousarray(self.mesh.p[:, :self.mesh.nvertices].T)
 
     @property
     def n_nodes(self) -> int:
         """Number of nodes."""
-        return int(self.mesh.p.shape[1])
+        return int(self.mesh.nvertices)
 
     @property
     def n_elements(self) -> int:
@@ -275,14 +272,6 @@ def _outward_faces(p: np.ndarray, faces: np.ndarray, centres: np.ndarray) -> np.
     return out
 
 
-def _corners(cell_type: str, cells: np.ndarray) -> tuple[str, np.ndarray]:
-    """``(kind, corner connectivity)`` of a block of cells (other types: as they are)."""
-    if cell_type not in _CORNERS:
-        return cell_type, cells
-    kind, nc = _CORNERS[cell_type]
-    return kind, cells[:, :nc]
-
-
 def load_mesh(path: str | os.PathLike) -> FEMesh:
     """Load a gmsh volume mesh into scikit-fem with its named groups.
 
@@ -291,9 +280,10 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
     path
         A gmsh ``.msh`` file (format 4.1 or 2.2) holding tetrahedra or hexahedra, first or second
         order (tetra10, hexahedron20, hexahedron27 with triangle6 / quad8 / quad9 faces), with
-        named physical groups (coordinates in metres). Second-order elements are read by their
-        corner nodes: the file's midside node positions are not used (the structure adds
-        straight-sided midside nodes again), so a curved boundary is represented by flat faces.
+        named physical groups (coordinates in metres). tetra10 elements are kept isoparametric
+        (:class:`skfem.MeshTet2` with the file's midside node positions, curved geometry);
+        hexahedron20 / 27 elements are read by their corner nodes (the structure adds
+        straight-sided midside nodes again, so a curved boundary becomes flat faces).
 
     Returns
     -------
@@ -313,14 +303,15 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
     if not kinds:
         raise ValueError(f"{path} has no volume elements; pdfem needs a 3-D mesh of {SUPPORTED} "
                          "in a named volume physical group")
-    if len(kinds) > 1 or kinds[0] not in _CORNERS:
+    if len(kinds) > 1 or kinds[0] not in CORNERS:
         raise ValueError(f"{path} has volume elements of type(s) {', '.join(kinds)}; "
                          f"supported are {SUPPORTED}")
     file_type = kinds[0]
-    kind, nc = _CORNERS[file_type]
+    kind, nc = CORNERS[file_type]
     cell_type = "tetra" if kind == "tet" else "hexahedron"
-    conn_all = raw.volume_cells[file_type][:, :nc]
-    conn = conn_all[_unique_rows(conn_all)]
+    full = raw.volume_cells[file_type]
+    full = full[_unique_rows(full[:, :nc])]
+    conn = full[:, :nc]
 
     used = np.unique(conn)
     renum = np.full(len(raw.points), -1, dtype=np.int64)
@@ -333,9 +324,11 @@ def load_mesh(path: str | os.PathLike) -> FEMesh:
     mesh = mesh_type(np.ascontiguousarray(p.T), np.ascontiguousarray(t_sk.T, dtype=np.int32))
 
     face_type = "triangle" if kind == "tet" else "quad"
-    femesh = FEMesh(mesh=mesh, path=path, kind=kind, file_order=1 if nc == len(
-        raw.volume_cells[file_type][0]) else 2)
-    members_of = {name: (dim, [_corners(ct, c) for ct, c in members])
+    if file_type == "tetra10":
+        mesh = isoparametric_tet(mesh, raw.points, renum, full)
+    femesh = FEMesh(mesh=mesh, path=path, kind=kind, file_order=1 if nc == full.shape[1] else 2,
+                    isoparametric=file_type == "tetra10")
+    members_of = {name: (dim, [corners(ct, c) for ct, c in members])
                   for name, (dim, members) in raw.groups.items()}
     centres = p[t].mean(axis=1)
     mesh_facets = np.ascontiguousarray(mesh.facets.T)

@@ -319,7 +319,9 @@ class ElasticStructure(AppliedLoads, Structure):
     def describe(self) -> str:
         """Nodes, DOFs, elements (which element) and critical step."""
         note = ("; the file's second-order elements were read by their corners and raised "
-                "straight-sided" if self.mesh.file_order == 2 else "")
+                "straight-sided" if self.mesh.file_order == 2 and not self.mesh.isoparametric
+                else "; isoparametric (the file's midside nodes)" if self.mesh.isoparametric
+                else "")
         return (f"structure '{self.name}': {self.n_nodes:,} nodes, {self.dofmap.n_dofs:,} DOFs, "
                 f"{self.mesh.n_elements:,} {self.space.element_name}, critical step "
                 f"{self.critical_time_step():.3e} s{note}")
