@@ -167,3 +167,19 @@ def test_box_bad_groups(tmp_path, groups):
     with pytest.raises(ModelParameterError) as info:
         box.build(tmp_path / "x.msh", groups=groups)
     assert info.value.param == "groups"
+
+
+def test_finish_mesh_refuses_triangles_on_a_hexahedral_mesh(tmp_path):
+    """A surface group of triangles on a hexahedron (whose faces are quadrilaterals) is refused
+    by name, and no file is written."""
+    from pdfem.meshing import MeshQualityError
+    from pdfem.meshing.structured import add_discrete_mesh
+    nodes = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], float)
+    with gmsh_session("h") as gmsh:
+        add_discrete_mesh(gmsh, nodes, np.arange(8)[None], "solid", {})
+        s = gmsh.model.addDiscreteEntity(2)
+        gmsh.model.mesh.addElementsByType(s, 2, [], [1, 4, 3, 1, 3, 2])
+        gmsh.model.addPhysicalGroup(2, [s], name="bottom")
+        with pytest.raises(MeshQualityError, match="quad"):
+            finish_mesh(tmp_path / "h.msh", "h", {}, 3)
+    assert not (tmp_path / "h.msh").exists()
