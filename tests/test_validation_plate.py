@@ -51,8 +51,8 @@ def test_quick_plate_cases_pass(tmp_path):
 
 
 def test_quick_panel_modes_pass(tmp_path):
-    """The demo panel at twice its element size against the panel at its own size: the first
-    five frequencies agree within 5 %."""
+    """The demo panel (0.08 m) against the panel meshed at 0.04 m: the first five frequencies
+    agree within 5 % (the quick variant is the full check, about a minute)."""
     cases = [c for c in all_cases() if c.name == "panel_modes"]
     (r,) = run_validation(cases, tmp_path, quick=True)
     assert r.passed, (r.value, r.message)

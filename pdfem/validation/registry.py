@@ -20,6 +20,7 @@ MODULES: tuple[str, ...] = (
     "rigid_wall",          # bar_rigid_wall.toml: contact duration and force
     "panel_reaction",      # panel_pressure_reaction.toml: support reaction p A
     "plate",               # plate_clamped.toml, plate_simply_supported.toml: f1 and deflection
+    "panel_modes",         # panel_modes.toml: demo panel f1..f5 vs the mesh refined 2x
 )
 """The case modules, in the order of the report."""
 

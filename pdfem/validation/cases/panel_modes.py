@@ -9,6 +9,11 @@ difference of the first five natural frequencies (:func:`pdfem.fem.modes.natural
 between the two meshes, ``max_i |f_i - f_i,ref| / f_i,ref``; it must stay below 5 %. A mesh
 that passes is converged enough for its frequencies (and the stiffness they reflect) to be
 trusted. SI units (Hz, m).
+
+The ``--quick`` variant is the same check: no coarser pair is within 5 % (measured with 20-node
+hexahedra, largest difference, mode 3 each time: 0.2/0.1 m 17.6 %, 0.16/0.08 m 6.3 %,
+0.12/0.06 m 5.8 %, 0.1/0.05 m 6.2 %; 0.08/0.04 m, the demo's, 4.9 %). Mode 3, the frame web
+and stiffeners bending with the plating, converges slowest (re-entrant web-to-plate corners).
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ from pdfem.case import Case
 from pdfem.fem.modes import natural_modes
 from pdfem.run.build import check_mesh
 from pdfem.run.build_structures import build_structure
-from pdfem.validation.case import Outcome, ValidationCase, replace_structure
+from pdfem.validation.case import Outcome, ValidationCase, replace_structure, unchanged
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -64,12 +69,6 @@ def reference(case: Case) -> float:
     return 0.0
 
 
-def quick(case: Case) -> Case:
-    """The panel at twice the element size (checked against the case's own size)."""
-    s = case.structures[0]
-    return replace_structure(case, params=dict(s.params, element_size=2.0 * s.params["element_size"]))
-
-
 def plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
     """The five frequencies of both meshes."""
     d = outcome.data
@@ -89,9 +88,9 @@ CASES = (
     ValidationCase(
         name="panel_modes", case_file="panel_modes.toml",
         quantity="panel f1..f5 vs mesh refined 2x (max rel. diff.)", unit="-",
-        measure=measure, reference=reference, plot=plot, quick=quick, execute=solve_pair,
+        measure=measure, reference=reference, plot=plot, quick=unchanged, execute=solve_pair,
         tolerance=0.05, relative=False,
         source="mesh convergence: the same panel with the element size halved (issue 13: "
                "first five frequencies within 5 % of a reference mesh refined twice)",
-        quick_note="the panel at twice the element size against the case's size"),
+        quick_note="unchanged: no coarser mesh pair is within 5 % (mode 3 converges slowly)"),
 )
