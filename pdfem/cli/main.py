@@ -3,6 +3,7 @@
     pdfem run [CASE.toml] [--out DIR] [--restart CHECKPOINT] [--quiet] [--json]
     pdfem post RESULTS.h5 [--plots DIR] [--csv FILE] [--json]
     pdfem mesh MODEL [--set key=value ...] [-o FILE.msh] [--json]
+    pdfem modes CASE.toml [--structure NAME] [--n K] [--out DIR] [--json]
     pdfem validate [--quick] [--report DIR] [--json] [--case NAME ...]
     pdfem schema [--markdown]
     pdfem bench {search,step,mpi,partition} [--n N] [--json]
@@ -26,9 +27,9 @@ import warnings
 from pdfem import __version__
 from pdfem.errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, EXIT_OK, InputError, InstabilityError
 
-from pdfem.cli import bench, info, mesh, post, run, schema, validate
+from pdfem.cli import bench, info, mesh, modes, post, run, schema, validate
 
-COMMANDS = (run, post, mesh, validate, schema, bench, info)
+COMMANDS = (run, post, mesh, modes, validate, schema, bench, info)
 """The commands, each a module with ``NAME``, ``HELP``, ``add_arguments(parser)`` and
 ``run(args) -> exit status``; a new command is one new module plus its entry here."""
 

@@ -19,6 +19,8 @@ MODULES: tuple[str, ...] = (
     "loop_agreement",      # sphere_ice_loops.toml: pair loop vs full-family loop
     "rigid_wall",          # bar_rigid_wall.toml: contact duration and force
     "panel_reaction",      # panel_pressure_reaction.toml: support reaction p A
+    "plate",               # plate_clamped.toml, plate_simply_supported.toml: f1 and deflection
+    "panel_modes",         # panel_modes.toml: demo panel f1..f5 vs the mesh refined 2x
     "coupled_step",        # demo_step_sweep.toml: energy and ice load at several steps
 )
 """The case modules, in the order of the report."""
