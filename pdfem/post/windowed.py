@@ -4,13 +4,13 @@ pdfem records the ice load of every coupling step as the impulse the particles g
 structure in that step divided by the step. An ice particle's impact lasts one step, so the
 step-by-step force has spikes whose height grows as the step shrinks (a particle's impulse over
 an ever shorter step) while their integral, the impulse, does not change: the raw per-step
-peak is not a converged quantity (measured on the demo: 0.29 MN at safety factor 0.9 and
-1.85 MN with substeps = 2 at 0.6). The moving average of the impulses over a fixed window,
+peak is not a converged quantity (measured on the demo: 0.27 MN at safety factor 0.9 and
+2.9 MN with substeps = 1 at 0.6). The moving average of the impulses over a fixed window,
 
     F_w(t) = (1 / w) * sum of the step impulses in (t - w, t],
 
-preserves the impulse and converges with the step (demo: 194.0 to 194.9 kN over safety factors
-0.15 to 0.9 and 1, 2, 8 or automatic substeps). The default window, 0.1 ms, is short against
+preserves the impulse and converges with the step (demo: 103 to 108 kN over safety factors
+0.15 to 0.9 and 1, 2 or automatic substeps). The default window, 0.1 ms, is short against
 the structure's response (a hull panel's first period is a few ms) and against the rise of an
 ice load, and long against the coupling step (a few µs). SI units: s, N.
 """
