@@ -69,9 +69,9 @@ def _cube_surface_closest(p, half):
 
 @pytest.mark.parametrize("where", ["faces", "edges", "vertices"])
 def test_particles_inside_a_cube_are_pushed_out_once_to_the_nearest_face(where):
-    """Particles just inside a closed cube, near its faces, edges (edge-on) and vertices, end on
-    the surface at the analytic closest point (the correct side), a second pass finds nothing
-    inside, and particles just outside are left alone. The impulse taken from the ice equals
+    """Particles that crossed into a closed cube in this step, near its faces, edges (edge-on)
+    and vertices, end on the surface at the analytic closest point (the correct side), a second
+    pass finds nothing inside, and particles just outside are left alone. The impulse taken from the ice equals
     the impulse the cube's nodes receive (momentum conservation, to round-off)."""
     half = 0.5
     rng = np.random.default_rng({"faces": 1, "edges": 2, "vertices": 3}[where])
@@ -87,20 +87,21 @@ def test_particles_inside_a_cube_are_pushed_out_once_to_the_nearest_face(where):
     outside[:, 0] = np.where(p[:, 0] > 0, 1, -1) * (half + rng.uniform(1e-9, depth, n))
     body = cube(half)
     con = SurfaceContact(body, search_radius=0.05)
-    y_old = p + 0.0   # the step's start position is irrelevant to where a particle is put
+    ref = np.array([_cube_surface_closest(q, half) for q in p])
+    y_old = 2 * ref - p   # outside at the step's start: the particles crossed in this step
     y = np.vstack([p, outside])
     y_old = np.vstack([y_old, outside])
-    v = np.zeros_like(y)
+    v = (y - y_old) / 1e-3              # the velocity the particles moved with
+    v0 = v.copy()
     mass = np.full(len(y), 2.0)
     step = con.resolve(y, y_old, v, mass, 1e-3)
     assert step.contacts == n
-    ref = np.array([_cube_surface_closest(q, half) for q in p])
     np.testing.assert_allclose(y[:n], ref, atol=1e-12)
     np.testing.assert_array_equal(y[n:], outside)
     assert not con.inside(y).any()
     assert con.resolve(y, y.copy(), v.copy(), mass, 1e-3).contacts == 0
-    # momentum: ice gained sum m v, the cube's nodes got the opposite impulse
-    ice = (mass[:, None] * v).sum(axis=0)
+    # momentum: ice gained sum m (v - v0), the cube's nodes got the opposite impulse
+    ice = (mass[:, None] * (v - v0)).sum(axis=0)
     np.testing.assert_allclose(ice + con.take_impulse().sum(axis=0), 0.0, atol=1e-12)
 
 
@@ -111,8 +112,10 @@ def test_open_surface_rim_and_moving_surface():
     pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     plate = RigidBody(pts, np.array([[0, 1, 2], [0, 2, 3]]), velocity=(0, 0, 1.0), name="plate")
     dt = 1e-3
-    plate.step(dt)                                       # plate now at z = 1e-3
     con = SurfaceContact(plate, search_radius=0.01)
+    start = plate.surface_points().copy()
+    plate.step(dt)                                       # plate now at z = 1e-3
+    con.set_surface(plate.surface_points(), plate.surface_velocities(), start=start)
     y_old = np.array([[0.3, 0.6, 0.0], [1.2, 0.5, 0.0]])
     v = np.array([[0.0, 0.0, -0.5], [0.0, 0.0, -0.5]])
     y = y_old + dt * v

@@ -75,7 +75,7 @@ def test_rigid_body_has_no_step_limit_no_energy_and_supplies_its_work():
     assert p.critical_time_step() == math.inf and p.stable_time_step() == math.inf
     assert p.kinetic_energy() == 0.0 and p.strain_energy() == 0.0
     assert p.prescribed_motion and p.frame_history() == {}
-    assert set(p.output_fields()) == {"u"}
+    assert set(p.output_fields()) == {"u", "v"}
     p.step(0.5)
     np.testing.assert_allclose(p.output_fields()["u"][:, 2], -0.5)
 
@@ -83,7 +83,7 @@ def test_rigid_body_has_no_step_limit_no_energy_and_supplies_its_work():
 def test_elastic_structure_reports_its_fields_energies_and_reactions(block):
     assert not block.prescribed_motion
     assert block.critical_time_step() == block.solver.critical_time_step()
-    assert set(block.output_fields()) == {"u", "von_mises"}
+    assert set(block.output_fields()) == {"u", "v", "von_mises"}
     assert set(block.frame_history()) == {"kinetic", "strain", "reaction_fixed"}
     rows = StructureSource(block).frame_rows()
     assert list(rows) == ["structures/block"]

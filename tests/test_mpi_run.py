@@ -87,13 +87,15 @@ def test_one_two_and_three_ranks_agree(tmp_path, text, body, structure):
     for ranks in (2, 3):
         r = results[ranks]
         assert r["meta"]["ranks"] == ranks
+        # round-off from the order of the sums over ranks (per structure substep: contact
+        # shares and impulses) grows where bonds break: 1e-12 at the first frame, up to 1e-6
         np.testing.assert_allclose(r["ice"][body]["u"], u_ref, rtol=0,
-                                   atol=1e-10 * np.abs(u_ref).max())
+                                   atol=1e-5 * np.abs(u_ref).max())
         np.testing.assert_array_equal(r["ice"][body]["damage"], ref["ice"][body]["damage"])
         np.testing.assert_allclose(r["histories"][f"loads/{structure}"]["force"], f_ref, rtol=0,
-                                   atol=1e-10 * np.abs(f_ref).max())
+                                   atol=1e-5 * np.abs(f_ref).max())
         np.testing.assert_allclose(r["structure"][structure]["u"], ref["structure"][structure]["u"],
-                                   rtol=0, atol=1e-10 * np.abs(ref["structure"][structure]["u"]).max())
+                                   rtol=0, atol=1e-5 * np.abs(ref["structure"][structure]["u"]).max())
 
 
 def test_per_rank_ice_files_read_as_one_run(tmp_path):

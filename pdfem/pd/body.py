@@ -1,8 +1,7 @@
 """An ice body: particles, bonds and state arrays, advanced by velocity-Verlet steps.
 
-The class holds flat arrays and calls the numba kernels of :mod:`pdfem.pd.kernels`; it has no
-loops over particles or bonds of its own. Particles are numbered in cell order (the order the
-neighbour search sorts them into), so bond partners sit close in memory.
+The class holds flat arrays and calls the numba kernels of :mod:`pdfem.pd.kernels` (no loops of
+its own). Particles are numbered in cell order, so bond partners sit close in memory.
 
 Bodies filled with a cubic lattice (:meth:`IceBody.from_shape`, hence every body of a case file)
 weigh their bonds with the cubic influence function of :mod:`pdfem.pd.influence`, which makes the
@@ -323,16 +322,15 @@ class IceBody(WholeBody):
             self.external_work += half * (self._power0 + self._constraint_force(self.time))
 
     def step(self, dt: float, after_drift=None) -> int:
-        """Advance by ``dt`` (s) with velocity Verlet; returns the number of bonds broken.
-        ``after_drift(y_old)``, if given, is called right after the position update with the
-        positions before it; it may correct ``y`` and ``v`` in place (contact does)."""
+        """Advance by ``dt`` (s) with velocity Verlet; the number of bonds broken. ``after_drift
+        (y_old)``, if given, may correct ``y`` and ``v`` right after the position update."""
         y_old = self.begin_step(dt, keep_old=after_drift is not None)
         if after_drift is not None:
             after_drift(y_old)
         nbroken = self.compute_forces()
         self.end_step(dt)
-        if nbroken:  # bonds that broke acted in this step; the next starts without them
-            self.compute_forces()
+        if nbroken:
+            self.compute_forces()  # the broken bonds acted in this step, not in the next
         return nbroken
 
     # -- diagnostics ---------------------------------------------------------------------------
