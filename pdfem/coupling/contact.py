@@ -116,16 +116,21 @@ def _detect(y, active, cell_start, cell_facets, origin, inv_h, dims, pts, tri, t
             normal[i, 2] = nz
 
 
+SHARE_UNIT = 2.0 ** 40
+"""Fixed-point unit of the contact weights summed per node: integer sums are exact, so the
+shares are the same bit for bit whatever the order of the particles or their split over ranks."""
+
+
 @numba.njit(cache=True)
 def _shares(facet, weight, tri, share):
-    """Add each contact's barycentric weights to ``share`` (per surface node): how many
-    contacts, weighted, a node's mass is split among in this step."""
+    """Add each contact's barycentric weights, in units of 1 / SHARE_UNIT, to ``share`` (int64,
+    per surface node): how many contacts, weighted, a node's mass is split among this step."""
     for i in range(facet.shape[0]):
         f = facet[i]
         if f < 0:
             continue
         for k in range(3):
-            share[tri[f, k]] += weight[i, k]
+            share[tri[f, k]] += np.int64(np.rint(weight[i, k] * SHARE_UNIT))
 
 
 @numba.njit(cache=True)
@@ -322,9 +327,9 @@ class SurfaceContact:
         _detect(y, active, g.cell_start, g.cell_facets, g.origin, g.inv_h, g.dims, self._points,
                 t.triangles, t.tri_edges, nr[0], nr[1], nr[2], t.boundary_edge, t.boundary_node,
                 self.search_radius, self._facet, self._weight, self._normal)
-        share = np.zeros(len(self._points))
-        _shares(self._facet, self._weight, t.triangles, share)
-        share = self.reduce(share)
+        counts = np.zeros(len(self._points), dtype=np.int64)
+        _shares(self._facet, self._weight, t.triangles, counts)
+        share = np.asarray(self.reduce(counts), dtype=np.float64) / SHARE_UNIT
         totals = np.zeros(4)
         per_particle = np.zeros((n, 3))
         _respond(self._facet, self._weight, y, y_old, v, mass, float(dt), self._points,
