@@ -5,9 +5,9 @@ Forces on an :class:`pdfem.fem.structure.ElasticStructure` in a step are the sum
 - constant nodal forces (N) set with :meth:`AppliedLoads.set_nodal_forces`,
 - surface tractions / pressures (Pa) added with :meth:`AppliedLoads.add_surface_load`
   (consistent nodal forces of the structure's elements, optionally scaled by a time history),
-- the contact forces (N) accumulated on the surface nodes with ``add_surface_forces``. They stay
-  applied in every later step until ``clear_surface_forces`` (so a contact load can be held over
-  FE substeps).
+- surface-node forces (N) set with ``add_surface_forces``; they stay applied in every later
+  step until ``clear_surface_forces``. (The coupled step gives the ice's contact impulses as
+  velocity jumps, :meth:`pdfem.fem.base.Structure.apply_surface_impulse`, not as forces.)
 """
 
 from __future__ import annotations

@@ -106,11 +106,17 @@ def triangle_areas(points: np.ndarray, tris: np.ndarray) -> np.ndarray:
 
 def triangle_min_angle(points: np.ndarray, tris: np.ndarray) -> np.ndarray:
     """Smallest interior angle (deg) of each triangle."""
-    p = points[tris]
-    worst = np.full(len(tris), np.pi)
-    for k in range(3):
-        u = p[:, (k + 1) % 3] - p[:, k]
-        v = p[:, (k + 2) % 3] - p[:, k]
+    return polygon_min_angle(points, tris)
+
+
+def polygon_min_angle(points: np.ndarray, polys: np.ndarray) -> np.ndarray:
+    """Smallest interior corner angle (deg) of each polygon (rows of corner nodes in order)."""
+    p = points[polys]
+    n = polys.shape[1]
+    worst = np.full(len(polys), np.pi)
+    for k in range(n):
+        u = p[:, (k + 1) % n] - p[:, k]
+        v = p[:, (k - 1) % n] - p[:, k]
         cosang = np.einsum("ij,ij->i", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
         worst = np.minimum(worst, np.arccos(np.clip(cosang, -1.0, 1.0)))
     return np.degrees(worst)
@@ -188,14 +194,7 @@ def quad_areas(points: np.ndarray, quads: np.ndarray) -> np.ndarray:
 
 def quad_min_angle(points: np.ndarray, quads: np.ndarray) -> np.ndarray:
     """Smallest interior corner angle (deg) of each quadrilateral."""
-    p = points[quads]
-    worst = np.full(len(quads), np.pi)
-    for k in range(4):
-        u = p[:, (k + 1) % 4] - p[:, k]
-        v = p[:, (k + 3) % 4] - p[:, k]
-        cosang = np.einsum("ij,ij->i", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
-        worst = np.minimum(worst, np.arccos(np.clip(cosang, -1.0, 1.0)))
-    return np.degrees(worst)
+    return polygon_min_angle(points, quads)
 
 
 def longest_edges(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
