@@ -209,8 +209,14 @@ class IceBody(WholeBody):
 
     @property
     def s0(self) -> float:
-        """The stretch above which bonds break (:attr:`failure`; inf: never)."""
-        return self.failure.stretch_limit()
+        """The stretch above which bonds break at zero dilatation (:attr:`failure`; inf: never)."""
+        return self.failure.stretch_limits()[0]
+
+    @property
+    def limits(self) -> tuple[float, float, float, float]:
+        """The failure law's stretch bounds (t0, t1, c0, c1) the kernels take
+        (:meth:`pdfem.pd.failure.base.FailureLaw.stretch_limits`)."""
+        return self.failure.stretch_limits()
 
     def cut_crack(self, point, normal, lo, hi) -> int:
         """Break the bonds crossing a planar pre-crack (see :func:`pdfem.pd.bonds.cut_crack`)."""
@@ -245,14 +251,15 @@ class IceBody(WholeBody):
         if self.loop == "pairs":
             nb = kernels.dilatation_and_forces(self.y, self.row_ptr, self.nbr, self.xi_len,
                                                self.weight, br, self.vol, self.m, mat.K, mat.mu,
-                                               self.s0, self.nofail, self.theta, self.f, self._ws)
+                                               self.limits, self.nofail, self.theta, self.f,
+                                               self._ws)
         else:
             fam_ptr, fam_nbr, fam_bond = self._family
             kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
                                       self.weight, br, self.vol, self.m, self.theta)
             nb = kernels.forces_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
                                        self.weight, br, self.vol, self.m, self.theta, mat.K,
-                                       mat.mu, self.s0, self.nofail, self.f)
+                                       mat.mu, self.limits, self.nofail, self.f)
         if nb:
             self.fracture_dissipated += self._ledger.released(self)
         return nb

@@ -157,7 +157,7 @@ class DistributedIce:
         b._ledger.prepare(b)
         self._exchange(b.y)
         broke = kernels.dilatation_and_forces(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight,
-                                              b._broken_arg(), b.vol, b.m, mat.K, mat.mu, b.s0,
+                                              b._broken_arg(), b.vol, b.m, mat.K, mat.mu, b.limits,
                                               b.nofail, b.theta, b.f, b._ws,
                                               between=self._exchange)
         if broke == 0:  # the usual step: no recount over the bonds

@@ -7,7 +7,11 @@ The linear peridynamic solid (Silling et al. 2007; DESIGN.md "Peridynamics") per
     force state:    t_ij = (3 K theta_i / m_i) l + (15 mu / m_i) e_d,   e_d = e - theta_i l / 3
                          = a_i l + b_i e,   a_i = theta_i (3K - 5mu) / m_i,   b_i = 15 mu / m_i
     pair force:     (t_ij + t_ji) omega (y_j - y_i) / r
-    breaking:       e / l > s0 (critical stretch), unless an end has ``nofail``
+    breaking:       e / l > s_max or e / l < s_min, unless an end has ``nofail``; the bounds
+                    are linear in the bond's mean dilatation (theta_i + theta_j) / 2:
+                    s_max = t0 + t1 theta, s_min = c0 + c1 theta (the failure law's
+                    :meth:`~pdfem.pd.failure.base.FailureLaw.stretch_limits`; the critical
+                    stretch is t0 = s0, t1 = 0, c0 = -inf, c1 = 0)
 
 Every kernel that evaluates the law (the pair loops of :mod:`pdfem.pd.pair_step_kernels` and
 :mod:`pdfem.pd.pair_sum_kernels`, the full-family reference loops of
@@ -15,7 +19,8 @@ Every kernel that evaluates the law (the pair loops of :mod:`pdfem.pd.pair_step_
 :mod:`pdfem.pd.distributed`) calls these helpers. They are ``inline="always"``: numba pastes
 their IR into the caller, which compiles them with its own flags, so a helper costs nothing and
 the floating-point operations (and their order) are exactly those of the formulas above.
-:func:`force_coefficients` is the per-particle half of the force state (a_i, b_i).
+:func:`force_coefficients` is the per-particle half of the force state (a_i, b_i) and of the
+stretch bounds (so that a bond's bound is the sum of its ends' halves, one gather each).
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 from numba import prange
 
 from pdfem.pd.chunk_kernels import U64, fma, twin
@@ -72,9 +78,24 @@ def dilatation_of(s, m):
 
 
 @numba.njit(**_INLINE)
-def breaks(e, l, s0, can_i, nofail, j):
-    """The critical-stretch test: stretch e / l above s0 and neither end ``nofail``."""
-    return e > s0 * l and can_i and nofail[j] == 0
+def breaks(e, l, hi, lo, can_i, nofail, j):
+    """The failure test: stretch e / l above ``hi`` or below ``lo`` (the sums of the two ends'
+    halves of the bounds, :func:`force_coefficients`) and neither end ``nofail``."""
+    return (e > hi * l or e < lo * l) and can_i and nofail[j] == 0
+
+
+def stretch_limits(s0) -> np.ndarray:
+    """The four stretch-bound coefficients (t0, t1, c0, c1) the kernels take (module doc).
+
+    ``s0`` is either a critical stretch (a scalar: ``(s0, 0, -inf, 0)``) or the four
+    coefficients of a failure law's :meth:`~pdfem.pd.failure.base.FailureLaw.stretch_limits`.
+    """
+    a = np.asarray(s0, dtype=np.float64).reshape(-1)
+    if a.shape[0] == 1:
+        return np.array([a[0], 0.0, -math.inf, 0.0])
+    if a.shape[0] != 4:
+        raise ValueError(f"stretch limits are a critical stretch or 4 numbers, got {a.shape[0]}")
+    return a
 
 
 @numba.njit(**_INLINE)
@@ -98,15 +119,24 @@ def energy_density(K, mu, theta, s, m):
 
 
 @twin(fastmath=False)
-def force_coefficients(m, theta, K, mu, coef):
-    """coef[:, 0] = a = theta (3K - 5mu) / m, coef[:, 1] = b = 15 mu / m (0 where m = 0)."""
+def force_coefficients(m, theta, K, mu, limits, coef):
+    """coef[:, 0] = a = theta (3K - 5mu) / m, coef[:, 1] = b = 15 mu / m (0 where m = 0);
+    coef[:, 2] = (t0 + t1 theta) / 2 and coef[:, 3] = (c0 + c1 theta) / 2, the particle's halves
+    of the upper and lower stretch bounds, with ``limits`` = (t0, t1, c0, c1)."""
     c1 = 3.0 * K - 5.0 * mu
     c2 = 15.0 * mu
+    t0 = limits[0]
+    t1 = limits[1]
+    l0 = limits[2]
+    l1 = limits[3]
     for p in prange(m.shape[0]):
+        th = theta[p]
         if m[p] > 0.0:
             im = 1.0 / m[p]
-            coef[p, 0] = theta[p] * c1 * im
+            coef[p, 0] = th * c1 * im
             coef[p, 1] = c2 * im
         else:
             coef[p, 0] = 0.0
             coef[p, 1] = 0.0
+        coef[p, 2] = 0.5 * t0 if t1 == 0.0 else 0.5 * (t0 + t1 * th)
+        coef[p, 3] = 0.5 * l0 if l1 == 0.0 else 0.5 * (l0 + l1 * th)

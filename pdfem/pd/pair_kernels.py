@@ -31,7 +31,8 @@ Per particle i with family j (e = |y_j - y_i| - |xi|, every family sum weighs me
 so that the total strain energy sum_i W_i V_i has gradient -V_i L_i with respect to y_i.
 
 A step computes the dilatation first, then forces with the break check: bond k breaks when its
-stretch e / |xi| exceeds ``s0`` and neither end has ``nofail``; a bond breaking in the force
+stretch e / |xi| leaves the failure law's bounds (above ``s0``, the critical stretch; a law may
+also bound it below, :mod:`pdfem.pd.lps_law`) and neither end has ``nofail``; a bond breaking in the force
 call contributes no force there and is marked broken (the dilatation of the same step still
 used it). Damage is the broken fraction of a particle's initial bonds.
 
@@ -46,7 +47,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pdfem.pd.lps_law import force_coefficients
+from pdfem.pd.lps_law import force_coefficients, stretch_limits
 from pdfem.pd.pair_step_kernels import dilatation_pairs, forces_pairs
 from pdfem.pd.pair_sum_kernels import damage_pairs, energy_pairs, family_sum_pairs
 from pdfem.pd.workspace import c_contiguous, workspace_for
@@ -218,7 +219,7 @@ def forces(
 ) -> int:
     """LPS force density with the bond-break check (pair loop).
 
-    A bond with stretch ``e / |xi| > s0`` whose ends both lack ``nofail`` breaks here: it is
+    A bond with stretch ``e / |xi|`` outside the bounds ``s0`` whose ends both lack ``nofail`` breaks here: it is
     marked in ``broken`` and contributes no force. Already broken bonds are skipped.
 
     Parameters
@@ -235,7 +236,10 @@ def forces(
     K, mu
         Bulk and shear modulus (Pa).
     s0
-        Critical stretch (``inf``: no breaking).
+        Critical stretch (``inf``: no breaking), or the four stretch-bound coefficients
+        (t0, t1, c0, c1) of a failure law: a bond breaks when its stretch is above
+        t0 + t1 theta or below c0 + c1 theta, theta its ends' mean dilatation
+        (:mod:`pdfem.pd.lps_law`).
     nofail
         (N,) uint8, 1 = the particle's bonds never break.
     f_out
@@ -249,10 +253,10 @@ def forces(
         Number of bonds broken in this call.
     """
     ws = workspace_for(ws, row_ptr, nbr)
-    force_coefficients(ws.parallel_particles, m, theta, K, mu, ws.coef)
+    force_coefficients(ws.parallel_particles, m, theta, K, mu, stretch_limits(s0), ws.coef)
     return int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                             check_broken(broken, nbr), vol,
-                            ws.coef, check_weight(weight, nbr), float(s0), nofail, ws.chunk_ptr,
+                            ws.coef, check_weight(weight, nbr), nofail, ws.chunk_ptr,
                             ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
                             _NO_R, False))
 
@@ -302,9 +306,10 @@ def dilatation_and_forces(
                      m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     if between is not None:
         between(theta_out)
-    force_coefficients(ws.parallel_particles, m, theta_out, K, mu, ws.coef)
+    force_coefficients(ws.parallel_particles, m, theta_out, K, mu, stretch_limits(s0),
+                       ws.coef)
     return int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
-                            float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
+                            nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
                             ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep))
 
 

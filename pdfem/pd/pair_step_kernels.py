@@ -107,14 +107,16 @@ def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, s
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail, f,
+def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail, f,
                 checked, r1, ov, base, rbuf, use_r):
     """Row i of the pair-loop forces; returns the number of bonds it broke."""
     yi0 = y[3 * i]
     yi1 = y[3 * i + 1]
     yi2 = y[3 * i + 2]
-    ai = coef[2 * i]
-    bi = coef[2 * i + 1]
+    ai = coef[4 * i]
+    bi = coef[4 * i + 1]
+    hi = coef[4 * i + 2]
+    lo = coef[4 * i + 3]
     vi = vol[i]
     can_i = nofail[i] == 0
     fx = 0.0
@@ -134,11 +136,11 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, n
         else:
             r = bond_length(d0, d1, d2)
         e = r - l
-        if breaks(e, l, s0, can_i, nofail, j):   # it still acts in this force evaluation
-            mark_broken(signed, wt, w, broken, k)
+        j4 = U64(4) * j
+        if breaks(e, l, hi + coef[j4 + U64(2)], lo + coef[j4 + U64(3)], can_i, nofail, j):
+            mark_broken(signed, wt, w, broken, k)  # it still acts in this force evaluation
             nb += 1
-        j2 = U64(2) * j
-        g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
+        g = pair_force_scalar(ai + coef[j4], bi + coef[j4 + U64(1)], l, e, w, r)
         gi = g * vol[j]
         fx = fma(gi, d0, fx)
         fy = fma(gi, d1, fy)
@@ -160,21 +162,21 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, n
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail,
+def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail,
                  f, r1, ov, base, rbuf, use_r):
     """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken."""
     nb = 0
     for i in range(r0, split):
-        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
+        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
                           nofail, f, False, r1, ov, base, rbuf, use_r)
     for i in range(split, r1):
-        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
+        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
                           nofail, f, True, r1, ov, base, rbuf, use_r)
     return nb
 
 
 @twin()
-def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, nofail,
+def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, nofail,
                  cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
     """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf."""
     y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
@@ -194,16 +196,16 @@ def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, n
         if signed:
             if use_r:
                 nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, s0, nofail, f, r1, ov, base, rbuf, True)
+                                  wt, nofail, f, r1, ov, base, rbuf, True)
             else:
                 nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, s0, nofail, f, r1, ov, base, rbuf, False)
+                                  wt, nofail, f, r1, ov, base, rbuf, False)
         elif use_r:
             nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, s0, nofail, f, r1, ov, base, rbuf, True)
+                              wt, nofail, f, r1, ov, base, rbuf, True)
         else:
             nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, s0, nofail, f, r1, ov, base, rbuf, False)
+                              wt, nofail, f, r1, ov, base, rbuf, False)
         counts[c] = nb
     for t in prange(C):
         add_overflow3(t, cb, ov_ptr, ov2, fout)

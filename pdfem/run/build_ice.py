@@ -14,6 +14,7 @@ from pdfem.case.config import IceConfig, RunConfig
 from pdfem.case.ice import IceMaterialSection
 from pdfem.errors import InputError
 from pdfem.pd.body import IceBody
+from pdfem.pd.failure import failure_law
 from pdfem.pd.influence import isotropy_gain
 from pdfem.pd.materials.lps import IceMaterial
 
@@ -24,7 +25,9 @@ def ice_material(m: IceMaterialSection) -> IceMaterial:
     return IceMaterial(density=m.density, youngs_modulus=m.youngs_modulus,
                        poisson_ratio=m.poisson_ratio,
                        fracture_energy=m.fracture_energy if m.critical_stretch is None else None,
-                       critical_stretch=m.critical_stretch)
+                       critical_stretch=m.critical_stretch,
+                       compressive_strength=m.compressive_strength,
+                       friction_angle=m.friction_angle)
 
 
 def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:
@@ -50,8 +53,10 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
         raise InputError(file, f"{cfg.field}.horizon_factor", str(exc),
                          cfg.horizon / cfg.dx) from None
     try:
-        body = IceBody.from_shape(cfg.name, cfg.shape, ice_material(cfg.material), cfg.dx, cfg.horizon,
-                                  loop=run.pd_loop)
+        material = ice_material(cfg.material)
+        law = failure_law(cfg.material.failure, material, cfg.horizon)
+        body = IceBody.from_shape(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon,
+                                  loop=run.pd_loop, failure=law)
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.shape", str(exc)) from None
     if body.n < 2:

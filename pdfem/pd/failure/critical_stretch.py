@@ -8,6 +8,7 @@ bonds never break (s0 = inf). The numba kernels compare each bond's stretch with
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 
@@ -33,3 +34,11 @@ class CriticalStretch:
     def stretch_limit(self) -> float:
         """s0, the stretch above which a bond breaks."""
         return self.s0
+
+    def stretch_limits(self) -> tuple[float, float, float, float]:
+        """(s0, 0, -inf, 0): above s0 at any dilatation, never in compression."""
+        return (self.s0, 0.0, -math.inf, 0.0)
+
+    def describe(self) -> str:
+        """``critical stretch s0 = ...``."""
+        return f"critical stretch s0 = {self.s0:.3e}"

@@ -137,6 +137,13 @@ class IceMaterial:
     critical_stretch
         The critical stretch itself (dimensionless, > 0); wins over ``fracture_energy``.
         With neither given, bonds never break (``s0 = inf``).
+    tensile_strength
+        Uniaxial tensile strength (Pa), for the ``"ice"`` failure law (default there:
+        E s0).
+    compressive_strength
+        Uniaxial compressive strength (Pa), for the ``"ice"`` failure law.
+    friction_angle
+        Internal friction angle (degrees) of the ``"ice"`` failure law's Coulomb criterion.
     """
 
     density: float
@@ -144,6 +151,9 @@ class IceMaterial:
     poisson_ratio: float
     fracture_energy: float | None = None
     critical_stretch: float | None = None
+    tensile_strength: float | None = None
+    compressive_strength: float | None = None
+    friction_angle: float = 30.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.density) and self.density > 0.0):
