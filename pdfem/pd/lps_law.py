@@ -106,6 +106,25 @@ def pair_force_scalar(a, b, l, e, w, r):
 
 
 @numba.njit(**_INLINE)
+def contact_bond_scalar(b, rc, w, r):
+    """A broken bond that still pushes (crushed ice, :mod:`pdfem.pd.failure.ice`): with
+    b = b_i + b_j, its length at breaking ``rc`` and weight magnitude ``w``, the force scalar
+    b w (r - rc) / r while r < rc (times V_j (y_j - y_i): the repulsion on i), else 0.
+    Its potential is b w V_i V_j (rc - r)^2 / 2 (:func:`contact_bond_energy`)."""
+    if r < rc:
+        return b * w * (r - rc) / r
+    return 0.0
+
+
+@numba.njit(**_INLINE)
+def contact_bond_energy(b, rc, w, r):
+    """The potential of :func:`contact_bond_scalar` per V_i V_j: b w (rc - r)^2 / 2 (0 if r >= rc)."""
+    if r < rc:
+        return 0.5 * b * w * (rc - r) * (rc - r)
+    return 0.0
+
+
+@numba.njit(**_INLINE)
 def deviatoric_extension(e, theta_third, l):
     """e_d = e - theta l / 3, with ``theta_third`` = theta / 3 of the particle concerned."""
     return e - theta_third * l

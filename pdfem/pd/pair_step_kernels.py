@@ -22,6 +22,7 @@ from pdfem.pd.lps_law import (
     bond_length,
     bond_vector,
     breaks,
+    contact_bond_scalar,
     dilatation_of,
     dilatation_term,
     is_broken,
@@ -108,8 +109,11 @@ def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, s
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail, f,
-                checked, r1, ov, base, rbuf, use_r):
-    """Row i of the pair-loop forces; returns the number of bonds it broke."""
+                checked, r1, ov, base, rbuf, use_r, rest, granular):
+    """Row i of the pair-loop forces; returns the number of bonds it broke. With ``granular``,
+    a broken bond whose ``rest`` stretch is set (not NaN) pushes its ends apart when shorter
+    than that (:func:`~pdfem.pd.lps_law.contact_bond_scalar`), and a bond breaking here gets
+    its current stretch as ``rest``."""
     yi0 = y[3 * i]
     yi1 = y[3 * i + 1]
     yi2 = y[3 * i + 2]
@@ -125,22 +129,34 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofai
     nb = 0
     for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
         w = wt[k]
-        if is_broken(signed, w, broken, k):
-            continue
         j = U64(nbr[k])
         j3 = U64(3) * j
-        l = xi_len[k]
-        d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
-        if use_r:
-            r = rbuf[k]
-        else:
-            r = bond_length(d0, d1, d2)
-        e = r - l
         j4 = U64(4) * j
-        if breaks(e, l, hi + coef[j4 + U64(2)], lo + coef[j4 + U64(3)], can_i, nofail, j):
-            mark_broken(signed, wt, w, broken, k)  # it still acts in this force evaluation
-            nb += 1
-        g = pair_force_scalar(ai + coef[j4], bi + coef[j4 + U64(1)], l, e, w, r)
+        l = xi_len[k]
+        if is_broken(signed, w, broken, k):
+            if not granular:
+                continue
+            sb = rest[k]
+            if sb != sb:  # NaN: broken for good
+                continue
+            d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
+            r = bond_length(d0, d1, d2)
+            g = contact_bond_scalar(bi + coef[j4 + U64(1)], l * (1.0 + sb), abs(w), r)
+            if g == 0.0:
+                continue
+        else:
+            d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
+            if use_r:
+                r = rbuf[k]
+            else:
+                r = bond_length(d0, d1, d2)
+            e = r - l
+            if breaks(e, l, hi + coef[j4 + U64(2)], lo + coef[j4 + U64(3)], can_i, nofail, j):
+                mark_broken(signed, wt, w, broken, k)  # it still acts in this force evaluation
+                if granular:
+                    rest[k] = e / l
+                nb += 1
+            g = pair_force_scalar(ai + coef[j4], bi + coef[j4 + U64(1)], l, e, w, r)
         gi = g * vol[j]
         fx = fma(gi, d0, fx)
         fy = fma(gi, d1, fy)
@@ -163,22 +179,23 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofai
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail,
-                 f, r1, ov, base, rbuf, use_r):
+                 f, r1, ov, base, rbuf, use_r, rest, granular):
     """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken."""
     nb = 0
     for i in range(r0, split):
         nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
-                          nofail, f, False, r1, ov, base, rbuf, use_r)
+                          nofail, f, False, r1, ov, base, rbuf, use_r, rest, granular)
     for i in range(split, r1):
         nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
-                          nofail, f, True, r1, ov, base, rbuf, use_r)
+                          nofail, f, True, r1, ov, base, rbuf, use_r, rest, granular)
     return nb
 
 
 @twin()
 def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, nofail,
-                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
-    """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf."""
+                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r, rest, granular):
+    """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf;
+    with ``granular`` broken bonds with a ``rest`` stretch act in compression (row doc)."""
     y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
     coef = coef2.reshape(coef2.size)
     f = fout.reshape(fout.size)
@@ -196,16 +213,16 @@ def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, nofai
         if signed:
             if use_r:
                 nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, nofail, f, r1, ov, base, rbuf, True)
+                                  wt, nofail, f, r1, ov, base, rbuf, True, rest, granular)
             else:
                 nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, nofail, f, r1, ov, base, rbuf, False)
+                                  wt, nofail, f, r1, ov, base, rbuf, False, rest, granular)
         elif use_r:
             nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, nofail, f, r1, ov, base, rbuf, True)
+                              wt, nofail, f, r1, ov, base, rbuf, True, rest, granular)
         else:
             nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, nofail, f, r1, ov, base, rbuf, False)
+                              wt, nofail, f, r1, ov, base, rbuf, False, rest, granular)
         counts[c] = nb
     for t in prange(C):
         add_overflow3(t, cb, ov_ptr, ov2, fout)

@@ -37,6 +37,11 @@ class FailureLaw(Protocol):
     name: str
     """Registry name of the law (:data:`pdfem.pd.failure.FAILURE_LAWS`)."""
 
+    broken_bonds_push: bool
+    """True if a broken bond keeps pushing its ends apart when compressed below the length it
+    broke at (crushed ice: :func:`pdfem.pd.lps_law.contact_bond_scalar`); False: broken bonds
+    carry nothing."""
+
     def stretch_limits(self) -> tuple[float, float, float, float]:
         """(t0, t1, c0, c1): a bond breaks when its stretch (dimensionless) is above
         t0 + t1 theta or below c0 + c1 theta (module doc); ``inf`` / ``-inf``: never."""

@@ -24,6 +24,7 @@ class CriticalStretch:
 
     s0: float
     name: str = "critical_stretch"
+    broken_bonds_push: bool = False
 
     @classmethod
     def from_material(cls, material, delta: float) -> "CriticalStretch":

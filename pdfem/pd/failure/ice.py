@@ -36,11 +36,15 @@ sigma_c + kappa sigma_3; hydrostatic pressure breaks nothing. The strengths are 
 any particle spacing, because both criteria are in stresses, not in stretches scaled by the
 horizon (the limits, and the implied fracture energy, are in ``docs/ice_failure.md``).
 
-A bond broken in compression is a broken bond like any other: its strain energy is fracture
-dissipation (:mod:`pdfem.pd.fracture`), and the particles it joined now interact only through
-the short-range contact force (:mod:`pdfem.forces.short_range`, switched on for a body with this
-law), which is repulsive only: crushed ice carries compression, not tension, is never deleted
-and can be squeezed out of the contact zone.
+A broken bond (in either mode) gives up its strain energy as fracture dissipation
+(:mod:`pdfem.pd.fracture`) but keeps pushing its ends apart whenever they come closer than the
+length it broke at (:func:`pdfem.pd.lps_law.contact_bond_scalar`: the bond's deviatoric
+stiffness b = b_i + b_j, compression only, starting from zero force and energy, so breaking
+creates no energy). Crushed ice is thus granular: it carries compression and, through the
+compressed bonds at every angle in a horizon, shear in proportion to the confinement (a
+frictional resistance), but no tension; it is never deleted and can be squeezed out of the
+contact zone. Pairs that were never bonded meet through the short-range contact force
+(:mod:`pdfem.forces.short_range`, switched on for a body with this law).
 
 The friction angle of ice: Coulombic shear faulting of ice under confinement follows
 sigma_1 = sigma_c + kappa sigma_3 with an internal friction coefficient mu_i = 0.5-0.9 (Schulson
@@ -81,6 +85,7 @@ class IceFailure:
     K: float
     mu: float
     name: str = "ice"
+    broken_bonds_push: bool = True
 
     @classmethod
     def from_material(cls, material, delta: float) -> "IceFailure":
