@@ -222,8 +222,8 @@ class IceBody(BodyCheckpoint, WholeBody):
         return self.failure.stretch_limits()[0]
 
     @property
-    def limits(self) -> tuple[float, float, float, float]:
-        """The failure law's stretch bounds (t0, t1, c0, c1) the kernels take
+    def limits(self) -> tuple[float, ...]:
+        """The failure law's stretch bounds (t0, t1, c0, c1, d0, d1) the kernels take
         (:meth:`pdfem.pd.failure.base.FailureLaw.stretch_limits`)."""
         return self.failure.stretch_limits()
 
@@ -261,7 +261,8 @@ class IceBody(BodyCheckpoint, WholeBody):
             nb = kernels.dilatation_and_forces(self.y, self.row_ptr, self.nbr, self.xi_len,
                                                self.weight, br, self.vol, self.m, mat.K, mat.mu,
                                                self.limits, self.nofail, self.theta, self.f,
-                                               self._ws, rest=self.rest)
+                                               self._ws, rest=self.rest,
+                                               crush_yield=self.failure.crush_yield)
         else:
             fam_ptr, fam_nbr, fam_bond = self._family
             kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
@@ -271,6 +272,8 @@ class IceBody(BodyCheckpoint, WholeBody):
                                        mat.mu, self.limits, self.nofail, self.f)
         if nb:
             self.fracture_dissipated += self._ledger.released(self)
+        if self.rest is not None:
+            self.fracture_dissipated += self._ws.crush_dissipated
         return nb
 
     def _apply_constraints(self, t: float) -> None:
@@ -310,7 +313,7 @@ class IceBody(BodyCheckpoint, WholeBody):
         breaking here are no dissipation of the run (the run starts from the state after)."""
         self._apply_constraints(self.time)
         before = self.fracture_dissipated
-        self.compute_forces()
+        self.refresh_forces()
         self.fracture_dissipated = before
 
     def begin_step(self, dt: float, keep_old: bool = False) -> np.ndarray | None:
@@ -346,8 +349,14 @@ class IceBody(BodyCheckpoint, WholeBody):
         nbroken = self.compute_forces()
         self.end_step(dt)
         if nbroken:
-            self.compute_forces()  # the broken bonds acted in this step, not in the next
+            self.refresh_forces()  # the broken bonds acted in this step, not in the next
         return nbroken
+
+    def refresh_forces(self) -> None:
+        """The forces without the bonds the last pass broke, recomputed until no further bond
+        breaks (:meth:`pdfem.pd.ice_interface.IceParticles.refresh_forces`)."""
+        while self.compute_forces():
+            pass
 
     # -- diagnostics ---------------------------------------------------------------------------
     def displacement(self) -> np.ndarray:

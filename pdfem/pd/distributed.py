@@ -133,6 +133,7 @@ class DistributedIce:
         # bonds whose lower end is owned here: counted once over all ranks
         self._counted = plan.owned[np.repeat(np.arange(len(loc)), np.diff(row_ptr))]
         self._counted_broken = self._broken_count()
+        self._owned_rows = plan.owned.astype(np.uint8)  # whose crushing energy this rank counts
 
     # -- exchanges ---------------------------------------------------------------------------
     def _exchange(self, values: np.ndarray) -> None:
@@ -160,7 +161,11 @@ class DistributedIce:
         broke = kernels.dilatation_and_forces(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight,
                                               b._broken_arg(), b.vol, b.m, mat.K, mat.mu, b.limits,
                                               b.nofail, b.theta, b.f, b._ws,
-                                              between=self._exchange, rest=b.rest)
+                                              between=self._exchange, rest=b.rest,
+                                              crush_yield=b.failure.crush_yield,
+                                              owned=self._owned_rows)
+        if b.rest is not None:
+            b.fracture_dissipated += b._ws.crush_dissipated
         if broke == 0:  # the usual step: no recount over the bonds
             return 0
         b.fracture_dissipated += b._ledger.released(b, self.plan.owned)
@@ -172,7 +177,7 @@ class DistributedIce:
         """Initial forces (call once before the first step)."""
         self.body._apply_constraints(self.body.time)
         before = self.body.fracture_dissipated
-        self._compute_forces()
+        self.refresh_forces()
         self.body.fracture_dissipated = before  # breaks before the start: not the run's
 
     def step(self, dt: float) -> int:
@@ -181,8 +186,14 @@ class DistributedIce:
         broken = int(self.comm.allreduce_sum(self._compute_forces()))
         self.body.end_step(dt)
         if broken:  # bonds that broke acted in this step; the next starts without them
-            self._compute_forces()
+            self.refresh_forces()
         return broken
+
+    def refresh_forces(self) -> None:
+        """The forces without the bonds the last pass broke, recomputed on all ranks until no
+        further bond breaks anywhere."""
+        while self.comm.allreduce_sum(self._compute_forces()):
+            pass
 
     # -- the IceParticles interface (pdfem.pd.ice_interface) ----------------------------------
     # Arrays are the local ones (owned and halo particles); sums are over owned particles and

@@ -87,7 +87,7 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
 
 
 @numba.njit(cache=True)
-def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coef2, nofail):
+def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coef2, nofail, lim):
     """Mark the bonds that break at these positions (after the forces, in which they still
     acted), each once from its smaller-index end; the number marked."""
     y = y2.reshape(y2.size)
@@ -95,8 +95,7 @@ def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coe
     nb = 0
     for i in range(fam_ptr.shape[0] - 1):
         can_i = nofail[i] == 0
-        hi = coef[4 * i + 2]
-        lo = coef[4 * i + 3]
+        hth = coef[4 * i + 2]
         for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
             j = U64(fam_nbr[q])
             if j <= U64(i):
@@ -108,8 +107,8 @@ def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coe
             l = xi_len[k]
             d0, d1, d2 = bond_vector(y, U64(3) * j, y[3 * i], y[3 * i + 1], y[3 * i + 2])
             j4 = U64(4) * j
-            if breaks(bond_length(d0, d1, d2) - l, l, hi + coef[j4 + U64(2)],
-                      lo + coef[j4 + U64(3)], can_i, nofail, j):
+            if breaks(bond_length(d0, d1, d2) - l, l, hth + coef[j4 + U64(2)], lim, can_i,
+                      nofail, j):
                 mark_broken(signed, wt, w, broken, k)
                 nb += 1
     return nb
@@ -179,11 +178,11 @@ def forces_family(
     n = fam_ptr.shape[0] - 1
     if coef is None:
         coef = np.empty((n, 4))
-    force_coefficients(True, m, theta, K, mu, stretch_limits(s0), coef)
+    force_coefficients(True, m, theta, K, mu, coef)
     yc, signed, wt = c_contiguous(y, "y"), check_broken(broken, xi_len), check_weight(weight, xi_len)
     _forces_family(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol,
                    c_contiguous(coef, "coef"), wt, c_contiguous(f_out, "f_out"))
     return int(_mark_breaks(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coef,
-                            nofail))
+                            nofail, stretch_limits(s0)))
 
 

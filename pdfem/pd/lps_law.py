@@ -8,10 +8,10 @@ The linear peridynamic solid (Silling et al. 2007; DESIGN.md "Peridynamics") per
                          = a_i l + b_i e,   a_i = theta_i (3K - 5mu) / m_i,   b_i = 15 mu / m_i
     pair force:     (t_ij + t_ji) omega (y_j - y_i) / r
     breaking:       e / l > s_max or e / l < s_min, unless an end has ``nofail``; the bounds
-                    are linear in the bond's mean dilatation (theta_i + theta_j) / 2:
-                    s_max = t0 + t1 theta, s_min = c0 + c1 theta (the failure law's
-                    :meth:`~pdfem.pd.failure.base.FailureLaw.stretch_limits`; the critical
-                    stretch is t0 = s0, t1 = 0, c0 = -inf, c1 = 0)
+                    depend on the bond's mean dilatation theta = (theta_i + theta_j) / 2:
+                    s_max = t0 + t1 theta, s_min = min(c0 + c1 theta, d0 + d1 theta) (the
+                    failure law's :meth:`~pdfem.pd.failure.base.FailureLaw.stretch_limits`;
+                    the critical stretch is (s0, 0, -inf, 0, -inf, 0))
 
 Every kernel that evaluates the law (the pair loops of :mod:`pdfem.pd.pair_step_kernels` and
 :mod:`pdfem.pd.pair_sum_kernels`, the full-family reference loops of
@@ -19,8 +19,8 @@ Every kernel that evaluates the law (the pair loops of :mod:`pdfem.pd.pair_step_
 :mod:`pdfem.pd.distributed`) calls these helpers. They are ``inline="always"``: numba pastes
 their IR into the caller, which compiles them with its own flags, so a helper costs nothing and
 the floating-point operations (and their order) are exactly those of the formulas above.
-:func:`force_coefficients` is the per-particle half of the force state (a_i, b_i) and of the
-stretch bounds (so that a bond's bound is the sum of its ends' halves, one gather each).
+:func:`force_coefficients` is the per-particle half of the force state (a_i, b_i) and half the
+particle's dilatation (so that a bond's mean dilatation is the sum of its ends', one gather each).
 """
 
 from __future__ import annotations
@@ -78,23 +78,27 @@ def dilatation_of(s, m):
 
 
 @numba.njit(**_INLINE)
-def breaks(e, l, hi, lo, can_i, nofail, j):
-    """The failure test: stretch e / l above ``hi`` or below ``lo`` (the sums of the two ends'
-    halves of the bounds, :func:`force_coefficients`) and neither end ``nofail``."""
-    return (e > hi * l or e < lo * l) and can_i and nofail[j] == 0
+def breaks(e, l, th, lim, can_i, nofail, j):
+    """The failure test: stretch e / l outside the bounds ``lim`` = (t0, t1, c0, c1, d0, d1)
+    at the bond's mean dilatation ``th`` (module doc), and neither end ``nofail``."""
+    if not (can_i and nofail[j] == 0):
+        return False
+    if e > (lim[0] + lim[1] * th) * l:
+        return True
+    return e < min(lim[2] + lim[3] * th, lim[4] + lim[5] * th) * l
 
 
 def stretch_limits(s0) -> np.ndarray:
-    """The four stretch-bound coefficients (t0, t1, c0, c1) the kernels take (module doc).
+    """The six stretch-bound coefficients (t0, t1, c0, c1, d0, d1) the kernels take (module doc).
 
-    ``s0`` is either a critical stretch (a scalar: ``(s0, 0, -inf, 0)``) or the four
+    ``s0`` is either a critical stretch (a scalar: ``(s0, 0, -inf, 0, -inf, 0)``) or the six
     coefficients of a failure law's :meth:`~pdfem.pd.failure.base.FailureLaw.stretch_limits`.
     """
     a = np.asarray(s0, dtype=np.float64).reshape(-1)
     if a.shape[0] == 1:
-        return np.array([a[0], 0.0, -math.inf, 0.0])
-    if a.shape[0] != 4:
-        raise ValueError(f"stretch limits are a critical stretch or 4 numbers, got {a.shape[0]}")
+        return np.array([a[0], 0.0, -math.inf, 0.0, -math.inf, 0.0])
+    if a.shape[0] != 6:
+        raise ValueError(f"stretch limits are a critical stretch or 6 numbers, got {a.shape[0]}")
     return a
 
 
@@ -106,22 +110,44 @@ def pair_force_scalar(a, b, l, e, w, r):
 
 
 @numba.njit(**_INLINE)
-def contact_bond_scalar(b, rc, w, r):
-    """A broken bond that still pushes (crushed ice, :mod:`pdfem.pd.failure.ice`): with
-    b = b_i + b_j, its length at breaking ``rc`` and weight magnitude ``w``, the force scalar
-    b w (r - rc) / r while r < rc (times V_j (y_j - y_i): the repulsion on i), else 0.
-    Its potential is b w V_i V_j (rc - r)^2 / 2 (:func:`contact_bond_energy`)."""
-    if r < rc:
-        return b * w * (r - rc) / r
+def crushed_bond(b, l, p, sy, w, r, vij):
+    """A broken bond that still pushes (crushed ice, :mod:`pdfem.pd.failure.ice`): a
+    compression-only, elastic-perfectly-plastic spring between its ends.
+
+    With b = b_i + b_j, weight magnitude ``w`` and its plastic rest length r_p = l (1 + p), it
+    pushes with k (r_p - r), k = b w V_i V_j, while r < r_p, up to a compression of ``sy`` l
+    (the yield stretch); beyond it r_p slides to r + sy l and the spring's force k sy l does
+    work that is dissipated. Returns the force scalar g (times V_j (y_j - y_i): the force
+    density on i, as :func:`pair_force_scalar`), the new p and the energy dissipated (J;
+    ``vij`` = V_i V_j)."""
+    rp = l * (1.0 + p)
+    c = rp - r
+    if c <= 0.0:
+        return 0.0, p, 0.0
+    cap = sy * l
+    diss = 0.0
+    if c > cap:
+        p = (r + cap - l) / l
+        diss = b * w * cap * c - b * w * cap * cap  # F_cap (r_p - r_p,new)
+        diss *= vij
+        c = cap
+    return -b * w * c / r, p, diss
+
+
+@numba.njit(**_INLINE)
+def crushed_bond_energy(b, l, p, w, r):
+    """The stored energy of :func:`crushed_bond` per V_i V_j: b w (r_p - r)^2 / 2 (0 if r >= r_p)."""
+    c = l * (1.0 + p) - r
+    if c > 0.0:
+        return 0.5 * b * w * c * c
     return 0.0
 
 
 @numba.njit(**_INLINE)
-def contact_bond_energy(b, rc, w, r):
-    """The potential of :func:`contact_bond_scalar` per V_i V_j: b w (rc - r)^2 / 2 (0 if r >= rc)."""
-    if r < rc:
-        return 0.5 * b * w * (rc - r) * (rc - r)
-    return 0.0
+def crushed_rest(e, l, sy):
+    """p of a bond breaking at extension ``e``: its plastic rest length is min(l, r + sy l),
+    so it pushes at once with at most the yield force (no drop of the force it carried)."""
+    return min(0.0, e / l + sy)
 
 
 @numba.njit(**_INLINE)
@@ -138,16 +164,11 @@ def energy_density(K, mu, theta, s, m):
 
 
 @twin(fastmath=False)
-def force_coefficients(m, theta, K, mu, limits, coef):
+def force_coefficients(m, theta, K, mu, coef):
     """coef[:, 0] = a = theta (3K - 5mu) / m, coef[:, 1] = b = 15 mu / m (0 where m = 0);
-    coef[:, 2] = (t0 + t1 theta) / 2 and coef[:, 3] = (c0 + c1 theta) / 2, the particle's halves
-    of the upper and lower stretch bounds, with ``limits`` = (t0, t1, c0, c1)."""
+    coef[:, 2] = theta / 2 (a bond's mean dilatation is the sum over its ends), coef[:, 3] = 0."""
     c1 = 3.0 * K - 5.0 * mu
     c2 = 15.0 * mu
-    t0 = limits[0]
-    t1 = limits[1]
-    l0 = limits[2]
-    l1 = limits[3]
     for p in prange(m.shape[0]):
         th = theta[p]
         if m[p] > 0.0:
@@ -157,5 +178,5 @@ def force_coefficients(m, theta, K, mu, limits, coef):
         else:
             coef[p, 0] = 0.0
             coef[p, 1] = 0.0
-        coef[p, 2] = 0.5 * t0 if t1 == 0.0 else 0.5 * (t0 + t1 * th)
-        coef[p, 3] = 0.5 * l0 if l1 == 0.0 else 0.5 * (l0 + l1 * th)
+        coef[p, 2] = 0.5 * th
+        coef[p, 3] = 0.0

@@ -57,6 +57,7 @@ if TYPE_CHECKING:
 
 _NO_R = np.zeros(0)  # stands for "no bond-length buffer" (read-only by convention)
 _NO_REST = np.zeros(0, dtype=np.float32)  # "broken bonds never push" (read-only by convention)
+_ALL_ROWS = np.zeros(0, dtype=np.uint8)  # "every row's crushing energy counts" (read-only)
 
 
 def rest_arg(rest: np.ndarray | None, per_pair: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -227,6 +228,8 @@ def forces(
     f_out: np.ndarray,
     ws: PairWorkspace | None = None,
     rest: np.ndarray | None = None,
+    crush_yield: float = np.inf,
+    owned: np.ndarray | None = None,
 ) -> int:
     """LPS force density with the bond-break check (pair loop).
 
@@ -247,10 +250,10 @@ def forces(
     K, mu
         Bulk and shear modulus (Pa).
     s0
-        Critical stretch (``inf``: no breaking), or the four stretch-bound coefficients
-        (t0, t1, c0, c1) of a failure law: a bond breaks when its stretch is above
-        t0 + t1 theta or below c0 + c1 theta, theta its ends' mean dilatation
-        (:mod:`pdfem.pd.lps_law`).
+        Critical stretch (``inf``: no breaking), or the six stretch-bound coefficients
+        (t0, t1, c0, c1, d0, d1) of a failure law: a bond breaks when its stretch is above
+        t0 + t1 theta or below min(c0 + c1 theta, d0 + d1 theta), theta its ends' mean
+        dilatation (:mod:`pdfem.pd.lps_law`).
     nofail
         (N,) uint8, 1 = the particle's bonds never break.
     f_out
@@ -258,9 +261,14 @@ def forces(
     ws
         Optional :class:`PairWorkspace` for this pair list.
     rest
-        Optional (P,) float32 (NaN where unset): with it, broken bonds keep pushing in
-        compression (crushed ice, :func:`pdfem.pd.lps_law.contact_bond_scalar`) from the
-        stretch they broke at, which a bond breaking here records.
+        Optional (P,) float32, NaN where unset: with it, broken bonds are crushed bonds,
+        compression-only elastic-plastic springs with plastic rest length |xi| (1 + rest)
+        (:func:`pdfem.pd.lps_law.crushed_bond`), which a bond breaking here becomes.
+    crush_yield
+        The crushed bonds' yield compression (stretch, > 0).
+    owned
+        Optional (N,) uint8: the rows whose crushed bonds' dissipation counts (default all).
+        The energy they dissipated in this call (J) is left in ``ws.crush_dissipated``.
 
     Returns
     -------
@@ -269,12 +277,16 @@ def forces(
     """
     ws = workspace_for(ws, row_ptr, nbr)
     rest, granular = rest_arg(rest, nbr)
-    force_coefficients(ws.parallel_particles, m, theta, K, mu, stretch_limits(s0), ws.coef)
-    return int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
+    owned = _ALL_ROWS if owned is None else owned
+    force_coefficients(ws.parallel_particles, m, theta, K, mu, ws.coef)
+    nb = int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                             check_broken(broken, nbr), vol,
                             ws.coef, check_weight(weight, nbr), nofail, ws.chunk_ptr,
                             ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
-                            _NO_R, False, rest, granular))
+                            _NO_R, False, rest, granular, float(crush_yield), owned, ws.crush,
+                            stretch_limits(s0)))
+    ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
+    return nb
 
 
 def dilatation_and_forces(
@@ -295,6 +307,8 @@ def dilatation_and_forces(
     ws: PairWorkspace,
     between=None,
     rest: np.ndarray | None = None,
+    crush_yield: float = np.inf,
+    owned: np.ndarray | None = None,
 ) -> int:
     """One OSB step's internal forces: :func:`dilatation`, then :func:`forces` (pair loops).
 
@@ -307,7 +321,7 @@ def dilatation_and_forces(
     Parameters are those of :func:`dilatation` and :func:`forces`; ``theta_out`` (N,) and
     ``f_out`` (N, 3) are overwritten; ``ws`` is required. ``between``, if given, is called with
     ``theta_out`` between the two passes (an MPI rank's body exchanges its halo's dilatations
-    there). ``rest``: as in :func:`forces`.
+    there). ``rest``, ``crush_yield``, ``owned``: as in :func:`forces`.
 
     Returns
     -------
@@ -320,12 +334,15 @@ def dilatation_and_forces(
     wt = check_weight(weight, nbr)
     signed = check_broken(broken, nbr)
     rest, granular = rest_arg(rest, nbr)
+    owned = _ALL_ROWS if owned is None else owned
     dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, signed, vol,
                      m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     if between is not None:
         between(theta_out)
-    force_coefficients(ws.parallel_particles, m, theta_out, K, mu, stretch_limits(s0),
-                       ws.coef)
-    return int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
-                            nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
-                            ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular))
+    force_coefficients(ws.parallel_particles, m, theta_out, K, mu, ws.coef)
+    nb = int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
+                          nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
+                          ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular,
+                          float(crush_yield), owned, ws.crush, stretch_limits(s0)))
+    ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
+    return nb

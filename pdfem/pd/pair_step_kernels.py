@@ -22,7 +22,9 @@ from pdfem.pd.lps_law import (
     bond_length,
     bond_vector,
     breaks,
-    contact_bond_scalar,
+    crushed_bond,
+    crushed_bond_energy,
+    crushed_rest,
     dilatation_of,
     dilatation_term,
     is_broken,
@@ -109,24 +111,25 @@ def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, s
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail, f,
-                checked, r1, ov, base, rbuf, use_r, rest, granular):
-    """Row i of the pair-loop forces; returns the number of bonds it broke. With ``granular``,
-    a broken bond whose ``rest`` stretch is set (not NaN) pushes its ends apart when shorter
-    than that (:func:`~pdfem.pd.lps_law.contact_bond_scalar`), and a bond breaking here gets
-    its current stretch as ``rest``."""
+                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim):
+    """Row i of the pair-loop forces; returns the number of bonds it broke and, with
+    ``granular``, the energy its crushed bonds dissipated (J, if ``counted``): a broken bond
+    whose ``rest`` (p) is set (not NaN) is a crushed bond (:func:`~pdfem.pd.lps_law.
+    crushed_bond`), and a bond breaking here becomes one (:func:`~pdfem.pd.lps_law.
+    crushed_rest`), the energy its spring starts with counted as negative dissipation."""
     yi0 = y[3 * i]
     yi1 = y[3 * i + 1]
     yi2 = y[3 * i + 2]
     ai = coef[4 * i]
     bi = coef[4 * i + 1]
-    hi = coef[4 * i + 2]
-    lo = coef[4 * i + 3]
+    hth = coef[4 * i + 2]
     vi = vol[i]
     can_i = nofail[i] == 0
     fx = 0.0
     fy = 0.0
     fz = 0.0
     nb = 0
+    diss = 0.0
     for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
         w = wt[k]
         j = U64(nbr[k])
@@ -141,9 +144,12 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofai
                 continue
             d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
             r = bond_length(d0, d1, d2)
-            g = contact_bond_scalar(bi + coef[j4 + U64(1)], l * (1.0 + sb), abs(w), r)
+            g, p, dk = crushed_bond(bi + coef[j4 + U64(1)], l, sb, sy, abs(w), r, vi * vol[j])
             if g == 0.0:
                 continue
+            if dk != 0.0:
+                rest[k] = p
+                diss += dk
         else:
             d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
             if use_r:
@@ -151,10 +157,13 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofai
             else:
                 r = bond_length(d0, d1, d2)
             e = r - l
-            if breaks(e, l, hi + coef[j4 + U64(2)], lo + coef[j4 + U64(3)], can_i, nofail, j):
+            if breaks(e, l, hth + coef[j4 + U64(2)], lim, can_i, nofail, j):
                 mark_broken(signed, wt, w, broken, k)  # it still acts in this force evaluation
                 if granular:
-                    rest[k] = e / l
+                    p = crushed_rest(e, l, sy)
+                    rest[k] = p
+                    diss -= crushed_bond_energy(bi + coef[j4 + U64(1)], l, rest[k], abs(w),
+                                                r) * vi * vol[j]
                 nb += 1
             g = pair_force_scalar(ai + coef[j4], bi + coef[j4 + U64(1)], l, e, w, r)
         gi = g * vol[j]
@@ -174,28 +183,41 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofai
     f[3 * i] += fx
     f[3 * i + 1] += fy
     f[3 * i + 2] += fz
-    return nb
+    if not counted:
+        diss = 0.0
+    return nb, diss
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail,
-                 f, r1, ov, base, rbuf, use_r, rest, granular):
-    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken."""
+                 f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim):
+    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken and the
+    energy the crushed bonds of the ``owned`` rows (all if empty) dissipated."""
     nb = 0
+    diss = 0.0
+    every = owned.shape[0] == 0
     for i in range(r0, split):
-        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
-                          nofail, f, False, r1, ov, base, rbuf, use_r, rest, granular)
+        n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
+                           nofail, f, False, r1, ov, base, rbuf, use_r, rest, granular, sy,
+                           every or owned[i] != 0, lim)
+        nb += n
+        diss += d
     for i in range(split, r1):
-        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
-                          nofail, f, True, r1, ov, base, rbuf, use_r, rest, granular)
-    return nb
+        n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
+                           nofail, f, True, r1, ov, base, rbuf, use_r, rest, granular, sy,
+                           every or owned[i] != 0, lim)
+        nb += n
+        diss += d
+    return nb, diss
 
 
 @twin()
 def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, nofail,
-                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r, rest, granular):
+                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r, rest, granular, sy, owned,
+                 crush, lim):
     """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf;
-    with ``granular`` broken bonds with a ``rest`` stretch act in compression (row doc)."""
+    with ``granular`` broken bonds with a ``rest`` stretch act in compression (row doc), and
+    crush[c] gets the energy chunk c's crushed bonds dissipated."""
     y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
     coef = coef2.reshape(coef2.size)
     f = fout.reshape(fout.size)
@@ -212,18 +234,19 @@ def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, nofai
         # one copy of the row loop per flag combination (constants inside the hot loop)
         if signed:
             if use_r:
-                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, nofail, f, r1, ov, base, rbuf, True, rest, granular)
+                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, nofail, f, r1, ov, base, rbuf, True, rest, granular, sy, owned, lim)
             else:
-                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, nofail, f, r1, ov, base, rbuf, False, rest, granular)
+                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, nofail, f, r1, ov, base, rbuf, False, rest, granular, sy, owned, lim)
         elif use_r:
-            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, nofail, f, r1, ov, base, rbuf, True, rest, granular)
+            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, nofail, f, r1, ov, base, rbuf, True, rest, granular, sy, owned, lim)
         else:
-            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, nofail, f, r1, ov, base, rbuf, False, rest, granular)
+            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, nofail, f, r1, ov, base, rbuf, False, rest, granular, sy, owned, lim)
         counts[c] = nb
+        crush[c] = dc
     for t in prange(C):
         add_overflow3(t, cb, ov_ptr, ov2, fout)
     total = 0

@@ -5,7 +5,7 @@ for race-free deterministic threading (:mod:`pdfem.pd.chunk_kernels`), every bon
 its ends: :func:`family_sum_pairs` (weighted volume and the time-step sums),
 :func:`energy_pairs` (strain energy density, :mod:`pdfem.pd.lps_law`) and
 :func:`damage_pairs` (broken fraction of the initial bonds), and
-:func:`contact_bond_energy_pairs` (the potential of broken bonds that still push). Float flags: ``FASTMATH`` of
+:func:`contact_bond_energy_pairs` (the energy stored in crushed bonds). Float flags: ``FASTMATH`` of
 :mod:`pdfem.pd.chunk_kernels` (no FMA contraction, so the code compiled in this process and the
 code loaded from numba's cache give the same bits).
 """
@@ -16,7 +16,7 @@ import numba
 from numba import prange
 
 from pdfem.pd.chunk_kernels import U64, add_overflow1, twin
-from pdfem.pd.lps_law import (bond_length, contact_bond_energy, deviatoric_extension,
+from pdfem.pd.lps_law import (bond_length, crushed_bond_energy, deviatoric_extension,
                               energy_density, is_broken)
 
 
@@ -140,8 +140,8 @@ def damage_pairs(row_ptr, nbr, broken, signed, wt, cb, ov_ptr, ov, nb, deg):
 @numba.njit(cache=True)
 def contact_bond_energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, wt, rest, vol, m, mu,
                               owned):
-    """Total potential (J) of the broken bonds that still push (:func:`~pdfem.pd.lps_law.
-    contact_bond_energy`, ``rest`` not NaN) in the rows i with ``owned[i]`` (all rows if
+    """Total energy (J) stored in the crushed bonds (:func:`~pdfem.pd.lps_law.
+    crushed_bond_energy`, ``rest`` not NaN) in the rows i with ``owned[i]`` (all rows if
     ``owned`` is empty), summed serially in bond order."""
     total = 0.0
     c = 15.0 * mu
@@ -160,5 +160,5 @@ def contact_bond_energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, wt, rest,
             j = U64(nbr[k])
             bj = c / m[j] if m[j] > 0.0 else 0.0
             r = bond_length(y[j, 0] - y[i, 0], y[j, 1] - y[i, 1], y[j, 2] - y[i, 2])
-            total += contact_bond_energy(bi + bj, xi_len[k] * (1.0 + sb), abs(w), r) * vol[i] * vol[j]
+            total += crushed_bond_energy(bi + bj, xi_len[k], sb, abs(w), r) * vol[i] * vol[j]
     return total

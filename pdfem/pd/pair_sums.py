@@ -62,10 +62,10 @@ def contact_bond_energy(
     mu: float,
     owned: np.ndarray | None = None,
 ) -> float:
-    """Potential (J) of the broken bonds that still push in compression (``rest`` of
-    :func:`pdfem.pd.pair_kernels.forces`): sum of (b_i + b_j) |omega| V_i V_j (r_c - r)^2 / 2
-    over those shorter than their breaking length r_c = |xi| (1 + rest), b = 15 mu / m; only
-    the bonds i < j with ``owned[i]`` if ``owned`` ((N,) bool) is given."""
+    """Energy (J) stored in the crushed bonds (``rest`` of :func:`pdfem.pd.pair_kernels.forces`):
+    sum of (b_i + b_j) |omega| V_i V_j (r_p - r)^2 / 2 over those shorter than their plastic
+    rest length r_p = |xi| (1 + rest), b = 15 mu / m; only the bonds i < j with ``owned[i]``
+    if ``owned`` ((N,) bool) is given."""
     rest, _ = rest_arg(rest, nbr)
     mask = np.zeros(0, dtype=np.bool_) if owned is None else np.asarray(owned, dtype=np.bool_)
     return float(contact_bond_energy_pairs(c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,

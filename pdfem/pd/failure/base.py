@@ -6,11 +6,11 @@ the interval [s_min, s_max] and neither end is a no-fail particle. The bounds ar
 bond's mean dilatation theta = (theta_i + theta_j) / 2 (the volumetric strain of its ends, which
 the step has just computed)::
 
-    s_max = t0 + t1 theta,      s_min = c0 + c1 theta
+    s_max = t0 + t1 theta,      s_min = min(c0 + c1 theta, d0 + d1 theta)
 
 so a law can bound the bond's normal stress sigma_n = lambda theta + 2 mu s from above
 (tension) and below (compression, with a pressure dependence), not just its stretch. A failure
-law is the object that supplies (t0, t1, c0, c1): the kernels stay plain functions over flat
+law is the object that supplies (t0, t1, c0, c1, d0, d1): the kernels stay plain functions over flat
 arrays, the law decides what they compare the stretch with, and the ice body
 (:class:`pdfem.pd.body.IceBody`) holds one law and hands its :meth:`FailureLaw.stretch_limits`
 to the kernel every step. Every rank of a distributed body evaluates a bond from the same
@@ -42,9 +42,14 @@ class FailureLaw(Protocol):
     broke at (crushed ice: :func:`pdfem.pd.lps_law.contact_bond_scalar`); False: broken bonds
     carry nothing."""
 
-    def stretch_limits(self) -> tuple[float, float, float, float]:
-        """(t0, t1, c0, c1): a bond breaks when its stretch (dimensionless) is above
-        t0 + t1 theta or below c0 + c1 theta (module doc); ``inf`` / ``-inf``: never."""
+    crush_yield: float
+    """The yield compression (stretch) of those pushing bonds (:func:`pdfem.pd.lps_law.
+    crushed_bond`); ``inf`` if they do not push."""
+
+    def stretch_limits(self) -> tuple[float, ...]:
+        """(t0, t1, c0, c1, d0, d1): a bond breaks when its stretch (dimensionless) is above
+        t0 + t1 theta or below min(c0 + c1 theta, d0 + d1 theta) (module doc); ``inf`` /
+        ``-inf``: never."""
         ...
 
     def describe(self) -> str:

@@ -25,6 +25,7 @@ class CriticalStretch:
     s0: float
     name: str = "critical_stretch"
     broken_bonds_push: bool = False
+    crush_yield: float = math.inf
 
     @classmethod
     def from_material(cls, material, delta: float) -> "CriticalStretch":
@@ -36,9 +37,9 @@ class CriticalStretch:
         """s0, the stretch above which a bond breaks."""
         return self.s0
 
-    def stretch_limits(self) -> tuple[float, float, float, float]:
-        """(s0, 0, -inf, 0): above s0 at any dilatation, never in compression."""
-        return (self.s0, 0.0, -math.inf, 0.0)
+    def stretch_limits(self) -> tuple[float, ...]:
+        """(s0, 0, -inf, 0, -inf, 0): above s0 at any dilatation, never in compression."""
+        return (self.s0, 0.0, -math.inf, 0.0, -math.inf, 0.0)
 
     def describe(self) -> str:
         """``critical stretch s0 = ...``."""

@@ -17,17 +17,21 @@ with theta the bond's mean dilatation (theta_i + theta_j) / 2, the nonlocal volu
 that the LPS step has just computed. A bond breaks
 
 - in tension (Rankine) when sigma_n > sigma_t;
-- in compression (Mohr-Coulomb) when  p_n - kappa q_n >= sigma_c,  with p_n = -sigma_n the
-  bond's normal pressure and q_n = (P - p_n) / 2 the mean pressure on the two directions normal
-  to it (P = -3 K theta, minus the stress trace), kappa = (1 + sin phi) / (1 - sin phi) the
-  Coulomb slope of a friction angle phi: sigma_1 = sigma_c + kappa sigma_3 for a bond along the
-  largest compression.
+- in compression (Mohr-Coulomb with a tension cut-off) when
+  p_n - kappa max(q_n, 0) >= sigma_c,  with p_n = -sigma_n the bond's normal pressure and
+  q_n = (P - p_n) / 2 the mean pressure on the two directions normal to it (P = -3 K theta,
+  minus the stress trace), kappa = (1 + sin phi) / (1 - sin phi) the Coulomb slope of a
+  friction angle phi: sigma_1 = sigma_c + kappa sigma_3 for a bond along the largest
+  compression under a confining pressure sigma_3 >= 0. Lateral tension does not lower the
+  strength below sigma_c (the Coulomb line is not extended into tension, where ice fails by
+  the tension criterion instead).
 
-Both are bounds on the stretch linear in theta, the form the kernels take
+Both are bounds on the stretch in theta, the form the kernels take
 (:mod:`pdfem.pd.failure.base`)::
 
     s_max = sigma_t / (2 mu) - lambda theta / (2 mu)
-    s_min = (-sigma_c + (3 kappa K / 2 - lambda (1 + kappa / 2)) theta) / (2 mu (1 + kappa / 2))
+    s_min = min((-sigma_c + (3 kappa K / 2 - lambda (1 + kappa / 2)) theta) / (2 mu (1 + kappa / 2)),
+                (-sigma_c - lambda theta) / (2 mu))
 
 Checks (tests/test_ice_failure.py): uniaxial tension sigma breaks the axial bond at sigma_t;
 uniaxial compression breaks the axial bond at sigma_c and never a lateral one (sigma_n = 0 there,
@@ -37,13 +41,16 @@ any particle spacing, because both criteria are in stresses, not in stretches sc
 horizon (the limits, and the implied fracture energy, are in ``docs/ice_failure.md``).
 
 A broken bond (in either mode) gives up its strain energy as fracture dissipation
-(:mod:`pdfem.pd.fracture`) but keeps pushing its ends apart whenever they come closer than the
-length it broke at (:func:`pdfem.pd.lps_law.contact_bond_scalar`: the bond's deviatoric
-stiffness b = b_i + b_j, compression only, starting from zero force and energy, so breaking
-creates no energy). Crushed ice is thus granular: it carries compression and, through the
-compressed bonds at every angle in a horizon, shear in proportion to the confinement (a
-frictional resistance), but no tension; it is never deleted and can be squeezed out of the
-contact zone. Pairs that were never bonded meet through the short-range contact force
+(:mod:`pdfem.pd.fracture`) and becomes a crushed bond (:func:`pdfem.pd.lps_law.crushed_bond`):
+a compression-only, elastic-perfectly-plastic spring with the bond's deviatoric stiffness
+b = b_i + b_j, whose plastic rest length starts at min(|xi|, r + s_y |xi|) (so a bond broken in
+compression goes on pushing with at most its yield force: breaking releases no stress wave)
+and slides when it is compressed by more than s_y = sigma_c / E. The energy its spring starts
+with and the work done while it slides are counted with the fracture dissipation. Crushed ice
+is thus granular: it carries compression up to a crushing pressure and, through the compressed
+bonds at every angle in a horizon, shear in proportion to the confinement (a frictional
+resistance), but no tension; it is never deleted and can be squeezed out of the contact
+zone. Pairs that were never bonded meet through the short-range contact force
 (:mod:`pdfem.forces.short_range`, switched on for a body with this law).
 
 The friction angle of ice: Coulombic shear faulting of ice under confinement follows
@@ -87,6 +94,16 @@ class IceFailure:
     name: str = "ice"
     broken_bonds_push: bool = True
 
+    @property
+    def crush_yield(self) -> float:
+        """sigma_c / (2 E): crushed bonds yield at half the compressive strength's uniaxial strain."""
+        return 0.5 * self.compressive_strength / self.youngs_modulus
+
+    @property
+    def youngs_modulus(self) -> float:
+        """E = 9 K mu / (3 K + mu) (Pa)."""
+        return 9.0 * self.K * self.mu / (3.0 * self.K + self.mu)
+
     @classmethod
     def from_material(cls, material, delta: float) -> "IceFailure":
         """The law of an ice material (:class:`pdfem.pd.materials.lps.IceMaterial`): its
@@ -100,14 +117,16 @@ class IceFailure:
         return cls(float(st), float(material.compressive_strength),
                    float(material.friction_angle), float(material.K), float(material.mu))
 
-    def stretch_limits(self) -> tuple[float, float, float, float]:
-        """(t0, t1, c0, c1) of the module doc's s_max and s_min."""
+    def stretch_limits(self) -> tuple[float, ...]:
+        """(t0, t1, c0, c1, d0, d1) of the module doc's s_max and s_min."""
         K, mu = self.K, self.mu
         lam = K - 2.0 * mu / 3.0
         kappa = coulomb_slope(self.friction_angle)
         d = 2.0 * mu * (1.0 + 0.5 * kappa)
+        sc = self.compressive_strength
         return (self.tensile_strength / (2.0 * mu), -lam / (2.0 * mu),
-                -self.compressive_strength / d, (1.5 * kappa * K - lam * (1.0 + 0.5 * kappa)) / d)
+                -sc / d, (1.5 * kappa * K - lam * (1.0 + 0.5 * kappa)) / d,
+                -sc / (2.0 * mu), -lam / (2.0 * mu))
 
     def describe(self) -> str:
         """``ice: tensile ... MPa, compressive ... MPa, friction angle ... deg``."""
