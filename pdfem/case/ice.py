@@ -56,6 +56,15 @@ class IceMaterialSection(Section):
         "criterion: the compressive strength rises by (1 + sin phi) / (1 - sin phi) times the "
         "confining pressure. Default: 30 (Schulson & Duval 2009: friction coefficient 0.5-0.9).")
 
+    transition_rate: Annotated[float, Positive("1/s")] | None = Field(
+        None, description="Ductile-to-brittle transition strain rate (1/s) of the \"ice\" law: "
+        "below it the compressive strength falls as (rate / transition_rate)^rate_exponent "
+        "(ductile ice), at and above it it is compressive_strength. Ice: 1e-4 to 1e-3 "
+        "(Schulson & Duval 2009). Default: none (no rate dependence).")
+    rate_exponent: Annotated[float, Number(gt=0.0, le=1.0)] = Field(
+        1.0 / 3.0, description="Exponent of the ductile strength's rise with the strain rate (-), "
+        "with transition_rate. Default: 1/3 (Glen's flow law, n = 3).")
+
     @model_validator(mode="after")
     def _one_criterion(self) -> "IceMaterialSection":
         if {"fracture_energy", "critical_stretch"} <= self.model_fields_set:
@@ -65,7 +74,8 @@ class IceMaterialSection(Section):
             raise fail('failure = "ice" needs compressive_strength (Pa), e.g. 3.0e6',
                        key="compressive_strength")
         if self.failure != "ice":
-            for key in ("compressive_strength", "friction_angle"):
+            for key in ("compressive_strength", "friction_angle", "transition_rate",
+                        "rate_exponent"):
                 if key in self.model_fields_set:
                     raise fail(f'{key} is a parameter of failure = "ice"; set failure = "ice" '
                                "or remove it", key=key)

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pdfem.pd import kernels
+from pdfem.pd.body_diagnostics import BodyDiagnostics
 from pdfem.pd.body_state import BodyCheckpoint
 from pdfem.pd.bonds import bond_lengths, cut_crack
 from pdfem.pd.constraints import VelocityConstraint
@@ -51,10 +52,11 @@ from pdfem.geometry.lattice import fill
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.pd.pair_kernels import SIGNED
 from pdfem.pd.search import cell_pairs
+from pdfem.pd.strain_rate import RateTracker
 
 
 @dataclass
-class IceBody(BodyCheckpoint, WholeBody):
+class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     """State of one peridynamic ice body (all arrays SI, particles in cell order).
 
     Build one with :meth:`from_points` (or :func:`pdfem.run.build_ice.build_ice_body` from a case).
@@ -94,6 +96,8 @@ class IceBody(BodyCheckpoint, WholeBody):
     # (P,) float32 stretch at which each bond broke, NaN if intact or broken for good: with a
     # failure law whose broken bonds keep pushing in compression (crushed ice), else None
     rest: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # strain rates and strength factors, for a law whose strength depends on the rate
+    rates: RateTracker | None = field(default=None, repr=False, compare=False)
     _ledger: FractureLedger = field(default_factory=FractureLedger, init=False, repr=False,
                                     compare=False)
 
@@ -105,6 +109,8 @@ class IceBody(BodyCheckpoint, WholeBody):
                 raise ValueError(f"the {self.failure.name!r} failure law needs the pair loop "
                                  "(pd_loop = \"pairs\")")
             self.rest = np.full(self.nbr.shape[0], np.nan, dtype=np.float32)
+        if self.failure.rate_dependent and self.rates is None:
+            self.rates = RateTracker(self.failure, self.material.poisson_ratio)
 
     @classmethod
     def from_points(cls, name: str, x: np.ndarray, material: IceMaterial, dx: float, delta: float,
@@ -222,6 +228,11 @@ class IceBody(BodyCheckpoint, WholeBody):
         return self.failure.stretch_limits()[0]
 
     @property
+    def strength_factors(self) -> np.ndarray | None:
+        """(N,) factors on the compressive strength from the strain rates (None: 1)."""
+        return None if self.rates is None else self.rates.factors
+
+    @property
     def limits(self) -> tuple[float, ...]:
         """The failure law's stretch bounds (t0, t1, c0, c1, d0, d1) the kernels take
         (:meth:`pdfem.pd.failure.base.FailureLaw.stretch_limits`)."""
@@ -262,7 +273,8 @@ class IceBody(BodyCheckpoint, WholeBody):
                                                self.weight, br, self.vol, self.m, mat.K, mat.mu,
                                                self.limits, self.nofail, self.theta, self.f,
                                                self._ws, rest=self.rest,
-                                               crush_yield=self.failure.crush_yield)
+                                               crush_yield=self.failure.crush_yield,
+                                               strength=self.strength_factors)
         else:
             fam_ptr, fam_nbr, fam_bond = self._family
             kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
@@ -323,6 +335,8 @@ class IceBody(BodyCheckpoint, WholeBody):
         ``f``) and :meth:`end_step`."""
         half = 0.5 * dt
         t0 = self.time
+        if self.rates is not None:
+            self.rates.advance(self.theta, dt)
         self._power0 = self._constraint_force(t0) if self.constraints else 0.0
         self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
         self._apply_constraints(t0 + half)
@@ -357,36 +371,3 @@ class IceBody(BodyCheckpoint, WholeBody):
         breaks (:meth:`pdfem.pd.ice_interface.IceParticles.refresh_forces`)."""
         while self.compute_forces():
             pass
-
-    # -- diagnostics ---------------------------------------------------------------------------
-    def displacement(self) -> np.ndarray:
-        """(N,3) displacement y - x0, m."""
-        return self.y - self.x0
-
-    def damage(self) -> np.ndarray:
-        """(N,) broken fraction of each particle's initial bonds."""
-        return kernels.damage(self.row_ptr, self.nbr, self._broken_arg(), self.n, self._ws,
-                              self.weight)
-
-    def kinetic_energy(self) -> float:
-        """Kinetic energy, J."""
-        return 0.5 * self.material.density * float(np.sum(self.vol * np.einsum("ij,ij->i", self.v, self.v)))
-
-    def strain_energy(self) -> float:
-        """Elastic energy of the unbroken bonds at the current positions, and of the broken
-        bonds that still push (crushed ice), J."""
-        mat = self.material
-        theta = np.empty(self.n)  # of the current bond set (bonds broken this step excluded)
-        br = self._broken_arg()
-        kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight, br,
-                           self.vol, self.m, theta, self._ws)
-        W = kernels.strain_energy(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight,
-                                  br, self.vol, self.m, theta, mat.K, mat.mu, self._ws)
-        crushed = 0.0 if self.rest is None else kernels.contact_bond_energy(
-            self.y, self.row_ptr, self.nbr, self.xi_len, self.weight, br, self.rest, self.vol,
-            self.m, mat.mu)
-        return float(np.dot(W, self.vol)) + crushed
-
-    def momentum(self) -> np.ndarray:
-        """Linear momentum (3,), kg m/s."""
-        return self.material.density * (self.vol @ self.v)

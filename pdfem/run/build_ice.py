@@ -27,7 +27,8 @@ def ice_material(m: IceMaterialSection) -> IceMaterial:
                        fracture_energy=m.fracture_energy if m.critical_stretch is None else None,
                        critical_stretch=m.critical_stretch,
                        compressive_strength=m.compressive_strength,
-                       friction_angle=m.friction_angle)
+                       friction_angle=m.friction_angle, transition_rate=m.transition_rate,
+                       rate_exponent=m.rate_exponent)
 
 
 def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:
