@@ -63,7 +63,8 @@ class VelocitySection(Section):
     region: RegionSection = Field(description="The region: `box`, `cylinder` or `sphere` (m). "
                                               "Required.")
     velocity: Annotated[Vec3, Vector("m/s")] | None = Field(
-        None, description="Prescribed velocity (m/s). Required unless path is given.")
+        None,
+        description="Prescribed velocity (m/s). Default: none (required unless path is given).")
     ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
         0.0, description="Time over which the velocity ramps up linearly from 0 (s). With "
                          "velocity only. Default: 0.")

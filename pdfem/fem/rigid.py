@@ -106,7 +106,7 @@ class RigidBody(Structure):
         (3,) angular velocity w (rad/s).
     centre
         (3,) centre of rotation at t = 0 (m); it moves with the translation.
-    path
+    translation
         A :class:`~pdfem.geometry.path.DisplacementPath` of the translation instead of
         ``velocity`` (the body starts at the path's displacement at t = 0).
     name
@@ -117,7 +117,7 @@ class RigidBody(Structure):
 
     def __init__(self, points: np.ndarray, triangles: np.ndarray, velocity=(0.0, 0.0, 0.0),
                  angular_velocity=(0.0, 0.0, 0.0), centre=(0.0, 0.0, 0.0), name: str = "rigid",
-                 orient: bool = True, path=None):
+                 orient: bool = True, translation=None):
         self.name = name
         self.x0 = np.ascontiguousarray(points, dtype=np.float64)
         if self.x0.ndim != 2 or self.x0.shape[1] != 3:
@@ -130,7 +130,7 @@ class RigidBody(Structure):
         self.velocity = np.asarray(velocity, dtype=np.float64).reshape(3).copy()
         self.angular_velocity = np.asarray(angular_velocity, dtype=np.float64).reshape(3).copy()
         self.centre0 = np.asarray(centre, dtype=np.float64).reshape(3).copy()
-        self.path = path
+        self.translation = translation
         self.time = 0.0
         self._time_carry = 0.0
         self._surface_forces = np.zeros((len(self.x0), 3))
@@ -145,13 +145,15 @@ class RigidBody(Structure):
     # ------------------------------------------------------------------ pose
     def centre(self) -> np.ndarray:
         """(3,) current centre of rotation c0 + v t, or c0 + u(t) on a path (m)."""
-        if self.path is not None:
-            return self.centre0 + self.path.displacement(self.time)
+        if self.translation is not None:
+            return self.centre0 + self.translation.displacement(self.time)
         return self.centre0 + self.velocity * self.time
 
     def translation_velocity(self) -> np.ndarray:
         """(3,) current velocity of the centre (m/s): v, or the slope of the path's segment."""
-        return self.velocity if self.path is None else self.path.velocity(self.time)
+        if self.translation is None:
+            return self.velocity
+        return self.translation.velocity(self.time)
 
     def rotation(self) -> np.ndarray:
         """(3, 3) current rotation R(w t)."""

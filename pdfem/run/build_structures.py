@@ -44,7 +44,7 @@ def _rigid(cfg: StructureConfig, path: Path, file: str) -> RigidBody:
     motion = None if cfg.path is None else DisplacementPath(cfg.path)
     return RigidBody.from_msh(path, cfg.contact_group, velocity=cfg.velocity,
                               angular_velocity=cfg.angular_velocity, centre=cfg.center,
-                              name=cfg.name, path=motion)
+                              name=cfg.name, translation=motion)
 
 
 def _elastic(cfg: StructureConfig, path: Path, file: str) -> ElasticStructure:
