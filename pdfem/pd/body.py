@@ -232,7 +232,7 @@ class IceBody(WholeBody):
         c = VelocityConstraint(idx, np.asarray(velocity, dtype=np.float64), float(ramp_time), path,
                                name or next_name(self.constraints, "prescribed"))
         self.constraints.append(c)
-        c.start(self)
+        c.impose(self, self.time)
 
     def fix(self, mask: np.ndarray, name: str = "") -> None:
         """Hold the particles in ``mask`` in place; ``name`` (default ``fixed<k>``) names the
@@ -264,10 +264,10 @@ class IceBody(WholeBody):
         return nb
 
     def _apply_constraints(self, t: float, step: float = 0.0) -> None:
-        """v = the prescribed velocity at ``t`` (s); with ``step``, the drift's over it."""
+        """The prescribed motion at ``t`` (s); with ``step``, the drift velocity over it."""
         self.v[self.fixed] = 0.0
         for c in self.constraints:
-            self.v[c.index] = c.drift(t, step) if step else c.value(t)
+            c.impose(self, t, step)
 
     def reactions(self) -> dict[str, np.ndarray]:
         """The reaction (N, global axes) of each fixed or prescribed region by name: the force

@@ -43,12 +43,16 @@ class VelocityConstraint:
         """Whether the particles move (False: a fixed region, whose work is zero)."""
         return self.path is not None or bool(np.any(self.velocity))
 
-    def start(self, body) -> None:
-        """Put the particles of ``body`` on the motion at ``body.time``: their velocity and, for
-        a path, their displacement."""
-        body.v[self.index] = self.value(body.time)
+    def impose(self, body, t: float, step: float = 0.0) -> None:
+        """Put the particles of ``body`` on the motion at ``t`` (s): their velocity and, for a
+        path, their position (x0 + u(t): exact, no round-off gathered over the steps); with
+        ``step`` (s), only the velocity of the drift over ``[t, t + step]``."""
+        if step:
+            body.v[self.index] = self.drift(t, step)
+            return
+        body.v[self.index] = self.value(t)
         if self.path is not None:
-            body.y[self.index] = body.x0[self.index] + self.path.displacement(body.time)
+            body.y[self.index] = body.x0[self.index] + self.path.displacement(t)
 
     def value(self, t: float) -> np.ndarray:
         """The prescribed velocity (m/s) at time ``t`` (s)."""
