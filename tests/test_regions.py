@@ -200,9 +200,10 @@ def test_rigid_path_with_velocity_exits_2(tmp_path, capsys):
     assert "structure[0].motion.path" in err and "not both" in err, err
 
 
-CASE = RUN.replace("1e-4", "3e-4").replace("5e-5", "1e-4") + "checkpoint_interval_steps = 50\n" \
-    + ICE + f"fixed = [ {{ name = 'left', box = {LEFT[8:-2]} }} ]\n" \
-    + f"prescribed_velocity = [ {{ region = {RIGHT}, path = [[0, 0, 0, 0], [2e-4, 2e-6, 0, 0]] }} ]\n"
+CASE = (RUN.replace("1e-4", "3e-4").replace("5e-5", "1e-4") + "checkpoint_interval_steps = 50\n"
+        + ICE + f"fixed = [ {{ name = 'left', box = {LEFT[8:-2]} }} ]\n"
+        + f"prescribed_velocity = [ {{ region = {RIGHT}, "
+        + "path = [[0, 0, 0, 0], [2e-4, 2e-6, 0, 0]] } ]\n")
 
 
 def test_run_writes_region_reactions_and_post_shows_them(tmp_path):

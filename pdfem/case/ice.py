@@ -145,8 +145,10 @@ class IceSection(Section):
     def region_names(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
         """Names of the fixed and the prescribed regions (given, or fixed<k>, prescribed<k> by
         position in their list, from 1)."""
-        return (tuple(r.name or f"fixed{k + 1}" for k, r in enumerate(self.fixed)),
-                tuple(r.name or f"prescribed{k + 1}" for k, r in enumerate(self.prescribed_velocity)))
+        fixed = tuple(r.name or f"fixed{k + 1}" for k, r in enumerate(self.fixed))
+        driven = tuple(r.name or f"prescribed{k + 1}"
+                       for k, r in enumerate(self.prescribed_velocity))
+        return fixed, driven
 
     @model_validator(mode="after")
     def _unique_region_names(self) -> "IceSection":

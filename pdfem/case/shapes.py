@@ -13,7 +13,8 @@ import re
 from pathlib import Path
 from typing import Annotated, Any, ClassVar
 
-from pydantic import BeforeValidator, ConfigDict, Field, PrivateAttr, ValidationInfo, model_validator
+from pydantic import (BeforeValidator, ConfigDict, Field, PrivateAttr, ValidationInfo,
+                      model_validator)
 
 from pdfem.case.fields import Name, Positive, Section, Vec3, Vector, fail, tidy_schema
 from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
