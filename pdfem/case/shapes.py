@@ -159,7 +159,7 @@ def _region_name_check(v: Any) -> str:
 
 
 #: The name of a fixed or prescribed region (letters, digits, ``_ + -``).
-RegionName = Annotated[str, Field(pattern=_REGION_NAME.pattern[:-2] + "$"),
+RegionName = Annotated[str, Field(pattern="^" + _REGION_NAME.pattern[:-2] + "$"),
                        BeforeValidator(_region_name_check)]
 
 
