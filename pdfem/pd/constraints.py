@@ -7,9 +7,13 @@ driver exerts on the ice, is what keeps its particles on the prescribed motion::
 
     R = sum_i V_i (rho a_prescribed - f_i - rho g)
 
-(``f`` force density N/m^3, ``g`` the body's uniform acceleration). The work it does over a
-velocity-Verlet step from t0 to t1 is counted exactly as the energy it puts into its particles,
-so the energy balance closes also where a path's velocity jumps (at its points)::
+(``f`` force density N/m^3 at the current positions, ``g`` the body's uniform acceleration;
+contact impulses on the region's own particles are not in it). On a path the particles drift
+with the path's mean velocity over each step and are put on x0 + u(t) at its end, so they follow
+the path to round-off; their velocity is the slope of the path's current segment. The work a
+constraint does over a velocity-Verlet step from t0 to t1 is counted exactly as the energy it
+puts into its particles, so the energy balance closes also where a path's velocity jumps (at its
+points)::
 
     W = 1/2 m (|v(t1)|^2 - |v(t0)|^2) - 1/2 (F(t0) + F(t1)) . (y(t1) - y(t0))
 
