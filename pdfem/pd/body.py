@@ -41,7 +41,8 @@ from pdfem.pd import kernels
 from pdfem.pd.body_diagnostics import BodyDiagnostics
 from pdfem.pd.body_state import BodyCheckpoint
 from pdfem.pd.bonds import bond_lengths, cut_crack
-from pdfem.pd.constraints import VelocityConstraint
+from pdfem.pd.constraints import VelocityConstraint, applied_forces, next_name, step_work
+from pdfem.pd.constraints import reaction_forces
 from pdfem.pd.failure import CriticalStretch, FailureLaw
 from pdfem.pd.fracture import FractureLedger
 from pdfem.pd.ice_interface import WholeBody
@@ -248,17 +249,22 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
         self.broken = flags
         return count
 
-    def add_velocity_constraint(self, mask: np.ndarray, velocity, ramp_time: float = 0.0) -> None:
-        """Prescribe the velocity (m/s) of the particles in ``mask`` (ramped over ``ramp_time`` s)."""
+    def add_velocity_constraint(self, mask: np.ndarray, velocity=(0.0, 0.0, 0.0),
+                                ramp_time: float = 0.0, *, path=None, name: str = "") -> None:
+        """Prescribe the motion of the particles in ``mask``: ``velocity`` (m/s, ramped over
+        ``ramp_time`` s) or a displacement ``path`` (:mod:`pdfem.pd.constraints`, which they are
+        put on now); ``name`` (default ``prescribed<k>``) names its reaction."""
         idx = np.flatnonzero(mask).astype(np.int64)
-        c = VelocityConstraint(idx, np.asarray(velocity, dtype=np.float64), float(ramp_time))
+        c = VelocityConstraint(idx, np.asarray(velocity, dtype=np.float64), float(ramp_time), path,
+                               name or next_name(self.constraints, "prescribed"))
         self.constraints.append(c)
-        self.v[idx] = c.value(self.time)
+        c.impose(self, self.time)
 
-    def fix(self, mask: np.ndarray) -> None:
-        """Hold the particles in ``mask`` at their reference positions."""
+    def fix(self, mask: np.ndarray, name: str = "") -> None:
+        """Hold the particles in ``mask`` in place; ``name`` (default ``fixed<k>``) names the
+        region's reaction."""
+        self.add_velocity_constraint(mask, name=name or next_name(self.constraints, "fixed"))
         self.fixed |= mask
-        self.v[self.fixed] = 0.0
 
     # -- physics -------------------------------------------------------------------------------
     def compute_forces(self) -> int:
@@ -288,22 +294,16 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
             self.fracture_dissipated += self._ws.crush_dissipated
         return nb
 
-    def _apply_constraints(self, t: float) -> None:
+    def _apply_constraints(self, t: float, step: float = 0.0) -> None:
+        """The prescribed motion at ``t`` (s); with ``step``, the drift velocity over it."""
         self.v[self.fixed] = 0.0
         for c in self.constraints:
-            self.v[c.index] = c.value(t)
+            c.impose(self, t, step)
 
-    def _constraint_force(self, t: float) -> float:
-        """Sum over constraints of R.v: the power (W) that supports and drivers put in."""
-        rho = self.material.density
-        power = 0.0
-        for c in self.constraints:
-            idx = c.index
-            a = c.acceleration(t)
-            # reaction = m a_prescribed - (internal + body) force on the constrained particles
-            r = (rho * a[None, :] - self.f[idx] - rho * self.gravity[None, :]) * self.vol[idx, None]
-            power += float(np.sum(r @ c.value(t)))
-        return power
+    def reactions(self) -> dict[str, np.ndarray]:
+        """The reaction (N, global axes) of each fixed or prescribed region by name: the force
+        its support or driver exerts on the ice now (:mod:`pdfem.pd.constraints`)."""
+        return dict(zip([c.name for c in self.constraints], reaction_forces(self)))
 
     def stable_time_step(self) -> float:
         """A stable velocity-Verlet step (s) for this body, safe for every body shape.
@@ -337,9 +337,9 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
         t0 = self.time
         if self.rates is not None:
             self.rates.advance(self.theta, dt)
-        self._power0 = self._constraint_force(t0) if self.constraints else 0.0
+        self._force0 = applied_forces(self) if self.constraints else None
         self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
-        self._apply_constraints(t0 + half)
+        self._apply_constraints(t0, dt)
         y_old = self.y.copy() if keep_old else None
         self.y += dt * self.v
         self.time = t0 + dt
@@ -352,7 +352,7 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
         self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
         self._apply_constraints(self.time)
         if self.constraints:
-            self.external_work += half * (self._power0 + self._constraint_force(self.time))
+            self.external_work += step_work(self, self._force0, dt)
 
     def step(self, dt: float, after_drift=None) -> int:
         """Advance by ``dt`` (s) with velocity Verlet; the number of bonds broken. ``after_drift

@@ -31,8 +31,8 @@ import numpy as np
 
 from pdfem.pd import kernels
 from pdfem.pd.body import IceBody
+from pdfem.pd.constraints import reaction_forces
 from pdfem.pd.distributed_state import DistributedCheckpoint
-from pdfem.pd.constraints import VelocityConstraint
 
 
 @dataclasses.dataclass
@@ -128,7 +128,7 @@ class DistributedIce(DistributedCheckpoint):
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
-            local.constraints.append(VelocityConstraint(g2l[mine], c.velocity, c.ramp_time))
+            local.constraints.append(dataclasses.replace(c, index=g2l[mine]))
         self.body = local
         self.exchange_seconds = 0.0  # wall time spent in halo exchanges, s
         # bonds whose lower end is owned here: counted once over all ranks
@@ -245,6 +245,13 @@ class DistributedIce(DistributedCheckpoint):
         return self.comm.allreduce_sum(per_particle[self.plan.owned].sum(axis=0))
 
     _sum = owned_sum
+
+    def reactions(self) -> dict[str, np.ndarray]:
+        """The reaction (N) of each fixed or prescribed region by name, summed over the owned
+        particles of all ranks (each rank's constraints hold only its owned particles; one sum
+        over ranks, in rank order, so every rank gets the same totals; collective)."""
+        total = self.comm.allreduce_sum(reaction_forces(self.body))
+        return dict(zip([c.name for c in self.body.constraints], total))
 
     @property
     def external_work(self) -> float:
