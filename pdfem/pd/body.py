@@ -41,6 +41,7 @@ from pdfem.pd import kernels
 from pdfem.pd.body_diagnostics import BodyDiagnostics
 from pdfem.pd.body_state import BodyCheckpoint
 from pdfem.pd.bonds import bond_lengths, cut_crack
+from pdfem.pd.damaged_volume import intact_weighted_volume
 from pdfem.pd.constraints import VelocityConstraint, applied_forces, next_name, step_work
 from pdfem.pd.constraints import reaction_forces
 from pdfem.pd.failure import CriticalStretch, FailureLaw
@@ -99,6 +100,10 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     rest: np.ndarray | None = field(default=None, repr=False, compare=False)
     # strain rates and strength factors, for a law whose strength depends on the rate
     rates: RateTracker | None = field(default=None, repr=False, compare=False)
+    # (N,) weighted volume of the intact bonds, m^5 (pdfem.pd.damaged_volume); None: all intact
+    m_now: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # (N,) global particle numbers of a rank's part of a body (summation order); None: own
+    gid: np.ndarray | None = field(default=None, repr=False, compare=False)
     _ledger: FractureLedger = field(default_factory=FractureLedger, init=False, repr=False,
                                     compare=False)
 
@@ -222,6 +227,12 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
             self.weight[:] = kernels.signed_weights(self.weight, flags)
         else:
             self.flags[:] = flags
+        self.update_intact_volume()
+
+    def update_intact_volume(self) -> None:
+        """Recompute :attr:`m_now` from the broken bonds (after bonds broke)."""
+        self.m_now = intact_weighted_volume(self.row_ptr, self.nbr, self.xi_len, self.weight,
+                                            self.broken != 0, self.vol, self.m, self.gid)
 
     @property
     def s0(self) -> float:
@@ -280,16 +291,18 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
                                                self.limits, self.nofail, self.theta, self.f,
                                                self._ws, rest=self.rest,
                                                crush_yield=self.failure.crush_yield,
-                                               strength=self.strength_factors)
+                                               strength=self.strength_factors, m_now=self.m_now)
         else:
             fam_ptr, fam_nbr, fam_bond = self._family
             kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
                                       self.weight, br, self.vol, self.m, self.theta)
             nb = kernels.forces_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
                                        self.weight, br, self.vol, self.m, self.theta, mat.K,
-                                       mat.mu, self.limits, self.nofail, self.f)
+                                       mat.mu, self.limits, self.nofail, self.f,
+                                       m_now=self.m_now)
         if nb:
             self.fracture_dissipated += self._ledger.released(self)
+            self.update_intact_volume()
         if self.rest is not None:
             self.fracture_dissipated += self._ws.crush_dissipated
         return nb

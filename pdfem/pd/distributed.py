@@ -124,7 +124,8 @@ class DistributedIce(DistributedCheckpoint):
             flags=None,  # broken bonds are negative weights (replace would copy the flags)
             fixed=body.fixed[loc].copy(), constraints=[],
             loop="pairs", external_work=0.0, fracture_dissipated=0.0,
-            rest=None if body.rest is None else body.rest[pairs].copy(), rates=None)
+            rest=None if body.rest is None else body.rest[pairs].copy(), rates=None,
+            m_now=None if body.m_now is None else body.m_now[loc].copy(), gid=loc)
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
@@ -165,7 +166,7 @@ class DistributedIce(DistributedCheckpoint):
                                               between=self._exchange, rest=b.rest,
                                               crush_yield=b.failure.crush_yield,
                                               owned=self._owned_rows,
-                                              strength=b.strength_factors)
+                                              strength=b.strength_factors, m_now=b.m_now)
         if b.rest is not None:
             b.fracture_dissipated += b._ws.crush_dissipated
         if broke == 0:  # the usual step: no recount over the bonds
@@ -185,7 +186,7 @@ class DistributedIce(DistributedCheckpoint):
     def step(self, dt: float) -> int:
         """One velocity-Verlet step of every rank's part; bonds broken on all ranks together."""
         self.body.begin_step(dt)
-        broken = int(self.comm.allreduce_sum(self._compute_forces()))
+        broken = self.compute_forces()
         self.body.end_step(dt)
         if broken:  # bonds that broke acted in this step; the next starts without them
             self.refresh_forces()
@@ -194,8 +195,14 @@ class DistributedIce(DistributedCheckpoint):
     def refresh_forces(self) -> None:
         """The forces without the bonds the last pass broke, recomputed on all ranks until no
         further bond breaks anywhere."""
-        while self.comm.allreduce_sum(self._compute_forces()):
+        while self.compute_forces():
             pass
+
+    def update_intact_volume(self) -> None:
+        """Every rank's weighted volume of the intact bonds after bonds broke, the halo's from
+        its owners (collective; :mod:`pdfem.pd.damaged_volume`)."""
+        self.body.update_intact_volume()
+        self._exchange(self.body.m_now)
 
     # -- the IceParticles interface (pdfem.pd.ice_interface) ----------------------------------
     # Arrays are the local ones (owned and halo particles); sums are over owned particles and
@@ -234,8 +241,12 @@ class DistributedIce(DistributedCheckpoint):
         return self.body.begin_step(dt, keep_old)
 
     def compute_forces(self) -> int:
-        """Forces at the current positions (two exchanges); bonds broken on all ranks."""
-        return int(self.comm.allreduce_sum(self._compute_forces()))
+        """Forces at the current positions (two exchanges); bonds broken on all ranks (after
+        which every rank updates its weighted volume of the intact bonds)."""
+        broken = int(self.comm.allreduce_sum(self._compute_forces()))
+        if broken:
+            self.update_intact_volume()
+        return broken
 
     def end_step(self, dt: float) -> None:
         self.body.end_step(dt)

@@ -67,6 +67,7 @@ class DistributedCheckpoint:
                                  **{k: state[k][loc] for k in ("rate_theta", "rate_factors")
                                     if k in state}})
         self._counted_broken = self._broken_count()
+        self.update_intact_volume()  # the halo's from their owners
 
     def _rate_arrays(self) -> dict[str, np.ndarray]:
         """The per-particle state of a rate-dependent failure law (empty without one)."""

@@ -26,7 +26,7 @@ from pdfem.pd.lps_law import (
     pair_force_scalar,
     stretch_limits,
 )
-from pdfem.pd.pair_kernels import _NO_STRENGTH, check_broken, check_weight
+from pdfem.pd.pair_kernels import _INTACT, _NO_STRENGTH, check_broken, check_weight
 from pdfem.pd.workspace import c_contiguous
 
 
@@ -153,6 +153,7 @@ def forces_family(
     nofail: np.ndarray,
     f_out: np.ndarray,
     coef: np.ndarray | None = None,
+    m_now: np.ndarray | None = None,
 ) -> int:
     """Force density by the per-particle full-family loop (reference for the pair loop).
 
@@ -168,6 +169,9 @@ def forces_family(
         Family lists from :func:`pdfem.pd.family.build_family`.
     coef
         Optional (N, 4) float64 scratch for the per-particle coefficients.
+    m_now
+        Optional weighted volume of the intact bonds, as in
+        :func:`pdfem.pd.pair_kernels.forces`.
     others
         As in :func:`pdfem.pd.pair_kernels.forces`.
 
@@ -181,7 +185,8 @@ def forces_family(
         coef = np.empty((n, 4))
     if coef.shape != (n, 4):
         raise ValueError(f"coef must be an (N, 4) float64 scratch array, got shape {coef.shape}")
-    force_coefficients(True, m, theta, K, mu, _NO_STRENGTH, coef)
+    force_coefficients(True, m, _INTACT if m_now is None else m_now, theta, K, mu, _NO_STRENGTH,
+                       coef)
     yc, signed, wt = c_contiguous(y, "y"), check_broken(broken, xi_len), check_weight(weight, xi_len)
     _forces_family(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol,
                    c_contiguous(coef, "coef"), wt, c_contiguous(f_out, "f_out"))

@@ -165,19 +165,26 @@ def energy_density(K, mu, theta, s, m):
 
 
 @twin(fastmath=False)
-def force_coefficients(m, theta, K, mu, strength, coef):
-    """coef[:, 0] = a = theta (3K - 5mu) / m, coef[:, 1] = b = 15 mu / m (0 where m = 0);
+def force_coefficients(m, m_now, theta, K, mu, strength, coef):
+    """coef[:, 0] = a = theta (3K - 5mu (2 - m'/m)) / m, coef[:, 1] = b = 15 mu / m (0 where
+    m = 0), with m' = ``m_now`` the weighted volume of the intact bonds (empty: m' = m; the
+    a of a damaged particle that keeps the force the energy's gradient,
+    :mod:`pdfem.pd.damaged_volume`);
     coef[:, 2] = theta / 2 (a bond's mean dilatation is the sum over its ends) and
     coef[:, 3] = strength / 2, the particle's compressive-strength factor (1 if ``strength`` is
     empty) halved likewise."""
     unit = strength.shape[0] == 0
+    intact = m_now.shape[0] == 0
     c1 = 3.0 * K - 5.0 * mu
     c2 = 15.0 * mu
     for p in prange(m.shape[0]):
         th = theta[p]
         if m[p] > 0.0:
             im = 1.0 / m[p]
-            coef[p, 0] = th * c1 * im
+            if intact or m_now[p] == m[p]:
+                coef[p, 0] = th * c1 * im
+            else:
+                coef[p, 0] = th * (3.0 * K - 5.0 * mu * (2.0 - m_now[p] * im)) * im
             coef[p, 1] = c2 * im
         else:
             coef[p, 0] = 0.0

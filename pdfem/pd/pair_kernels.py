@@ -59,6 +59,7 @@ _NO_R = np.zeros(0)  # stands for "no bond-length buffer" (read-only by conventi
 _NO_REST = np.zeros(0, dtype=np.float32)  # "broken bonds never push" (read-only by convention)
 _ALL_ROWS = np.zeros(0, dtype=np.uint8)  # "every row's crushing energy counts" (read-only)
 _NO_STRENGTH = np.zeros(0)  # "every particle's strength factor is 1" (read-only by convention)
+_INTACT = np.zeros(0)  # "m' = m: no broken bond" (read-only by convention)
 
 
 def rest_arg(rest: np.ndarray | None, per_pair: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -232,6 +233,7 @@ def forces(
     crush_yield: float = np.inf,
     owned: np.ndarray | None = None,
     strength: np.ndarray | None = None,
+    m_now: np.ndarray | None = None,
 ) -> int:
     """LPS force density with the bond-break check (pair loop).
 
@@ -274,6 +276,10 @@ def forces(
     strength
         Optional (N,) float64 factors on the compressive strength (the constant parts c0, d0 of
         the lower bound; a bond takes its ends' mean), e.g. a strain-rate dependence; default 1.
+    m_now
+        Optional (N,) weighted volume of each particle's intact bonds (m^5,
+        :func:`pdfem.pd.damaged_volume.intact_weighted_volume`): with broken bonds the force is
+        then the exact gradient of the strain energy; default m (as if none were broken).
 
     Returns
     -------
@@ -283,8 +289,8 @@ def forces(
     ws = workspace_for(ws, row_ptr, nbr)
     rest, granular = rest_arg(rest, nbr)
     owned = _ALL_ROWS if owned is None else owned
-    force_coefficients(ws.parallel_particles, m, theta, K, mu,
-                       _NO_STRENGTH if strength is None else strength, ws.coef)
+    force_coefficients(ws.parallel_particles, m, _INTACT if m_now is None else m_now, theta, K,
+                       mu, _NO_STRENGTH if strength is None else strength, ws.coef)
     nb = int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                             check_broken(broken, nbr), vol,
                             ws.coef, check_weight(weight, nbr), nofail, ws.chunk_ptr,
@@ -316,6 +322,7 @@ def dilatation_and_forces(
     crush_yield: float = np.inf,
     owned: np.ndarray | None = None,
     strength: np.ndarray | None = None,
+    m_now: np.ndarray | None = None,
 ) -> int:
     """One OSB step's internal forces: :func:`dilatation`, then :func:`forces` (pair loops).
 
@@ -328,7 +335,7 @@ def dilatation_and_forces(
     Parameters are those of :func:`dilatation` and :func:`forces`; ``theta_out`` (N,) and
     ``f_out`` (N, 3) are overwritten; ``ws`` is required. ``between``, if given, is called with
     ``theta_out`` between the two passes (an MPI rank's body exchanges its halo's dilatations
-    there). ``rest``, ``crush_yield``, ``owned``, ``strength``: as in :func:`forces`.
+    there). ``rest``, ``crush_yield``, ``owned``, ``strength``, ``m_now``: as in :func:`forces`.
 
     Returns
     -------
@@ -346,8 +353,8 @@ def dilatation_and_forces(
                      m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     if between is not None:
         between(theta_out)
-    force_coefficients(ws.parallel_particles, m, theta_out, K, mu,
-                       _NO_STRENGTH if strength is None else strength, ws.coef)
+    force_coefficients(ws.parallel_particles, m, _INTACT if m_now is None else m_now, theta_out,
+                       K, mu, _NO_STRENGTH if strength is None else strength, ws.coef)
     nb = int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
                           nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
                           ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular,
