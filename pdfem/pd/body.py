@@ -41,7 +41,7 @@ from pdfem.pd import kernels
 from pdfem.pd.body_diagnostics import BodyDiagnostics
 from pdfem.pd.body_state import BodyCheckpoint
 from pdfem.pd.bonds import bond_lengths, cut_crack
-from pdfem.pd.damaged_volume import intact_weighted_volume
+from pdfem.pd.damaged_volume import IntactVolume
 from pdfem.pd.constraints import VelocityConstraint, applied_forces, next_name, step_work
 from pdfem.pd.constraints import reaction_forces
 from pdfem.pd.failure import CriticalStretch, FailureLaw
@@ -100,10 +100,10 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     rest: np.ndarray | None = field(default=None, repr=False, compare=False)
     # strain rates and strength factors, for a law whose strength depends on the rate
     rates: RateTracker | None = field(default=None, repr=False, compare=False)
-    # (N,) weighted volume of the intact bonds, m^5 (pdfem.pd.damaged_volume); None: all intact
-    m_now: np.ndarray | None = field(default=None, repr=False, compare=False)
     # (N,) global particle numbers of a rank's part of a body (summation order); None: own
     gid: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # the weighted volume of the intact bonds (pdfem.pd.damaged_volume)
+    _intact: IntactVolume | None = field(default=None, init=False, repr=False, compare=False)
     _ledger: FractureLedger = field(default_factory=FractureLedger, init=False, repr=False,
                                     compare=False)
 
@@ -227,12 +227,21 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
             self.weight[:] = kernels.signed_weights(self.weight, flags)
         else:
             self.flags[:] = flags
+        if self._intact is not None:
+            self._intact.forget()
         self.update_intact_volume()
 
+    @property
+    def m_now(self) -> np.ndarray | None:
+        """(N,) weighted volume of the intact bonds (m^5); None before any bond broke."""
+        return None if self._intact is None else self._intact.now
+
     def update_intact_volume(self) -> None:
-        """Recompute :attr:`m_now` from the broken bonds (after bonds broke)."""
-        self.m_now = intact_weighted_volume(self.row_ptr, self.nbr, self.xi_len, self.weight,
-                                            self.broken != 0, self.vol, self.m, self.gid)
+        """Bring :attr:`m_now` up to date with the broken bonds (after bonds broke)."""
+        if self._intact is None:
+            self._intact = IntactVolume(self.m, self.gid)
+        self._intact.update(self.row_ptr, self.nbr, self.xi_len, self.weight, self.broken != 0,
+                            self.vol)
 
     @property
     def s0(self) -> float:

@@ -14,10 +14,11 @@ the intact bonds. The force state's a-coefficient is then
 breaking body to O(dt^2) between breaks; without it every break put about half a bond's energy
 into the motion (a block crushed to pieces gained 16 % of its energy).
 
-:func:`intact_weighted_volume` computes m' = m - (the broken bonds' omega |xi|^2 V_j), summed
-for each particle over its broken bonds in the order of the partners' global numbers, so a
-body split over MPI ranks gets the same bits as the whole body; a particle without a broken
-bond keeps m' = m exactly. SI units: m^5.
+:class:`IntactVolume` keeps m' = m - (the broken bonds' |omega| |xi|^2 V_j), summed for each
+particle over its broken bonds in the order of the partners' global numbers, so a body split
+over MPI ranks gets the same bits as the whole body; a particle without a broken bond keeps
+m' = m exactly. After a step that broke bonds only the particles those bonds touch are summed
+again (one pass over the broken flags to find them, one bit per bond remembered). SI: m^5.
 """
 
 from __future__ import annotations
@@ -25,36 +26,55 @@ from __future__ import annotations
 import numpy as np
 
 
-def intact_weighted_volume(row_ptr: np.ndarray, nbr: np.ndarray, xi_len: np.ndarray,
-                           weight: np.ndarray, broken: np.ndarray, vol: np.ndarray,
-                           m: np.ndarray, gid: np.ndarray | None = None) -> np.ndarray:
-    """m'_i = m_i - sum over particle i's broken bonds of |omega| |xi|^2 V_j (m^5).
+class IntactVolume:
+    """m' of one body (or one rank's part of it), updated as its bonds break.
 
     Parameters
     ----------
-    row_ptr, nbr, xi_len, weight
-        The pair list (i < j grouped by i), reference lengths (m) and bond weights.
-    broken
-        (P,) bool: which bonds are broken.
-    vol, m
-        (N,) volumes (m^3) and weighted volumes of all initial bonds (m^5).
+    m
+        (N,) weighted volumes of all initial bonds (m^5).
     gid
         (N,) global particle numbers (default: the local ones), which fix the summation order.
     """
-    n = m.shape[0]
-    k = np.flatnonzero(broken)
-    if len(k) == 0:
-        return m.copy()
-    gid = np.arange(n) if gid is None else np.asarray(gid)
-    i = np.searchsorted(row_ptr, k, side="right") - 1
-    j = nbr[k].astype(np.int64)
-    g = xi_len[k] * xi_len[k] * np.abs(weight[k]).astype(np.float64)
-    owner = np.concatenate([i, j])
-    partner = np.concatenate([j, i])
-    value = np.concatenate([g * vol[j], g * vol[i]])
-    order = np.lexsort((gid[partner], owner))
-    lost = np.bincount(owner[order], weights=value[order], minlength=n)
-    out = m - lost
-    keep = np.bincount(owner, minlength=n) == 0
-    out[keep] = m[keep]
-    return out
+
+    def __init__(self, m: np.ndarray, gid: np.ndarray | None = None) -> None:
+        self.m = m
+        self.gid = np.arange(m.shape[0]) if gid is None else np.asarray(gid)
+        self.now: np.ndarray | None = None   # (N,) m'; None before the first update
+        self._seen: np.ndarray | None = None  # packed bits: the broken bonds already summed
+
+    def update(self, row_ptr: np.ndarray, nbr: np.ndarray, xi_len: np.ndarray,
+               weight: np.ndarray, broken: np.ndarray, vol: np.ndarray) -> np.ndarray | None:
+        """m' after bonds broke (``broken``: (P,) bool)."""
+        if self.now is None:
+            self.now = self.m.copy()
+        seen = (np.zeros(len(broken), dtype=bool) if self._seen is None
+                else np.unpackbits(self._seen, count=len(broken)).astype(bool))
+        new = np.flatnonzero(broken & ~seen)
+        self._seen = np.packbits(broken)
+        if len(new) == 0:
+            return self.now
+        n = self.m.shape[0]
+        touched = np.zeros(n, dtype=bool)
+        touched[np.searchsorted(row_ptr, new, side="right") - 1] = True
+        touched[nbr[new]] = True
+        k = np.flatnonzero(broken)
+        i = np.searchsorted(row_ptr, k, side="right") - 1
+        j = nbr[k].astype(np.int64)
+        sel = touched[i] | touched[j]
+        k, i, j = k[sel], i[sel], j[sel]
+        g = xi_len[k] * xi_len[k] * np.abs(weight[k]).astype(np.float64)
+        owner = np.concatenate([i, j])
+        partner = np.concatenate([j, i])
+        value = np.concatenate([g * vol[j], g * vol[i]])
+        keep = touched[owner]
+        owner, partner, value = owner[keep], partner[keep], value[keep]
+        order = np.lexsort((self.gid[partner], owner))
+        lost = np.bincount(owner[order], weights=value[order], minlength=n)
+        self.now[touched] = self.m[touched] - lost[touched]
+        return self.now
+
+    def forget(self) -> None:
+        """Sum every particle again at the next :meth:`update` (the flags were set anew)."""
+        self.now = None
+        self._seen = None

@@ -124,8 +124,7 @@ class DistributedIce(DistributedCheckpoint):
             flags=None,  # broken bonds are negative weights (replace would copy the flags)
             fixed=body.fixed[loc].copy(), constraints=[],
             loop="pairs", external_work=0.0, fracture_dissipated=0.0,
-            rest=None if body.rest is None else body.rest[pairs].copy(), rates=None,
-            m_now=None if body.m_now is None else body.m_now[loc].copy(), gid=loc)
+            rest=None if body.rest is None else body.rest[pairs].copy(), rates=None, gid=loc)
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
@@ -136,6 +135,7 @@ class DistributedIce(DistributedCheckpoint):
         self._counted = plan.owned[np.repeat(np.arange(len(loc)), np.diff(row_ptr))]
         self._counted_broken = self._broken_count()
         self._owned_rows = plan.owned.astype(np.uint8)  # whose crushing energy this rank counts
+        self.update_intact_volume()  # pre-cracks: the halo's from their owners
 
     # -- exchanges ---------------------------------------------------------------------------
     def _exchange(self, values: np.ndarray) -> None:
