@@ -53,6 +53,14 @@ class ContactPair:
     contacts: int = 0            # particle contacts in the last coupling step
 
 
+def _global_numbers(body) -> np.ndarray:
+    """(N,) global particle numbers of a body's local particles (-1 for those it does not own):
+    the order in which the contacts' impulses are summed onto the structure."""
+    ids = np.full(len(body.v), -1, dtype=np.int64)
+    ids[body.owned] = body.owned_reference()[0]
+    return ids
+
+
 def substep_counts(ice_step: float, structure_step: float, substeps: int = 0):
     """Coupling step and substep counts from the two stable steps (s).
 
@@ -103,8 +111,9 @@ class Coupler:
         ice step, each adds its force density to the bodies' ``f``, in list order.
     comm
         With ice bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`):
-        the communicator over which the contact impulses are summed (one sum per structure and
-        coupling step), so every rank advances the replicated structures identically. Contact
+        the communicator over which the contact impulses are gathered and summed in global
+        particle order (the serial order), so every rank advances the replicated structures
+        identically and as the serial run does. Contact
         is resolved for each body's ``owned`` particles (all of them for a whole body).
     """
 
@@ -124,6 +133,7 @@ class Coupler:
         self.time = 0.0
         self._pairs_of = {id(b): [p for p in self.pairs if p.body is b] for b in self.bodies}
         self._mass = {id(b): b.material.density * b.vol for b in self.bodies}  # kg
+        self._ids = {id(b): _global_numbers(b) for b in self.bodies}
         # N s, contact impulses on each structure's surface nodes in the current coupling step
         self._impulse = {id(s): np.zeros((len(s.surface_points()), 3)) for s in self.structures}
         # J, work of the contact loads on each structure (as it moves under them)
@@ -250,7 +260,7 @@ class Coupler:
                 y += h * body.v
                 for p in self._pairs_of[id(body)]:
                     c = p.contact.resolve(body.y, before, body.v, self._mass[id(body)], h,
-                                          active=body.owned)
+                                          active=body.owned, ids=self._ids[id(body)])
                     p.contacts += c.contacts
                     work.add(c.particle_impulse, j * h)
             self._hand_over(pair_impulse, {k: e[1] for k, e in ends.items()})
@@ -295,7 +305,7 @@ class Coupler:
             for body, y_old, work in zip(self.bodies, olds, works):
                 for p in self._pairs_of[id(body)]:
                     c = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h,
-                                          active=body.owned)
+                                          active=body.owned, ids=self._ids[id(body)])
                     p.contacts += c.contacts
                     work.add(c.particle_impulse, 0.0)
             self._hand_over(pair_impulse, {key: e[1] for key, e in ends.items()})
@@ -323,9 +333,7 @@ class Coupler:
         their surface velocity ``velocity``)."""
         for p, total in zip(self.pairs, pair_impulse):
             k = id(p.structure)
-            impulse = p.contact.take_impulse()
-            if self.comm is not None:
-                impulse = self.comm.allreduce_sum(impulse)
+            impulse = p.contact.take_impulse(None if self.comm is None else self.comm.allgather)
             if p.structure.prescribed_motion:
                 self.contact_work[k] += float(np.sum(impulse * velocity[k]))
             self._impulse[k] += impulse
