@@ -238,8 +238,10 @@ class Coupler:
         h = D / n
         works = [ImpulseWork(b) for b in self.bodies]
         olds = [b.begin_step(D, keep_old=True) for b in self.bodies]
-        for b, y_old in zip(self.bodies, olds):
+        kicks = {}
+        for b, y_old, work in zip(self.bodies, olds, works):
             b.y[:] = y_old                       # the drift is taken below, in n parts
+            kicks[id(b)] = b.v - work.v0         # the first half kick, D/2 a_t
         for j in range(n):
             ends, starts = {}, {}
             for s in self.structures:
@@ -257,12 +259,19 @@ class Coupler:
             for body, work in zip(self.bodies, works):
                 y = body.y                       # in place: the body keeps its array
                 before = y.copy()
-                y += h * body.v
+                # the velocity of substep j: v_t + a_t (j + 1/2) h, so that a contact stops
+                # the particle's velocity of that instant (not the mid-step velocity of the
+                # whole step, off by O(D a)); the positions at the step's end are Verlet's
+                u = body.v if n == 1 else body.v + kicks[id(body)] * ((2 * j + 1) / n - 1.0)
+                y += h * u
                 for p in self._pairs_of[id(body)]:
-                    c = p.contact.resolve(body.y, before, body.v, self._mass[id(body)], h,
-                                          active=body.owned, ids=self._ids[id(body)])
+                    m = self._mass[id(body)]
+                    c = p.contact.resolve(body.y, before, u, m, h, active=body.owned,
+                                          ids=self._ids[id(body)])
                     p.contacts += c.contacts
                     work.add(c.particle_impulse, j * h)
+                    if u is not body.v:
+                        np.add(body.v, c.particle_impulse / m[:, None], out=body.v)
             self._hand_over(pair_impulse, {k: e[1] for k, e in ends.items()})
             self._apply_impulses()
             for s in self.structures:
