@@ -41,6 +41,7 @@ Units: m, s, kg, N s (impulses), J.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -146,7 +147,7 @@ def _respond(facet, weight, y, y_old, v, mass, dt, pts, pts0, vel, invm, share, 
     on how they are split over MPI ranks. ``totals`` accumulates: [0:3] impulse to the
     structure (N s), [3] contacts; ``particle_impulse`` gets each particle's impulse (N s;
     rows of other particles are left alone). The structure's nodal share is summed apart, in
-    global particle order (:func:`_scatter`).
+    global particle order (:mod:`pdfem.coupling.nodal_impulse`).
     """
     inv_dt = 1.0 / dt
     for i in range(facet.shape[0]):
@@ -348,7 +349,7 @@ class SurfaceContact:
         """(Ns, 3) nodal impulses (N s) of this process's contacts since :meth:`take_impulse`."""
         return self.records.local()
 
-    def take_impulse(self, allgather=None) -> np.ndarray:
+    def take_impulse(self, allgather: Callable[[list], list] | None = None) -> np.ndarray:
         """The nodal impulses (Ns, 3) (N s) of the contacts since the last call, summed in
         global particle order over the processes (``allgather(x)``: every process's ``x``, in
         rank order; default: this process alone), and forget those contacts."""

@@ -12,6 +12,8 @@ Units: N s.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numba
 import numpy as np
 
@@ -53,7 +55,7 @@ class ContactRecords:
                            np.ascontiguousarray(weight, dtype=np.float64),
                            np.ascontiguousarray(impulse, dtype=np.float64)))
 
-    def _sum(self, calls) -> np.ndarray:
+    def _sum(self, calls: list) -> np.ndarray:
         out = np.zeros((self.n_nodes, 3))
         for ids, facet, weight, impulse in calls:
             order = np.argsort(ids, kind="stable")
@@ -64,7 +66,7 @@ class ContactRecords:
         """(Ns, 3) nodal impulses (N s) of this process's contacts so far (kept)."""
         return self._sum(self.calls)
 
-    def take(self, allgather=None) -> np.ndarray:
+    def take(self, allgather: Callable[[list], list] | None = None) -> np.ndarray:
         """(Ns, 3) nodal impulses (N s) of the contacts of every process (``allgather(x)``: the
         list of every process's ``x`` in rank order; default this process alone), summed in
         the order (call, global particle number); the contacts are then forgotten."""
