@@ -134,19 +134,26 @@ def test_split_bar_matches_serial(tmp_path, ranks):
 @pytest.mark.parametrize("ranks", [2, 3])
 def test_coupled_contact_split_matches_serial(tmp_path, ranks):
     """A rigid plate driven into an ice plate's edge (contact, bond breaking) on 2 and 3 ranks:
-    the load history and the particle positions agree with the serial run to 1e-6 relative
-    and the damage field is identical (contact impulses summed over ranks, structure
-    replicated)."""
+    the load history and the particle positions agree with the serial run to 1e-10 relative
+    (measured: identical) and the damage field is identical (contact impulses gathered from
+    the ranks and summed in global particle order, as the serial run sums them; structure
+    replicated). One numba thread per process: the ice's pair loops cut their pair list into
+    one chunk per thread (pdfem.pd.workspace), and a rank's list is cut at other particles than
+    the whole body's, so with several threads the ice's own force sums differ by round-off
+    (1e-20 N at rest), which the crushing here grows to 6e-8: a matter of the PD kernels, not
+    of the coupling this test checks."""
+    import os
+
     script = tmp_path / "coupled.py"
     script.write_text(COUPLED)
+    env = dict(os.environ, NUMBA_NUM_THREADS="1")
     r = subprocess.run([_mpiexec(), "-n", str(ranks), sys.executable, str(script)],
-                       capture_output=True, text=True, timeout=300)
+                       capture_output=True, text=True, timeout=300, env=env)
     assert r.returncode == 0, r.stderr[-2000:]
     line = next(l for l in r.stdout.splitlines() if l.startswith("RESULT"))
     fields = dict(kv.split("=") for kv in line.split()[1:])
     assert float(fields["fmax"]) > 1e3 and int(fields["broken"]) > 0
-    # round-off of the sums over ranks, grown where bonds break (measured 6e-8 on 2 ranks)
-    assert float(fields["err_y"]) <= 1e-6 and float(fields["err_f"]) <= 1e-6
+    assert float(fields["err_y"]) <= 1e-10 and float(fields["err_f"]) <= 1e-10
     assert fields["same_damage"] == "True"
 
 

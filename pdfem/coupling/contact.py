@@ -41,6 +41,7 @@ Units: m, s, kg, N s (impulses), J.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -49,6 +50,7 @@ from numba import prange
 
 from pdfem.coupling.facet_grid import FacetGrid
 from pdfem.coupling.facets import FACE, FacetTopology, closest_point_on_triangle, pseudo_normals
+from pdfem.coupling.nodal_impulse import ContactRecords
 
 
 @numba.njit(parallel=True, cache=True)
@@ -135,17 +137,17 @@ def _shares(facet, weight, tri, share):
 
 @numba.njit(cache=True)
 def _respond(facet, weight, y, y_old, v, mass, dt, pts, pts0, vel, invm, share, tri, friction,
-             node_impulse, particle_impulse, totals):
+             particle_impulse, totals):
     """Give each contacting particle and the surface point it hit their impulse (Eq. 5 with the
     structure's inertia, module docstring); move the particle with its corrected velocity.
 
-    Serial over particles in index order, so the nodal sums are deterministic. Every contact
-    uses the surface velocities ``vel`` as they were before the step's contacts, and a node's
-    mass is split among the contacts touching it in proportion to their weights (``share``),
-    so the result does not depend on the order of the particles or on how they are split over
-    MPI ranks. ``totals`` accumulates: [0:3] impulse to the structure (N s), [3] contacts;
-    ``particle_impulse`` gets each particle's impulse (N s; rows of other particles are left
-    alone).
+    Every contact uses the surface velocities ``vel`` as they were before the step's contacts,
+    and a node's mass is split among the contacts touching it in proportion to their weights
+    (``share``), so each particle's impulse does not depend on the order of the particles or
+    on how they are split over MPI ranks. ``totals`` accumulates: [0:3] impulse to the
+    structure (N s), [3] contacts; ``particle_impulse`` gets each particle's impulse (N s;
+    rows of other particles are left alone). The structure's nodal share is summed apart, in
+    global particle order (:mod:`pdfem.coupling.nodal_impulse`).
     """
     inv_dt = 1.0 / dt
     for i in range(facet.shape[0]):
@@ -202,11 +204,6 @@ def _respond(facet, weight, y, y_old, v, mass, dt, pts, pts0, vel, invm, share, 
             y[i, d] = y_old[i, d] + dt * (v[i, d] + dv)
             v[i, d] += dv
             particle_impulse[i, d] = p[d]
-        for k in range(3):
-            node = tri[f, k]
-            w = weight[i, k]
-            for d in range(3):
-                node_impulse[node, d] -= w * p[d]      # Eqs. (7)-(8), barycentric shares
         for d in range(3):
             totals[d] -= p[d]
         totals[3] += 1.0
@@ -247,9 +244,9 @@ class SurfaceContact:
 
     Notes
     -----
-    Nodal impulses accumulate in :attr:`node_impulse` ((Ns, 3), N s) until
-    :meth:`take_impulse` hands them over, so several ice substeps can be summed into one load
-    on the structure.
+    The contacts' impulses are kept (:class:`pdfem.coupling.nodal_impulse.ContactRecords`) until
+    :meth:`take_impulse` hands their nodal sum over, so several ice substeps can be summed into
+    one load on the structure; :attr:`node_impulse` shows the sum so far of this process.
     """
 
     def __init__(self, surface, search_radius: float, friction: float = 0.0,
@@ -267,7 +264,7 @@ class SurfaceContact:
         self.inverse_mass = np.ascontiguousarray(surface.surface_inverse_mass(), dtype=np.float64)
         self.topology = FacetTopology.from_triangles(surface.surface_triangles, len(points))
         self.grid = FacetGrid(self.topology.triangles, self.search_radius)
-        self.node_impulse = np.zeros((len(points), 3))
+        self.records = ContactRecords(len(points), self.topology.triangles)
         self.total_impulse = np.zeros(3)
         self._points = self._velocities = self._start = None
         self._normals = None
@@ -296,9 +293,10 @@ class SurfaceContact:
             self._normal = np.empty((n, 3))
 
     def resolve(self, y: np.ndarray, y_old: np.ndarray, v: np.ndarray, mass: np.ndarray,
-                dt: float, active: np.ndarray | None = None) -> ContactStep:
+                dt: float, active: np.ndarray | None = None,
+                ids: np.ndarray | None = None) -> ContactStep:
         """Push particles that crossed the surface back and give each contact its impulse (in
-        place on ``y`` and ``v``; the structure's share accumulates in :attr:`node_impulse`).
+        place on ``y`` and ``v``; the structure's share is kept for :meth:`take_impulse`).
 
         Parameters
         ----------
@@ -314,6 +312,9 @@ class SurfaceContact:
             The step (s) from ``y_old`` to ``y``.
         active
             (N,) bool, particles that may touch this surface (default all).
+        ids
+            (N,) global numbers of the particles (default ``arange(N)``): the structure's
+            share is summed in this order, whatever the split over MPI ranks.
 
         Returns
         -------
@@ -323,6 +324,8 @@ class SurfaceContact:
         self._buffers(n)
         if active is None:
             active = np.ones(n, dtype=np.bool_)
+        if ids is None:
+            ids = np.arange(n)
         g, t, nr = self.grid, self.topology, self._normals
         _detect(y, active, g.cell_start, g.cell_facets, g.origin, g.inv_h, g.dims, self._points,
                 t.triangles, t.tri_edges, nr[0], nr[1], nr[2], t.boundary_edge, t.boundary_node,
@@ -334,16 +337,23 @@ class SurfaceContact:
         per_particle = np.zeros((n, 3))
         _respond(self._facet, self._weight, y, y_old, v, mass, float(dt), self._points,
                  self._start, self._velocities, self.inverse_mass, share, t.triangles, self.friction,
-                 self.node_impulse, per_particle, totals)
+                 per_particle, totals)
+        hit = np.flatnonzero(per_particle.any(axis=1))
+        self.records.add(ids[hit], self._facet[hit], self._weight[hit], per_particle[hit])
         impulse = totals[:3].copy()
         self.total_impulse += impulse
         return ContactStep(int(totals[3]), impulse, per_particle)
 
-    def take_impulse(self) -> np.ndarray:
-        """The nodal impulses (Ns, 3) (N s) accumulated since the last call, and reset them."""
-        out = self.node_impulse.copy()
-        self.node_impulse[:] = 0.0
-        return out
+    @property
+    def node_impulse(self) -> np.ndarray:
+        """(Ns, 3) nodal impulses (N s) of this process's contacts since :meth:`take_impulse`."""
+        return self.records.local()
+
+    def take_impulse(self, allgather: Callable[[list], list] | None = None) -> np.ndarray:
+        """The nodal impulses (Ns, 3) (N s) of the contacts since the last call, summed in
+        global particle order over the processes (``allgather(x)``: every process's ``x``, in
+        rank order; default: this process alone), and forget those contacts."""
+        return self.records.take(allgather)
 
     def inside(self, y: np.ndarray) -> np.ndarray:
         """(N,) bool: particles behind the surface within the search radius (no changes made)."""

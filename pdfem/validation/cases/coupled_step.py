@@ -3,8 +3,9 @@
 The demo runs at safety factors 0.9, 0.6, 0.3 and 0.15 (automatic substeps: the structure
 subcycles) and at 0.6 with ``substeps`` 1 and 2. Every run must finish; over all runs and
 frames the energy balance must close within 1 % of the energy supplied (the residual, every
-term computed on its own), no dissipation term may be negative, and the peak ice load averaged
-over 0.1 ms (:mod:`pdfem.post.windowed`) must agree within 5 % with the run at 0.9.
+term computed on its own), no dissipation term may be negative (to round-off), and the peak
+ice load averaged over 0.1 ms (:mod:`pdfem.post.windowed`) must agree within 5 % with the run
+at 0.9.
 """
 
 from __future__ import annotations
@@ -27,6 +28,12 @@ SETTINGS = ((0.9, 0), (0.6, 0), (0.3, 0), (0.15, 0), (0.6, 1), (0.6, 2))
 """(safety factor, substeps) of the runs; the first is the reference of the ice load."""
 
 DISSIPATION = ("contact_dissipated", "fracture_dissipated", "damping_dissipated")
+
+NEGATIVE_DISSIPATION_TOLERANCE = 1e-9
+"""The largest negative dissipation allowed, / supplied energy: the target is 0; a term made of
+differences of works (contact: minus the works of the impulses on ice and structure, each a
+few J) can only miss it by their round-off, 1e-16 of them, so 1e-9 is ample and still fails
+any real energy creation (the old scheme's was 8e-3)."""
 
 
 def sweep(case: Case, directory: Path) -> dict[str, Any]:
@@ -108,11 +115,13 @@ CASES = (
                "computed on its own (issue target: 1 % at every frame)"),
     ValidationCase(
         name="step_dissipation_sign", quantity="negative part of any dissipation term / supplied",
-        unit="-", measure=negative_dissipation, tolerance=0.01, **_COMMON,
+        unit="-", measure=negative_dissipation, tolerance=NEGATIVE_DISSIPATION_TOLERANCE,
+        **_COMMON,
         source="second law: contact (plastic impulses, friction), fracture and damping only "
-               "dissipate. Target 0; measured 0 at safety factors 0.15-0.6 and substeps 1, 2 "
-               "and -0.85 % of the input (contact, 0.23 J) at 0.9 with automatic substeps, the "
-               "ice's O(dt a) velocity error in the contact at its largest step"),
+               "dissipate. Target 0, measured 0 in every run and frame (quick sweep). It was "
+               "-0.8 % of the input (contact) at safety 0.9 with automatic substeps while the "
+               "ice met the structure's substeps with its mid-step velocity (off by O(D a)); "
+               "the tolerance is round-off of the sum of the impulses' works"),
     ValidationCase(
         name="step_load_convergence", quantity="spread of the 0.1 ms peak ice load", unit="-",
         measure=load_spread, plot=plot_loads, tolerance=0.05, **_COMMON,
