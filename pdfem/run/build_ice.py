@@ -15,16 +15,28 @@ from pdfem.case.ice import IceMaterialSection
 from pdfem.errors import InputError
 from pdfem.pd.body import IceBody
 from pdfem.pd.influence import isotropy_gain
-from pdfem.pd.materials.lps import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial, tensile_from_flexural
 
 
-def ice_material(m: IceMaterialSection) -> IceMaterial:
-    """The LPS material of a case's ``material`` section (``critical_stretch``, when given,
-    replaces ``fracture_energy``)."""
+def ice_material(m: IceMaterialSection, dx: float | None = None,
+                 depth: float | None = None) -> IceMaterial:
+    """The LPS material of a case's ``material`` section.
+
+    ``critical_stretch`` or a strength, when given, replaces ``fracture_energy``. A
+    ``flexural_strength`` becomes the kernels' tensile strength through
+    :func:`pdfem.pd.materials.lps.tensile_from_flexural`, which needs the lattice spacing ``dx``
+    (m) and the body's depth ``depth`` (m, its thinnest extent); ``docs/ice_strength.md``.
+    """
+    tensile = m.tensile_strength
+    if m.flexural_strength is not None:
+        if dx is None or depth is None:
+            raise ValueError("a flexural strength needs the spacing dx and the body's depth")
+        tensile = tensile_from_flexural(m.flexural_strength, dx, depth)
+    by_energy = m.critical_stretch is None and tensile is None
     return IceMaterial(density=m.density, youngs_modulus=m.youngs_modulus,
                        poisson_ratio=m.poisson_ratio,
-                       fracture_energy=m.fracture_energy if m.critical_stretch is None else None,
-                       critical_stretch=m.critical_stretch)
+                       fracture_energy=m.fracture_energy if by_energy else None,
+                       critical_stretch=m.critical_stretch, tensile_strength=tensile)
 
 
 def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:
@@ -50,7 +62,9 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
         raise InputError(file, f"{cfg.field}.horizon_factor", str(exc),
                          cfg.horizon / cfg.dx) from None
     try:
-        body = IceBody.from_shape(cfg.name, cfg.shape, ice_material(cfg.material), cfg.dx, cfg.horizon,
+        lo, hi = cfg.shape.bounds()
+        material = ice_material(cfg.material, cfg.dx, float(min(np.subtract(hi, lo))))
+        body = IceBody.from_shape(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon,
                                   loop=run.pd_loop)
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.shape", str(exc)) from None

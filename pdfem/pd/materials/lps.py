@@ -2,7 +2,9 @@
 
 The ordinary state-based kernels (:mod:`pdfem.pd.kernels`) need the bulk modulus ``K`` (Pa), the
 shear modulus ``mu`` (Pa) and the critical stretch ``s0`` (dimensionless) of the bond-breaking
-criterion. This module derives them from engineering constants.
+criterion. This module derives them from engineering constants: ``s0`` from a tensile strength
+(``s0 = sigma_t / E``, independent of the spacing), from the fracture energy (``s0`` scales as
+horizon^-1/2) or given; ``docs/ice_strength.md`` derives the strength relations.
 
 Sea-ice defaults (``SEA_ICE_DEFAULTS``) and their sources:
 
@@ -14,8 +16,8 @@ Sea-ice defaults (``SEA_ICE_DEFAULTS``) and their sources:
   e.g. Timco & Weeks 2010, Cold Reg. Sci. Technol. 60);
 - fracture energy 10 J/m^2: an order of magnitude; reported values for sea ice scatter over
   roughly an order of magnitude with specimen size and loading rate (Timco & Weeks 2010);
-- flexural strength 0.4-0.9 MPa (Timco & O'Brien 1994, Cold Reg. Sci. Technol. 22). Not used by
-  the kernels; listed so that a calibrated ``s0`` can be checked against it.
+- flexural strength 0.4-0.9 MPa (Timco & O'Brien 1994, Cold Reg. Sci. Technol. 22): a typical
+  input ``flexural_strength`` of a case (:func:`tensile_from_flexural`).
 
 All values are SI.
 """
@@ -120,6 +122,36 @@ def critical_stretch(fracture_energy: float, K: float, mu: float, delta: float) 
     return math.sqrt(G0 / denom)
 
 
+def implied_fracture_energy(s0: float, K: float, mu: float, delta: float) -> float:
+    """The fracture energy (J/m^2) that a critical stretch ``s0`` implies at horizon ``delta`` (m).
+
+    The inverse of :func:`critical_stretch`: ``G0 = s0^2 (3 mu + (3/4)^4 (K - 5 mu / 3)) delta``
+    (Madenci & Oterkus 2014). With ``s0`` fixed by a strength, G0 grows in proportion to the
+    horizon: a brittle bond law honours a strength or a fracture energy, not both.
+    """
+    return float(s0) ** 2 * (3.0 * mu + 0.75**4 * (K - 5.0 * mu / 3.0)) * float(delta)
+
+
+def tensile_from_flexural(flexural_strength: float, dx: float, depth: float) -> float:
+    """The bond tensile strength (Pa) that makes a lattice beam's flexural strength the input.
+
+    Parameters
+    ----------
+    flexural_strength
+        sigma_f (Pa), from the beam formula at the peak load.
+    dx
+        Lattice spacing (m).
+    depth
+        Depth h of the body in bending (m): its thinnest extent.
+
+    Returns
+    -------
+    float
+        sigma_t (Pa); ``docs/ice_strength.md`` derives the relation and its limits.
+    """
+    return float(flexural_strength)
+
+
 @dataclass(frozen=True)
 class IceMaterial:
     """Elastic-brittle ice for the LPS kernels.
@@ -135,8 +167,15 @@ class IceMaterial:
     fracture_energy
         Critical energy release rate G0 (J/m^2); gives ``s0`` through :func:`critical_stretch`.
     critical_stretch
-        The critical stretch itself (dimensionless, > 0); wins over ``fracture_energy``.
-        With neither given, bonds never break (``s0 = inf``).
+        The critical stretch itself (dimensionless, > 0); wins over the others.
+    tensile_strength
+        The uniaxial tensile strength sigma_t (Pa, > 0) the kernels use: ``s0 = sigma_t / E``,
+        at any horizon; wins over ``fracture_energy``. Under uniaxial stress sigma along x the
+        LPS strain is uniform, eps = sigma / E along x and -nu eps across, so a bond of
+        direction n has stretch eps (n_x^2 - nu (1 - n_x^2)) (small strain: the stretch of a
+        bond is n.eps.n). That is largest, eps, for the bond along the load (n_x = 1); bonds
+        first break when eps = s0, i.e. at sigma = E s0. Hence ``s0 = sigma_t / E`` exactly.
+        With none of the three given, bonds never break (``s0 = inf``).
     """
 
     density: float
@@ -144,6 +183,7 @@ class IceMaterial:
     poisson_ratio: float
     fracture_energy: float | None = None
     critical_stretch: float | None = None
+    tensile_strength: float | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.density) and self.density > 0.0):
@@ -157,6 +197,12 @@ class IceMaterial:
             )
         if self.critical_stretch is not None and not (self.critical_stretch > 0.0):
             raise ValueError(f"critical stretch must be positive, got {self.critical_stretch!r}")
+        if self.tensile_strength is not None and not (
+            math.isfinite(self.tensile_strength) and self.tensile_strength > 0.0
+        ):
+            raise ValueError(
+                f"tensile strength must be a positive number of Pa, got {self.tensile_strength!r}"
+            )
 
     @property
     def K(self) -> float:
@@ -174,10 +220,23 @@ class IceMaterial:
         return math.sqrt(self.youngs_modulus / self.density)
 
     def s0(self, delta: float) -> float:
-        """Critical stretch for horizon ``delta`` (m): the given one, else from G0, else inf."""
+        """Critical stretch for horizon ``delta`` (m): the given one, else sigma_t / E, else from
+        G0, else inf."""
         if self.critical_stretch is not None:
             return float(self.critical_stretch)
+        if self.tensile_strength is not None:
+            return float(self.tensile_strength) / float(self.youngs_modulus)
         if self.fracture_energy is None:
             return math.inf
         K, mu = lps_constants(self.youngs_modulus, self.poisson_ratio)
         return critical_stretch(self.fracture_energy, K, mu, delta)
+
+    def fracture_energy_at(self, delta: float) -> float:
+        """The fracture energy (J/m^2) the bond law has at horizon ``delta`` (m): the given
+        G0, or the one ``s0`` implies (:func:`implied_fracture_energy`; inf if bonds never
+        break)."""
+        s0 = self.s0(delta)
+        if self.critical_stretch is None and self.tensile_strength is None \
+                and self.fracture_energy is not None:
+            return float(self.fracture_energy)
+        return implied_fracture_energy(s0, self.K, self.mu, delta)
