@@ -25,7 +25,8 @@ def ice_material(m: IceMaterialSection, dx: float | None = None,
     ``critical_stretch`` or a strength, when given, replaces ``fracture_energy``. A
     ``flexural_strength`` becomes the kernels' tensile strength through
     :func:`pdfem.pd.materials.lps.tensile_from_flexural`, which needs the lattice spacing ``dx``
-    (m) and the body's depth ``depth`` (m, its thinnest extent); ``docs/ice_strength.md``.
+    (m) and the body's depth ``depth`` (m, its z extent: the thickness of a sheet, the depth
+    of a beam loaded along z); ``docs/ice_strength.md``.
     """
     tensile = m.tensile_strength
     if m.flexural_strength is not None:
@@ -61,9 +62,12 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.horizon_factor", str(exc),
                          cfg.horizon / cfg.dx) from None
+    lo, hi = cfg.shape.bounds()
     try:
-        lo, hi = cfg.shape.bounds()
-        material = ice_material(cfg.material, cfg.dx, float(min(np.subtract(hi, lo))))
+        material = ice_material(cfg.material, cfg.dx, float(hi[2] - lo[2]))
+    except ValueError as exc:
+        raise InputError(file, f"{cfg.field}.material.flexural_strength", str(exc)) from None
+    try:
         body = IceBody.from_shape(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon,
                                   loop=run.pd_loop)
     except ValueError as exc:
