@@ -86,6 +86,18 @@ def test_flexural_strength_becomes_the_bond_threshold():
     sigma_t = tensile_from_flexural(0.7e6, 0.01, 0.05)
     assert body.material.tensile_strength == pytest.approx(sigma_t, rel=1e-15)
     assert body.s0 == pytest.approx(sigma_t / 4.1e9, rel=1e-15)
+    assert sigma_t == pytest.approx(0.7e6 * (1 - 0.01 / 0.05) / 1.08, rel=1e-15)
+
+
+def test_flexural_strength_on_too_thin_a_body_exits_2(tmp_path):
+    """Reference: the law's limit (docs/ice_strength.md): fewer than 4 particle layers across
+    the depth is refused, naming the field."""
+    case = tmp_path / "thin.toml"
+    case.write_text(RUN + ICE.replace("0.04, 0.04, 0.04", "0.10, 0.10, 0.03")
+                    + "material = { flexural_strength = 0.7e6 }\n")
+    r = _pdfem("run", str(case), "--out", str(tmp_path / "out"), "--quiet")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert "ice[0].material.flexural_strength" in r.stderr and "4 particle layers" in r.stderr
 
 
 BAR = """
