@@ -8,7 +8,7 @@ turns the material section into the kernels' :class:`pdfem.pd.materials.lps.IceM
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
@@ -57,6 +57,19 @@ class IceMaterialSection(Section):
     critical_stretch: Annotated[float, Positive()] | None = Field(
         None, description="Critical bond stretch s0 (-), instead of fracture_energy. "
         "Default: from fracture_energy.")
+    failure: Literal["critical_stretch", "ice"] = Field(
+        "critical_stretch", description="Failure law of the bonds: \"critical_stretch\" (bonds "
+        "break in tension only) or \"ice\" (tension, and compressive-shear crushing at "
+        "compressive_strength, rising with confinement; docs/ice_failure.md). "
+        "Default: \"critical_stretch\".")
+    compressive_strength: Annotated[float, Positive("Pa")] | None = Field(
+        None, description="Uniaxial compressive strength (Pa) of the \"ice\" failure law; "
+        "required with it. Sea ice: about 1-5 MPa at ice-structure strain rates (Timco & Weeks "
+        "2010). Default: none.")
+    friction_angle: Annotated[float, Number("deg", ge=0.0, lt=60.0)] = Field(
+        30.0, description="Internal friction angle (degrees) of the \"ice\" law's Coulomb "
+        "criterion: the compressive strength rises by (1 + sin phi) / (1 - sin phi) times the "
+        "confining pressure. Default: 30 (Schulson & Duval 2009: friction coefficient 0.5-0.9).")
 
     @model_validator(mode="after")
     def _one_criterion(self) -> "IceMaterialSection":
@@ -76,6 +89,14 @@ class IceMaterialSection(Section):
         if {"fracture_energy", "critical_stretch"} <= given:
             raise fail("give either fracture_energy (J/m^2) or critical_stretch, not both",
                        key="critical_stretch")
+        if self.failure == "ice" and self.compressive_strength is None:
+            raise fail('failure = "ice" needs compressive_strength (Pa), e.g. 3.0e6',
+                       key="compressive_strength")
+        if self.failure != "ice":
+            for key in ("compressive_strength", "friction_angle"):
+                if key in self.model_fields_set:
+                    raise fail(f'{key} is a parameter of failure = "ice"; set failure = "ice" '
+                               "or remove it", key=key)
         return self
 
 

@@ -38,7 +38,8 @@ class RunSection(Section):
     short_range_contact: Boolean = Field(
         False, description="Repulsion between ice particles closer than 0.9 of their initial "
                            "distance (broken pieces, separate floes; seed Eq. 4 with Silling & "
-                           "Askari's constant). Default: false.")
+                           "Askari's constant). Always on when an ice body has failure = "
+                           "\"ice\" (crushed ice carries load through it). Default: false.")
     allow_unstable_time_step: Boolean = Field(
         False, description="Run with a time_step above the stable estimate (only a warning); "
                            "otherwise such a step is refused (exit 2). Default: false.")

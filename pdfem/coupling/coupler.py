@@ -338,7 +338,7 @@ class Coupler:
         energy balance, and the energy it held leaves with it (the fracture term)."""
         if broken:
             for b in self.bodies:
-                b.compute_forces()
+                b.refresh_forces()
             for force in self.forces:
                 force.add_forces()
 

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pdfem.pd import kernels
+from pdfem.pd.body_state import BodyCheckpoint
 from pdfem.pd.bonds import bond_lengths, cut_crack
 from pdfem.pd.constraints import VelocityConstraint
 from pdfem.pd.failure import CriticalStretch, FailureLaw
@@ -53,7 +54,7 @@ from pdfem.pd.search import cell_pairs
 
 
 @dataclass
-class IceBody(WholeBody):
+class IceBody(BodyCheckpoint, WholeBody):
     """State of one peridynamic ice body (all arrays SI, particles in cell order).
 
     Build one with :meth:`from_points` (or :func:`pdfem.run.build_ice.build_ice_body` from a case).
@@ -90,12 +91,20 @@ class IceBody(WholeBody):
     # bond is a negative weight. Given (e.g. by dataclasses.replace(body, flags=...)), the body
     # keeps them as a separate array that the kernels update in place, and ``broken`` is it.
     flags: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # (P,) float32 stretch at which each bond broke, NaN if intact or broken for good: with a
+    # failure law whose broken bonds keep pushing in compression (crushed ice), else None
+    rest: np.ndarray | None = field(default=None, repr=False, compare=False)
     _ledger: FractureLedger = field(default_factory=FractureLedger, init=False, repr=False,
                                     compare=False)
 
     def __post_init__(self) -> None:
         if self.failure is None:
             self.failure = CriticalStretch.from_material(self.material, self.delta)
+        if self.failure.broken_bonds_push and self.rest is None:
+            if self.loop != "pairs":
+                raise ValueError(f"the {self.failure.name!r} failure law needs the pair loop "
+                                 "(pd_loop = \"pairs\")")
+            self.rest = np.full(self.nbr.shape[0], np.nan, dtype=np.float32)
 
     @classmethod
     def from_points(cls, name: str, x: np.ndarray, material: IceMaterial, dx: float, delta: float,
@@ -209,8 +218,14 @@ class IceBody(WholeBody):
 
     @property
     def s0(self) -> float:
-        """The stretch above which bonds break (:attr:`failure`; inf: never)."""
-        return self.failure.stretch_limit()
+        """The stretch above which bonds break at zero dilatation (:attr:`failure`; inf: never)."""
+        return self.failure.stretch_limits()[0]
+
+    @property
+    def limits(self) -> tuple[float, ...]:
+        """The failure law's stretch bounds (t0, t1, c0, c1, d0, d1) the kernels take
+        (:meth:`pdfem.pd.failure.base.FailureLaw.stretch_limits`)."""
+        return self.failure.stretch_limits()
 
     def cut_crack(self, point, normal, lo, hi) -> int:
         """Break the bonds crossing a planar pre-crack (see :func:`pdfem.pd.bonds.cut_crack`)."""
@@ -245,16 +260,20 @@ class IceBody(WholeBody):
         if self.loop == "pairs":
             nb = kernels.dilatation_and_forces(self.y, self.row_ptr, self.nbr, self.xi_len,
                                                self.weight, br, self.vol, self.m, mat.K, mat.mu,
-                                               self.s0, self.nofail, self.theta, self.f, self._ws)
+                                               self.limits, self.nofail, self.theta, self.f,
+                                               self._ws, rest=self.rest,
+                                               crush_yield=self.failure.crush_yield)
         else:
             fam_ptr, fam_nbr, fam_bond = self._family
             kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
                                       self.weight, br, self.vol, self.m, self.theta)
             nb = kernels.forces_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
                                        self.weight, br, self.vol, self.m, self.theta, mat.K,
-                                       mat.mu, self.s0, self.nofail, self.f)
+                                       mat.mu, self.limits, self.nofail, self.f)
         if nb:
             self.fracture_dissipated += self._ledger.released(self)
+        if self.rest is not None:
+            self.fracture_dissipated += self._ws.crush_dissipated
         return nb
 
     def _apply_constraints(self, t: float) -> None:
@@ -294,7 +313,7 @@ class IceBody(WholeBody):
         breaking here are no dissipation of the run (the run starts from the state after)."""
         self._apply_constraints(self.time)
         before = self.fracture_dissipated
-        self.compute_forces()
+        self.refresh_forces()
         self.fracture_dissipated = before
 
     def begin_step(self, dt: float, keep_old: bool = False) -> np.ndarray | None:
@@ -330,8 +349,14 @@ class IceBody(WholeBody):
         nbroken = self.compute_forces()
         self.end_step(dt)
         if nbroken:
-            self.compute_forces()  # the broken bonds acted in this step, not in the next
+            self.refresh_forces()  # the broken bonds acted in this step, not in the next
         return nbroken
+
+    def refresh_forces(self) -> None:
+        """The forces without the bonds the last pass broke, recomputed until no further bond
+        breaks (:meth:`pdfem.pd.ice_interface.IceParticles.refresh_forces`)."""
+        while self.compute_forces():
+            pass
 
     # -- diagnostics ---------------------------------------------------------------------------
     def displacement(self) -> np.ndarray:
@@ -348,7 +373,8 @@ class IceBody(WholeBody):
         return 0.5 * self.material.density * float(np.sum(self.vol * np.einsum("ij,ij->i", self.v, self.v)))
 
     def strain_energy(self) -> float:
-        """Elastic energy of the unbroken bonds at the current positions, J."""
+        """Elastic energy of the unbroken bonds at the current positions, and of the broken
+        bonds that still push (crushed ice), J."""
         mat = self.material
         theta = np.empty(self.n)  # of the current bond set (bonds broken this step excluded)
         br = self._broken_arg()
@@ -356,45 +382,11 @@ class IceBody(WholeBody):
                            self.vol, self.m, theta, self._ws)
         W = kernels.strain_energy(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight,
                                   br, self.vol, self.m, theta, mat.K, mat.mu, self._ws)
-        return float(np.dot(W, self.vol))
+        crushed = 0.0 if self.rest is None else kernels.contact_bond_energy(
+            self.y, self.row_ptr, self.nbr, self.xi_len, self.weight, br, self.rest, self.vol,
+            self.m, mat.mu)
+        return float(np.dot(W, self.vol)) + crushed
 
     def momentum(self) -> np.ndarray:
         """Linear momentum (3,), kg m/s."""
         return self.material.density * (self.vol @ self.v)
-
-    # -- checkpoints ---------------------------------------------------------------------------
-    def checkpoint_state(self) -> dict:
-        """Copies of the state that a restart needs: arrays :data:`STATE_ARRAYS` (``y`` m,
-        ``v`` m/s, ``f`` N/m^3, ``broken`` uint8 per bond, ``theta``) and scalars
-        :data:`STATE_SCALARS` (``time`` s, ``external_work`` J, ``fracture_dissipated`` J)."""
-        out = {k: np.array(getattr(self, k)) for k in STATE_ARRAYS}
-        out.update({k: float(getattr(self, k)) for k in STATE_SCALARS})
-        return out
-
-    def restore_state(self, state: dict) -> None:
-        """Put a state from :meth:`checkpoint_state` back, in place and bit for bit.
-
-        Raises
-        ------
-        ValueError
-            If an array's shape differs from the body's.
-        """
-        for k in STATE_ARRAYS:
-            value = np.asarray(state[k])
-            target = getattr(self, k)
-            if value.shape != target.shape:
-                raise ValueError(f"ice body '{self.name}': {k} has shape {value.shape} in the "
-                                 f"checkpoint, {target.shape} in the case")
-            if k == "broken":
-                self.broken = value.astype(np.uint8)  # kept in the signed weights or the flags
-            else:
-                target[...] = value
-        for k in STATE_SCALARS:
-            setattr(self, k, float(state[k]))
-
-
-STATE_ARRAYS = ("y", "v", "f", "broken", "theta")
-"""Per-particle (and per-bond: ``broken``) state arrays of an ice body, for checkpoints."""
-
-STATE_SCALARS = ("time", "external_work", "fracture_dissipated")
-"""Scalar state of an ice body (s, J, J), for checkpoints."""

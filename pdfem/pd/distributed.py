@@ -122,7 +122,8 @@ class DistributedIce:
             weight=kernels.signed_weights(body.weight[pairs], body.broken[pairs]),
             flags=None,  # broken bonds are negative weights (replace would copy the flags)
             fixed=body.fixed[loc].copy(), constraints=[],
-            loop="pairs", external_work=0.0, fracture_dissipated=0.0)
+            loop="pairs", external_work=0.0, fracture_dissipated=0.0,
+            rest=None if body.rest is None else body.rest[pairs].copy())
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
@@ -132,6 +133,7 @@ class DistributedIce:
         # bonds whose lower end is owned here: counted once over all ranks
         self._counted = plan.owned[np.repeat(np.arange(len(loc)), np.diff(row_ptr))]
         self._counted_broken = self._broken_count()
+        self._owned_rows = plan.owned.astype(np.uint8)  # whose crushing energy this rank counts
 
     # -- exchanges ---------------------------------------------------------------------------
     def _exchange(self, values: np.ndarray) -> None:
@@ -157,9 +159,13 @@ class DistributedIce:
         b._ledger.prepare(b)
         self._exchange(b.y)
         broke = kernels.dilatation_and_forces(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight,
-                                              b._broken_arg(), b.vol, b.m, mat.K, mat.mu, b.s0,
+                                              b._broken_arg(), b.vol, b.m, mat.K, mat.mu, b.limits,
                                               b.nofail, b.theta, b.f, b._ws,
-                                              between=self._exchange)
+                                              between=self._exchange, rest=b.rest,
+                                              crush_yield=b.failure.crush_yield,
+                                              owned=self._owned_rows)
+        if b.rest is not None:
+            b.fracture_dissipated += b._ws.crush_dissipated
         if broke == 0:  # the usual step: no recount over the bonds
             return 0
         b.fracture_dissipated += b._ledger.released(b, self.plan.owned)
@@ -171,7 +177,7 @@ class DistributedIce:
         """Initial forces (call once before the first step)."""
         self.body._apply_constraints(self.body.time)
         before = self.body.fracture_dissipated
-        self._compute_forces()
+        self.refresh_forces()
         self.body.fracture_dissipated = before  # breaks before the start: not the run's
 
     def step(self, dt: float) -> int:
@@ -180,8 +186,14 @@ class DistributedIce:
         broken = int(self.comm.allreduce_sum(self._compute_forces()))
         self.body.end_step(dt)
         if broken:  # bonds that broke acted in this step; the next starts without them
-            self._compute_forces()
+            self.refresh_forces()
         return broken
+
+    def refresh_forces(self) -> None:
+        """The forces without the bonds the last pass broke, recomputed on all ranks until no
+        further bond breaks anywhere."""
+        while self.comm.allreduce_sum(self._compute_forces()):
+            pass
 
     # -- the IceParticles interface (pdfem.pd.ice_interface) ----------------------------------
     # Arrays are the local ones (owned and halo particles); sums are over owned particles and
@@ -257,7 +269,10 @@ class DistributedIce:
         self._exchange(theta)
         W = kernels.strain_energy(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b._broken_arg(), b.vol,
                                   b.m, theta, mat.K, mat.mu, b._ws)
-        return float(self._sum(W * b.vol))
+        crushed = 0.0 if b.rest is None else kernels.contact_bond_energy(
+            b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b._broken_arg(), b.rest, b.vol, b.m,
+            mat.mu, owned=self.plan.owned)
+        return float(self._sum(W * b.vol)) + float(self.comm.allreduce_sum(crushed))
 
     def momentum(self) -> np.ndarray:
         b = self.body
@@ -308,15 +323,20 @@ class DistributedIce:
         b = self.body
         arrays = {k: self.gather(getattr(b, k)) for k in ("y", "v", "f", "theta")}
         counted = self._counted
-        bonds = self.comm.gather((self.plan.pairs[counted], b.broken[counted]))
+        rest = b.rest[counted] if b.rest is not None else None
+        bonds = self.comm.gather((self.plan.pairs[counted], b.broken[counted], rest))
         work = self.comm.gather(float(b.external_work))
         frac = self.comm.gather(float(b.fracture_dissipated))
         if bonds is None:
             return None
         broken = np.zeros(len(self.global_body.nbr), dtype=np.uint8)
-        for idx, flags in bonds:
+        rests = np.full(len(self.global_body.nbr), np.nan, dtype=np.float32)
+        for idx, flags, rest in bonds:
             broken[idx] = flags
-        return {**arrays, "broken": broken, "time": float(b.time),
+            if rest is not None:
+                rests[idx] = rest
+        extra = {} if b.rest is None else {"rest": rests}
+        return {**arrays, **extra, "broken": broken, "time": float(b.time),
                 "external_work": _rank_sum(work), "external_work_ranks": np.array(work),
                 "fracture_dissipated": _rank_sum(frac), "fracture_dissipated_ranks": np.array(frac)}
 
@@ -340,7 +360,9 @@ class DistributedIce:
                                  "broken": state["broken"][pairs], "time": state["time"],
                                  "external_work": self._rank_part(state, "external_work"),
                                  "fracture_dissipated":
-                                     self._rank_part(state, "fracture_dissipated")})
+                                     self._rank_part(state, "fracture_dissipated"),
+                                 **({} if self.body.rest is None
+                                    else {"rest": state["rest"][pairs]})})
         self._counted_broken = self._broken_count()
 
     def _rank_part(self, state: dict, key: str) -> float:

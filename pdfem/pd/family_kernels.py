@@ -24,6 +24,7 @@ from pdfem.pd.lps_law import (
     is_broken,
     mark_broken,
     pair_force_scalar,
+    stretch_limits,
 )
 from pdfem.pd.pair_kernels import check_broken, check_weight
 from pdfem.pd.workspace import c_contiguous
@@ -51,8 +52,7 @@ def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, v
 
 
 @numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
-def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, coef2, wt, s0,
-                   nofail, fout):
+def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, coef2, wt, fout):
     y = y2.reshape(y2.size)
     coef = coef2.reshape(coef2.size)
     f = fout.reshape(fout.size)
@@ -60,8 +60,8 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
         yi0 = y[3 * i]
         yi1 = y[3 * i + 1]
         yi2 = y[3 * i + 2]
-        ai = coef[2 * i]
-        bi = coef[2 * i + 1]
+        ai = coef[4 * i]
+        bi = coef[4 * i + 1]
         fx = 0.0
         fy = 0.0
         fz = 0.0
@@ -75,8 +75,8 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
             d0, d1, d2 = bond_vector(y, U64(3) * j, yi0, yi1, yi2)
             r = bond_length(d0, d1, d2)
             e = r - l
-            j2 = U64(2) * j
-            g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
+            j4 = U64(4) * j
+            g = pair_force_scalar(ai + coef[j4], bi + coef[j4 + U64(1)], l, e, w, r)
             g *= vol[j]
             fx = fma(g, d0, fx)
             fy = fma(g, d1, fy)
@@ -87,13 +87,15 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
 
 
 @numba.njit(cache=True)
-def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, s0, nofail):
+def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coef2, nofail, lim):
     """Mark the bonds that break at these positions (after the forces, in which they still
     acted), each once from its smaller-index end; the number marked."""
     y = y2.reshape(y2.size)
+    coef = coef2.reshape(coef2.size)
     nb = 0
     for i in range(fam_ptr.shape[0] - 1):
         can_i = nofail[i] == 0
+        hth = coef[4 * i + 2]
         for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
             j = U64(fam_nbr[q])
             if j <= U64(i):
@@ -104,7 +106,9 @@ def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, s0,
                 continue
             l = xi_len[k]
             d0, d1, d2 = bond_vector(y, U64(3) * j, y[3 * i], y[3 * i + 1], y[3 * i + 2])
-            if breaks(bond_length(d0, d1, d2) - l, l, s0, can_i, nofail, j):
+            j4 = U64(4) * j
+            if breaks(bond_length(d0, d1, d2) - l, l, hth + coef[j4 + U64(2)], lim, can_i,
+                      nofail, j):
                 mark_broken(signed, wt, w, broken, k)
                 nb += 1
     return nb
@@ -162,7 +166,7 @@ def forces_family(
     fam_ptr, fam_nbr, fam_bond
         Family lists from :func:`pdfem.pd.family.build_family`.
     coef
-        Optional (N, 2) float64 scratch for the per-particle coefficients.
+        Optional (N, 4) float64 scratch for the per-particle coefficients.
     others
         As in :func:`pdfem.pd.pair_kernels.forces`.
 
@@ -173,12 +177,12 @@ def forces_family(
     """
     n = fam_ptr.shape[0] - 1
     if coef is None:
-        coef = np.empty((n, 2))
+        coef = np.empty((n, 4))
     force_coefficients(True, m, theta, K, mu, coef)
     yc, signed, wt = c_contiguous(y, "y"), check_broken(broken, xi_len), check_weight(weight, xi_len)
     _forces_family(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol,
-                   c_contiguous(coef, "coef"), wt, float(s0), nofail, c_contiguous(f_out, "f_out"))
-    return int(_mark_breaks(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, float(s0),
-                            nofail))
+                   c_contiguous(coef, "coef"), wt, c_contiguous(f_out, "f_out"))
+    return int(_mark_breaks(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coef,
+                            nofail, stretch_limits(s0)))
 
 

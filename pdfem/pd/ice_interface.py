@@ -45,6 +45,12 @@ class IceParticles(Protocol):
 
     def compute_forces(self) -> int: ...
 
+    def refresh_forces(self) -> None:
+        """After a force pass that broke bonds: the forces without them (recomputed until no
+        further bond breaks at these positions, as a failure law whose bounds depend on the
+        dilatation can break more once some are gone)."""
+        ...
+
     def end_step(self, dt: float) -> None: ...
 
     @property

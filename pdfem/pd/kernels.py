@@ -9,8 +9,9 @@ The kernels live in modules with one concept each:
 - :mod:`pdfem.pd.lps_law`: the LPS force law per bond (stretch, dilatation term, force-state
   scalar, breaking test), written once and inlined into every loop below;
 - :mod:`pdfem.pd.pair_kernels`: the particle-pair loops' public functions (weighted volume,
-  dilatation, forces and bond breaking, the fused step, strain energy, damage), over the numba
-  loops of :mod:`pdfem.pd.pair_step_kernels` and :mod:`pdfem.pd.pair_sum_kernels`;
+  dilatation, forces and bond breaking, the fused step) and :mod:`pdfem.pd.pair_sums` (strain
+  energy, the potential of crushed bonds, damage), over the numba loops of
+  :mod:`pdfem.pd.pair_step_kernels` and :mod:`pdfem.pd.pair_sum_kernels`;
 - :mod:`pdfem.pd.family_kernels`: the per-particle full-family reference loops;
 - :mod:`pdfem.pd.fracture_kernels`: the strain energy released by the bonds broken in a step
   (used by :mod:`pdfem.pd.fracture`);
@@ -28,15 +29,14 @@ from pdfem.pd.integrate import verlet_drift, verlet_kick
 from pdfem.pd.pair_kernels import (
     SIGNED,
     broken_flags,
-    damage,
     dilatation,
     dilatation_and_forces,
     family_sum,
     forces,
     signed_weights,
-    strain_energy,
     weighted_volume,
 )
+from pdfem.pd.pair_sums import contact_bond_energy, damage, strain_energy
 from pdfem.pd.timestep import max_eigenvalue_time_step, stable_time_step
 from pdfem.pd.workspace import SERIAL_BELOW_PAIRS, SERIAL_BELOW_PARTICLES, PairWorkspace
 
@@ -47,6 +47,7 @@ __all__ = [
     "PairWorkspace",
     "broken_flags",
     "bond_weights",
+    "contact_bond_energy",
     "damage",
     "dilatation",
     "dilatation_and_forces",

@@ -7,7 +7,11 @@ The linear peridynamic solid (Silling et al. 2007; DESIGN.md "Peridynamics") per
     force state:    t_ij = (3 K theta_i / m_i) l + (15 mu / m_i) e_d,   e_d = e - theta_i l / 3
                          = a_i l + b_i e,   a_i = theta_i (3K - 5mu) / m_i,   b_i = 15 mu / m_i
     pair force:     (t_ij + t_ji) omega (y_j - y_i) / r
-    breaking:       e / l > s0 (critical stretch), unless an end has ``nofail``
+    breaking:       e / l > s_max or e / l < s_min, unless an end has ``nofail``; the bounds
+                    depend on the bond's mean dilatation theta = (theta_i + theta_j) / 2:
+                    s_max = t0 + t1 theta, s_min = min(c0 + c1 theta, d0 + d1 theta) (the
+                    failure law's :meth:`~pdfem.pd.failure.base.FailureLaw.stretch_limits`;
+                    the critical stretch is (s0, 0, -inf, 0, -inf, 0))
 
 Every kernel that evaluates the law (the pair loops of :mod:`pdfem.pd.pair_step_kernels` and
 :mod:`pdfem.pd.pair_sum_kernels`, the full-family reference loops of
@@ -15,7 +19,8 @@ Every kernel that evaluates the law (the pair loops of :mod:`pdfem.pd.pair_step_
 :mod:`pdfem.pd.distributed`) calls these helpers. They are ``inline="always"``: numba pastes
 their IR into the caller, which compiles them with its own flags, so a helper costs nothing and
 the floating-point operations (and their order) are exactly those of the formulas above.
-:func:`force_coefficients` is the per-particle half of the force state (a_i, b_i).
+:func:`force_coefficients` is the per-particle half of the force state (a_i, b_i) and half the
+particle's dilatation (so that a bond's mean dilatation is the sum of its ends', one gather each).
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 from numba import prange
 
 from pdfem.pd.chunk_kernels import U64, fma, twin
@@ -72,9 +78,28 @@ def dilatation_of(s, m):
 
 
 @numba.njit(**_INLINE)
-def breaks(e, l, s0, can_i, nofail, j):
-    """The critical-stretch test: stretch e / l above s0 and neither end ``nofail``."""
-    return e > s0 * l and can_i and nofail[j] == 0
+def breaks(e, l, th, lim, can_i, nofail, j):
+    """The failure test: stretch e / l outside the bounds ``lim`` = (t0, t1, c0, c1, d0, d1)
+    at the bond's mean dilatation ``th`` (module doc), and neither end ``nofail``."""
+    if not (can_i and nofail[j] == 0):
+        return False
+    if e > (lim[0] + lim[1] * th) * l:
+        return True
+    return e < min(lim[2] + lim[3] * th, lim[4] + lim[5] * th) * l
+
+
+def stretch_limits(s0) -> np.ndarray:
+    """The six stretch-bound coefficients (t0, t1, c0, c1, d0, d1) the kernels take (module doc).
+
+    ``s0`` is either a critical stretch (a scalar: ``(s0, 0, -inf, 0, -inf, 0)``) or the six
+    coefficients of a failure law's :meth:`~pdfem.pd.failure.base.FailureLaw.stretch_limits`.
+    """
+    a = np.asarray(s0, dtype=np.float64).reshape(-1)
+    if a.shape[0] == 1:
+        return np.array([a[0], 0.0, -math.inf, 0.0, -math.inf, 0.0])
+    if a.shape[0] != 6:
+        raise ValueError(f"stretch limits are a critical stretch or 6 numbers, got {a.shape[0]}")
+    return a
 
 
 @numba.njit(**_INLINE)
@@ -82,6 +107,47 @@ def pair_force_scalar(a, b, l, e, w, r):
     """(t_ij + t_ji) omega / r, with a = a_i + a_j and b = b_i + b_j (see the module doc):
     times V_j (y_j - y_i) it is the force density on i, times V_i (y_i - y_j) that on j."""
     return fma(a, l, b * e) * w / r
+
+
+@numba.njit(**_INLINE)
+def crushed_bond(b, l, p, sy, w, r, vij):
+    """A broken bond that still pushes (crushed ice, :mod:`pdfem.pd.failure.ice`): a
+    compression-only, elastic-perfectly-plastic spring between its ends.
+
+    With b = b_i + b_j, weight magnitude ``w`` and its plastic rest length r_p = l (1 + p), it
+    pushes with k (r_p - r), k = b w V_i V_j, while r < r_p, up to a compression of ``sy`` l
+    (the yield stretch); beyond it r_p slides to r + sy l and the spring's force k sy l does
+    work that is dissipated. Returns the force scalar g (times V_j (y_j - y_i): the force
+    density on i, as :func:`pair_force_scalar`), the new p and the energy dissipated (J;
+    ``vij`` = V_i V_j)."""
+    rp = l * (1.0 + p)
+    c = rp - r
+    if c <= 0.0:
+        return 0.0, p, 0.0
+    cap = sy * l
+    diss = 0.0
+    if c > cap:
+        p = (r + cap - l) / l
+        diss = b * w * cap * c - b * w * cap * cap  # F_cap (r_p - r_p,new)
+        diss *= vij
+        c = cap
+    return -b * w * c / r, p, diss
+
+
+@numba.njit(**_INLINE)
+def crushed_bond_energy(b, l, p, w, r):
+    """The stored energy of :func:`crushed_bond` per V_i V_j: b w (r_p - r)^2 / 2 (0 if r >= r_p)."""
+    c = l * (1.0 + p) - r
+    if c > 0.0:
+        return 0.5 * b * w * c * c
+    return 0.0
+
+
+@numba.njit(**_INLINE)
+def crushed_rest(e, l, sy):
+    """p of a bond breaking at extension ``e``: its plastic rest length is min(l, r + sy l),
+    so it pushes at once with at most the yield force (no drop of the force it carried)."""
+    return min(0.0, e / l + sy)
 
 
 @numba.njit(**_INLINE)
@@ -99,14 +165,18 @@ def energy_density(K, mu, theta, s, m):
 
 @twin(fastmath=False)
 def force_coefficients(m, theta, K, mu, coef):
-    """coef[:, 0] = a = theta (3K - 5mu) / m, coef[:, 1] = b = 15 mu / m (0 where m = 0)."""
+    """coef[:, 0] = a = theta (3K - 5mu) / m, coef[:, 1] = b = 15 mu / m (0 where m = 0);
+    coef[:, 2] = theta / 2 (a bond's mean dilatation is the sum over its ends), coef[:, 3] = 0."""
     c1 = 3.0 * K - 5.0 * mu
     c2 = 15.0 * mu
     for p in prange(m.shape[0]):
+        th = theta[p]
         if m[p] > 0.0:
             im = 1.0 / m[p]
-            coef[p, 0] = theta[p] * c1 * im
+            coef[p, 0] = th * c1 * im
             coef[p, 1] = c2 * im
         else:
             coef[p, 0] = 0.0
             coef[p, 1] = 0.0
+        coef[p, 2] = 0.5 * th
+        coef[p, 3] = 0.0

@@ -31,7 +31,8 @@ Per particle i with family j (e = |y_j - y_i| - |xi|, every family sum weighs me
 so that the total strain energy sum_i W_i V_i has gradient -V_i L_i with respect to y_i.
 
 A step computes the dilatation first, then forces with the break check: bond k breaks when its
-stretch e / |xi| exceeds ``s0`` and neither end has ``nofail``; a bond breaking in the force
+stretch e / |xi| leaves the failure law's bounds (above ``s0``, the critical stretch; a law may
+also bound it below, :mod:`pdfem.pd.lps_law`) and neither end has ``nofail``; a bond breaking in the force
 call contributes no force there and is marked broken (the dilatation of the same step still
 used it). Damage is the broken fraction of a particle's initial bonds.
 
@@ -46,15 +47,26 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pdfem.pd.lps_law import force_coefficients
+from pdfem.pd.lps_law import force_coefficients, stretch_limits
 from pdfem.pd.pair_step_kernels import dilatation_pairs, forces_pairs
-from pdfem.pd.pair_sum_kernels import damage_pairs, energy_pairs, family_sum_pairs
+from pdfem.pd.pair_sum_kernels import family_sum_pairs
 from pdfem.pd.workspace import c_contiguous, workspace_for
 
 if TYPE_CHECKING:
     from pdfem.pd.workspace import PairWorkspace
 
 _NO_R = np.zeros(0)  # stands for "no bond-length buffer" (read-only by convention)
+_NO_REST = np.zeros(0, dtype=np.float32)  # "broken bonds never push" (read-only by convention)
+_ALL_ROWS = np.zeros(0, dtype=np.uint8)  # "every row's crushing energy counts" (read-only)
+
+
+def rest_arg(rest: np.ndarray | None, per_pair: np.ndarray) -> tuple[np.ndarray, bool]:
+    """(array, granular) for the force kernels: ``rest`` checked, or the empty default."""
+    if rest is None:
+        return _NO_REST, False
+    if rest.dtype != np.float32 or rest.shape != per_pair.shape or not rest.flags.c_contiguous:
+        raise ValueError(f"rest must be a C-contiguous float32 array of shape {per_pair.shape}")
+    return rest, True
 
 #: Pass as ``broken`` to mean "bond k is broken iff weight[k] < 0" (read-only by convention).
 SIGNED = np.zeros(0, dtype=np.uint8)
@@ -215,10 +227,13 @@ def forces(
     nofail: np.ndarray,
     f_out: np.ndarray,
     ws: PairWorkspace | None = None,
+    rest: np.ndarray | None = None,
+    crush_yield: float = np.inf,
+    owned: np.ndarray | None = None,
 ) -> int:
     """LPS force density with the bond-break check (pair loop).
 
-    A bond with stretch ``e / |xi| > s0`` whose ends both lack ``nofail`` breaks here: it is
+    A bond with stretch ``e / |xi|`` outside the bounds ``s0`` whose ends both lack ``nofail`` breaks here: it is
     marked in ``broken`` and contributes no force. Already broken bonds are skipped.
 
     Parameters
@@ -235,13 +250,25 @@ def forces(
     K, mu
         Bulk and shear modulus (Pa).
     s0
-        Critical stretch (``inf``: no breaking).
+        Critical stretch (``inf``: no breaking), or the six stretch-bound coefficients
+        (t0, t1, c0, c1, d0, d1) of a failure law: a bond breaks when its stretch is above
+        t0 + t1 theta or below min(c0 + c1 theta, d0 + d1 theta), theta its ends' mean
+        dilatation (:mod:`pdfem.pd.lps_law`).
     nofail
         (N,) uint8, 1 = the particle's bonds never break.
     f_out
         (N, 3) float64, overwritten with the force density L_i (N/m^3).
     ws
         Optional :class:`PairWorkspace` for this pair list.
+    rest
+        Optional (P,) float32, NaN where unset: with it, broken bonds are crushed bonds,
+        compression-only elastic-plastic springs with plastic rest length |xi| (1 + rest)
+        (:func:`pdfem.pd.lps_law.crushed_bond`), which a bond breaking here becomes.
+    crush_yield
+        The crushed bonds' yield compression (stretch, > 0).
+    owned
+        Optional (N,) uint8: the rows whose crushed bonds' dissipation counts (default all).
+        The energy they dissipated in this call (J) is left in ``ws.crush_dissipated``.
 
     Returns
     -------
@@ -249,12 +276,17 @@ def forces(
         Number of bonds broken in this call.
     """
     ws = workspace_for(ws, row_ptr, nbr)
+    rest, granular = rest_arg(rest, nbr)
+    owned = _ALL_ROWS if owned is None else owned
     force_coefficients(ws.parallel_particles, m, theta, K, mu, ws.coef)
-    return int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
+    nb = int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                             check_broken(broken, nbr), vol,
-                            ws.coef, check_weight(weight, nbr), float(s0), nofail, ws.chunk_ptr,
+                            ws.coef, check_weight(weight, nbr), nofail, ws.chunk_ptr,
                             ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
-                            _NO_R, False))
+                            _NO_R, False, rest, granular, float(crush_yield), owned, ws.crush,
+                            stretch_limits(s0)))
+    ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
+    return nb
 
 
 def dilatation_and_forces(
@@ -274,6 +306,9 @@ def dilatation_and_forces(
     f_out: np.ndarray,
     ws: PairWorkspace,
     between=None,
+    rest: np.ndarray | None = None,
+    crush_yield: float = np.inf,
+    owned: np.ndarray | None = None,
 ) -> int:
     """One OSB step's internal forces: :func:`dilatation`, then :func:`forces` (pair loops).
 
@@ -286,7 +321,7 @@ def dilatation_and_forces(
     Parameters are those of :func:`dilatation` and :func:`forces`; ``theta_out`` (N,) and
     ``f_out`` (N, 3) are overwritten; ``ws`` is required. ``between``, if given, is called with
     ``theta_out`` between the two passes (an MPI rank's body exchanges its halo's dilatations
-    there).
+    there). ``rest``, ``crush_yield``, ``owned``: as in :func:`forces`.
 
     Returns
     -------
@@ -298,86 +333,16 @@ def dilatation_and_forces(
     keep = rbuf.shape[0] > 0
     wt = check_weight(weight, nbr)
     signed = check_broken(broken, nbr)
+    rest, granular = rest_arg(rest, nbr)
+    owned = _ALL_ROWS if owned is None else owned
     dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, signed, vol,
                      m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     if between is not None:
         between(theta_out)
     force_coefficients(ws.parallel_particles, m, theta_out, K, mu, ws.coef)
-    return int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
-                            float(s0), nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
-                            ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep))
-
-
-def strain_energy(
-    y: np.ndarray,
-    row_ptr: np.ndarray,
-    nbr: np.ndarray,
-    xi_len: np.ndarray,
-    weight: np.ndarray,
-    broken: np.ndarray,
-    vol: np.ndarray,
-    m: np.ndarray,
-    theta: np.ndarray,
-    K: float,
-    mu: float,
-    ws: PairWorkspace | None = None,
-) -> np.ndarray:
-    """Strain energy density W_i = K theta_i^2 / 2 + (15 mu / (2 m_i)) sum_j omega e_d^2 V_j.
-
-    Parameters are as in :func:`forces` (``theta`` from :func:`dilatation` for the same ``y``).
-
-    Returns
-    -------
-    ndarray
-        (N,) float64 energy density (J/m^3); the total strain energy is ``(W * vol).sum()``.
-    """
-    ws = workspace_for(ws, row_ptr, nbr)
-    W = np.empty(ws.n)
-    energy_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                 check_broken(broken, nbr), vol, m, theta,
-                 float(K), float(mu), check_weight(weight, nbr), ws.chunk_ptr, ws.ov_ptr, ws.ov,
-                 W)
-    return W
-
-
-def damage(
-    row_ptr: np.ndarray,
-    nbr: np.ndarray,
-    broken: np.ndarray,
-    n: int,
-    ws: PairWorkspace | None = None,
-    weight: np.ndarray | None = None,
-) -> np.ndarray:
-    """Damage: the broken fraction of each particle's initial bonds (0 for a particle without).
-
-    Parameters
-    ----------
-    row_ptr, nbr, broken
-        Pair list and broken flags (or :data:`SIGNED`); every pair counts for both its ends.
-    n
-        Number of particles N.
-    ws
-        Optional :class:`PairWorkspace` for this pair list.
-    weight
-        The signed float32 bond weights; required (and only read) with ``broken=SIGNED``.
-
-    Returns
-    -------
-    ndarray
-        (N,) float64 in [0, 1].
-    """
-    if row_ptr.shape[0] != n + 1:
-        raise ValueError(f"row_ptr must have n + 1 = {n + 1} entries, got {row_ptr.shape[0]}")
-    ws = workspace_for(ws, row_ptr, nbr)
-    out = np.empty(n)
-    deg = np.empty(n)
-    if weight is None:
-        weight = np.zeros(0, dtype=np.float32)
-    signed = check_broken(broken, nbr)
-    if signed:
-        check_weight(weight, nbr)
-    damage_pairs(ws.parallel, row_ptr, nbr, broken, signed, weight, ws.chunk_ptr, ws.ov_ptr,
-                 ws.ov, out, deg)
-    return out
-
-
+    nb = int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
+                          nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
+                          ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular,
+                          float(crush_yield), owned, ws.crush, stretch_limits(s0)))
+    ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
+    return nb

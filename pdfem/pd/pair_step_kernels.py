@@ -22,6 +22,9 @@ from pdfem.pd.lps_law import (
     bond_length,
     bond_vector,
     breaks,
+    crushed_bond,
+    crushed_bond_energy,
+    crushed_rest,
     dilatation_of,
     dilatation_term,
     is_broken,
@@ -107,38 +110,62 @@ def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, s
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail, f,
-                checked, r1, ov, base, rbuf, use_r):
-    """Row i of the pair-loop forces; returns the number of bonds it broke."""
+def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail, f,
+                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim):
+    """Row i of the pair-loop forces; returns the number of bonds it broke and, with
+    ``granular``, the energy its crushed bonds dissipated (J, if ``counted``): a broken bond
+    whose ``rest`` (p) is set (not NaN) is a crushed bond (:func:`~pdfem.pd.lps_law.
+    crushed_bond`), and a bond breaking here becomes one (:func:`~pdfem.pd.lps_law.
+    crushed_rest`), the energy its spring starts with counted as negative dissipation."""
     yi0 = y[3 * i]
     yi1 = y[3 * i + 1]
     yi2 = y[3 * i + 2]
-    ai = coef[2 * i]
-    bi = coef[2 * i + 1]
+    ai = coef[4 * i]
+    bi = coef[4 * i + 1]
+    hth = coef[4 * i + 2]
     vi = vol[i]
     can_i = nofail[i] == 0
     fx = 0.0
     fy = 0.0
     fz = 0.0
     nb = 0
+    diss = 0.0
     for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
         w = wt[k]
-        if is_broken(signed, w, broken, k):
-            continue
         j = U64(nbr[k])
         j3 = U64(3) * j
+        j4 = U64(4) * j
         l = xi_len[k]
-        d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
-        if use_r:
-            r = rbuf[k]
-        else:
+        if is_broken(signed, w, broken, k):
+            if not granular:
+                continue
+            sb = rest[k]
+            if sb != sb:  # NaN: broken for good
+                continue
+            d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
             r = bond_length(d0, d1, d2)
-        e = r - l
-        if breaks(e, l, s0, can_i, nofail, j):   # it still acts in this force evaluation
-            mark_broken(signed, wt, w, broken, k)
-            nb += 1
-        j2 = U64(2) * j
-        g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
+            g, p, dk = crushed_bond(bi + coef[j4 + U64(1)], l, sb, sy, abs(w), r, vi * vol[j])
+            if g == 0.0:
+                continue
+            if dk != 0.0:
+                rest[k] = p
+                diss += dk
+        else:
+            d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
+            if use_r:
+                r = rbuf[k]
+            else:
+                r = bond_length(d0, d1, d2)
+            e = r - l
+            if breaks(e, l, hth + coef[j4 + U64(2)], lim, can_i, nofail, j):
+                mark_broken(signed, wt, w, broken, k)  # it still acts in this force evaluation
+                if granular:
+                    p = crushed_rest(e, l, sy)
+                    rest[k] = p
+                    diss -= crushed_bond_energy(bi + coef[j4 + U64(1)], l, rest[k], abs(w),
+                                                r) * vi * vol[j]
+                nb += 1
+            g = pair_force_scalar(ai + coef[j4], bi + coef[j4 + U64(1)], l, e, w, r)
         gi = g * vol[j]
         fx = fma(gi, d0, fx)
         fy = fma(gi, d1, fy)
@@ -156,27 +183,41 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, n
     f[3 * i] += fx
     f[3 * i + 1] += fy
     f[3 * i + 2] += fz
-    return nb
+    if not counted:
+        diss = 0.0
+    return nb, diss
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail,
-                 f, r1, ov, base, rbuf, use_r):
-    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken."""
+def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail,
+                 f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim):
+    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken and the
+    energy the crushed bonds of the ``owned`` rows (all if empty) dissipated."""
     nb = 0
+    diss = 0.0
+    every = owned.shape[0] == 0
     for i in range(r0, split):
-        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
-                          nofail, f, False, r1, ov, base, rbuf, use_r)
+        n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
+                           nofail, f, False, r1, ov, base, rbuf, use_r, rest, granular, sy,
+                           every or owned[i] != 0, lim)
+        nb += n
+        diss += d
     for i in range(split, r1):
-        nb += _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
-                          nofail, f, True, r1, ov, base, rbuf, use_r)
-    return nb
+        n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
+                           nofail, f, True, r1, ov, base, rbuf, use_r, rest, granular, sy,
+                           every or owned[i] != 0, lim)
+        nb += n
+        diss += d
+    return nb, diss
 
 
 @twin()
-def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, nofail,
-                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
-    """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf."""
+def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, nofail,
+                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r, rest, granular, sy, owned,
+                 crush, lim):
+    """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf;
+    with ``granular`` broken bonds with a ``rest`` stretch act in compression (row doc), and
+    crush[c] gets the energy chunk c's crushed bonds dissipated."""
     y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
     coef = coef2.reshape(coef2.size)
     f = fout.reshape(fout.size)
@@ -193,18 +234,19 @@ def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, n
         # one copy of the row loop per flag combination (constants inside the hot loop)
         if signed:
             if use_r:
-                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, s0, nofail, f, r1, ov, base, rbuf, True)
+                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, nofail, f, r1, ov, base, rbuf, True, rest, granular, sy, owned, lim)
             else:
-                nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, s0, nofail, f, r1, ov, base, rbuf, False)
+                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, nofail, f, r1, ov, base, rbuf, False, rest, granular, sy, owned, lim)
         elif use_r:
-            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, s0, nofail, f, r1, ov, base, rbuf, True)
+            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, nofail, f, r1, ov, base, rbuf, True, rest, granular, sy, owned, lim)
         else:
-            nb = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, s0, nofail, f, r1, ov, base, rbuf, False)
+            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, nofail, f, r1, ov, base, rbuf, False, rest, granular, sy, owned, lim)
         counts[c] = nb
+        crush[c] = dc
     for t in prange(C):
         add_overflow3(t, cb, ov_ptr, ov2, fout)
     total = 0

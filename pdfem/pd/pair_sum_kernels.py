@@ -4,17 +4,20 @@ Over the unique bonds i < j grouped by i (data layout: :mod:`pdfem.pd.pair_kerne
 for race-free deterministic threading (:mod:`pdfem.pd.chunk_kernels`), every bond adding to both
 its ends: :func:`family_sum_pairs` (weighted volume and the time-step sums),
 :func:`energy_pairs` (strain energy density, :mod:`pdfem.pd.lps_law`) and
-:func:`damage_pairs` (broken fraction of the initial bonds). Float flags: ``FASTMATH`` of
+:func:`damage_pairs` (broken fraction of the initial bonds), and
+:func:`contact_bond_energy_pairs` (the energy stored in crushed bonds). Float flags: ``FASTMATH`` of
 :mod:`pdfem.pd.chunk_kernels` (no FMA contraction, so the code compiled in this process and the
 code loaded from numba's cache give the same bits).
 """
 
 from __future__ import annotations
 
+import numba
 from numba import prange
 
 from pdfem.pd.chunk_kernels import U64, add_overflow1, twin
-from pdfem.pd.lps_law import bond_length, deviatoric_extension, energy_density, is_broken
+from pdfem.pd.lps_law import (bond_length, crushed_bond_energy, deviatoric_extension,
+                              energy_density, is_broken)
 
 
 @twin()
@@ -132,3 +135,30 @@ def damage_pairs(row_ptr, nbr, broken, signed, wt, cb, ov_ptr, ov, nb, deg):
         add_overflow1(t, cb, ov_ptr, ov, 1, deg)
         for p in range(cb[t], cb[t + 1]):
             nb[p] = nb[p] / deg[p] if deg[p] > 0.0 else 0.0
+
+
+@numba.njit(cache=True)
+def contact_bond_energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, wt, rest, vol, m, mu,
+                              owned):
+    """Total energy (J) stored in the crushed bonds (:func:`~pdfem.pd.lps_law.
+    crushed_bond_energy`, ``rest`` not NaN) in the rows i with ``owned[i]`` (all rows if
+    ``owned`` is empty), summed serially in bond order."""
+    total = 0.0
+    c = 15.0 * mu
+    every = owned.shape[0] == 0
+    for i in range(row_ptr.shape[0] - 1):
+        if not every and not owned[i]:
+            continue
+        bi = c / m[i] if m[i] > 0.0 else 0.0
+        for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
+            w = wt[k]
+            if not is_broken(signed, w, broken, k):
+                continue
+            sb = rest[k]
+            if sb != sb:
+                continue
+            j = U64(nbr[k])
+            bj = c / m[j] if m[j] > 0.0 else 0.0
+            r = bond_length(y[j, 0] - y[i, 0], y[j, 1] - y[i, 1], y[j, 2] - y[i, 2])
+            total += crushed_bond_energy(bi + bj, xi_len[k], sb, abs(w), r) * vol[i] * vol[j]
+    return total

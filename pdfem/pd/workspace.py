@@ -68,7 +68,8 @@ class PairWorkspace:
     ov
         float64 (ov_ptr[-1], 3) overflow buffer.
     coef
-        float64 (N, 2) per-particle force coefficients (theta (3K - 5mu) / m, 15 mu / m).
+        float64 (N, 4) per-particle force coefficients (theta (3K - 5mu) / m, 15 mu / m) and
+        halves of the stretch bounds (:func:`pdfem.pd.lps_law.force_coefficients`).
     bond_length
         float64 (P,) current bond lengths kept by
         :func:`pdfem.pd.pair_kernels.dilatation_and_forces` (None until that is first called,
@@ -110,8 +111,10 @@ class PairWorkspace:
         self.split = chunk_split(row_ptr, nbr, cb)
         self.ov_ptr = np.concatenate(([0], np.cumsum(ov_len))).astype(np.int64)
         self.ov = np.zeros((int(self.ov_ptr[-1]), 3))
-        self.coef = np.empty((n, 2))
+        self.coef = np.empty((n, 4))
         self.counts = np.zeros(C, dtype=np.int64)
+        self.crush = np.zeros(C)  # energy (J) each chunk's crushed bonds dissipated, last pass
+        self.crush_dissipated = 0.0  # their sum in chunk order
         self.parallel = C > 1
         # per-particle loops (force coefficients) of a small body run serially even when the
         # pair loops are threaded: a parallel region over a few thousand particles costs more

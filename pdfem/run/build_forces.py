@@ -22,7 +22,10 @@ def _gravity(case: Case, bodies: list) -> Gravity:
 
 
 def _short_range(case: Case, bodies: list) -> ShortRangeContact | None:
-    return ShortRangeContact(bodies) if case.run.short_range_contact and bodies else None
+    # crushed ice (failure = "ice") carries compression only through this force
+    crushing = any(ice.material.failure == "ice" for ice in case.ice)
+    on = case.run.short_range_contact or crushing
+    return ShortRangeContact(bodies) if on and bodies else None
 
 
 PARTICLE_FORCES: dict[type[ParticleForce], Callable[[Case, list], ParticleForce | None]] = {

@@ -14,6 +14,7 @@ from pdfem.case.config import IceConfig, RunConfig
 from pdfem.case.ice import IceMaterialSection
 from pdfem.errors import InputError
 from pdfem.pd.body import IceBody
+from pdfem.pd.failure import failure_law
 from pdfem.pd.influence import isotropy_gain
 from pdfem.pd.materials.lps import IceMaterial, tensile_from_flexural
 
@@ -37,7 +38,9 @@ def ice_material(m: IceMaterialSection, dx: float | None = None,
     return IceMaterial(density=m.density, youngs_modulus=m.youngs_modulus,
                        poisson_ratio=m.poisson_ratio,
                        fracture_energy=m.fracture_energy if by_energy else None,
-                       critical_stretch=m.critical_stretch, tensile_strength=tensile)
+                       critical_stretch=m.critical_stretch, tensile_strength=tensile,
+                       compressive_strength=m.compressive_strength,
+                       friction_angle=m.friction_angle)
 
 
 def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:
@@ -68,8 +71,9 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.material.flexural_strength", str(exc)) from None
     try:
+        law = failure_law(cfg.material.failure, material, cfg.horizon)
         body = IceBody.from_shape(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon,
-                                  loop=run.pd_loop)
+                                  loop=run.pd_loop, failure=law)
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.shape", str(exc)) from None
     if body.n < 2:

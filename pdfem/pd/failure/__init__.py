@@ -10,9 +10,11 @@ from collections.abc import Callable
 
 from pdfem.pd.failure.base import FailureLaw
 from pdfem.pd.failure.critical_stretch import CriticalStretch
+from pdfem.pd.failure.ice import IceFailure
 
 FAILURE_LAWS: dict[str, Callable[..., FailureLaw]] = {
     "critical_stretch": CriticalStretch.from_material,
+    "ice": IceFailure.from_material,
 }
 """Failure-law name -> builder ``(material, delta) -> FailureLaw``."""
 
@@ -35,4 +37,5 @@ def failure_law(name: str, material, delta: float) -> FailureLaw:
     return build(material, delta)
 
 
-__all__ = ["DEFAULT_FAILURE_LAW", "FAILURE_LAWS", "CriticalStretch", "FailureLaw", "failure_law"]
+__all__ = ["DEFAULT_FAILURE_LAW", "FAILURE_LAWS", "CriticalStretch", "FailureLaw", "IceFailure",
+           "failure_law"]

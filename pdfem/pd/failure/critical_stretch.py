@@ -10,6 +10,7 @@ of them the bonds never break (s0 = inf). The numba kernels compare each bond's 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 
@@ -25,6 +26,8 @@ class CriticalStretch:
 
     s0: float
     name: str = "critical_stretch"
+    broken_bonds_push: bool = False
+    crush_yield: float = math.inf
 
     @classmethod
     def from_material(cls, material, delta: float) -> "CriticalStretch":
@@ -35,3 +38,11 @@ class CriticalStretch:
     def stretch_limit(self) -> float:
         """s0, the stretch above which a bond breaks."""
         return self.s0
+
+    def stretch_limits(self) -> tuple[float, ...]:
+        """(s0, 0, -inf, 0, -inf, 0): above s0 at any dilatation, never in compression."""
+        return (self.s0, 0.0, -math.inf, 0.0, -math.inf, 0.0)
+
+    def describe(self) -> str:
+        """``critical stretch s0 = ...``."""
+        return f"critical stretch s0 = {self.s0:.3e}"

@@ -197,12 +197,17 @@ class IceMaterial:
         The critical stretch itself (dimensionless, > 0); wins over the others.
     tensile_strength
         The uniaxial tensile strength sigma_t (Pa, > 0) the kernels use: ``s0 = sigma_t / E``,
-        at any horizon; wins over ``fracture_energy``. Under uniaxial stress sigma along x the
-        LPS strain is uniform, eps = sigma / E along x and -nu eps across, so a bond of
-        direction n has stretch eps (n_x^2 - nu (1 - n_x^2)) (small strain: the stretch of a
-        bond is n.eps.n). That is largest, eps, for the bond along the load (n_x = 1); bonds
-        first break when eps = s0, i.e. at sigma = E s0. Hence ``s0 = sigma_t / E`` exactly.
-        With none of the three given, bonds never break (``s0 = inf``).
+        at any horizon; wins over ``fracture_energy`` (the ``"ice"`` failure law takes it as its
+        tension cut-off; without it, E s0). Under uniaxial stress sigma along x the LPS strain
+        is uniform, eps = sigma / E along x and -nu eps across, so a bond of direction n has
+        stretch eps (n_x^2 - nu (1 - n_x^2)) (small strain: the stretch of a bond is n.eps.n).
+        That is largest, eps, for the bond along the load (n_x = 1); bonds first break when
+        eps = s0, i.e. at sigma = E s0. Hence ``s0 = sigma_t / E`` exactly. With none of the
+        three given, bonds never break (``s0 = inf``).
+    compressive_strength
+        Uniaxial compressive strength (Pa), for the ``"ice"`` failure law.
+    friction_angle
+        Internal friction angle (degrees) of the ``"ice"`` failure law's Coulomb criterion.
     """
 
     density: float
@@ -211,6 +216,8 @@ class IceMaterial:
     fracture_energy: float | None = None
     critical_stretch: float | None = None
     tensile_strength: float | None = None
+    compressive_strength: float | None = None
+    friction_angle: float = 30.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.density) and self.density > 0.0):
