@@ -153,3 +153,30 @@ def test_checkpoint_keeps_the_crushed_bonds():
     other.restore_state(state)
     np.testing.assert_array_equal(other.rest, body.rest)
     np.testing.assert_array_equal(other.broken, body.broken)
+
+
+def test_strain_rate_dependence_of_the_compressive_strength():
+    """Ductile below the transition rate: sigma_c (rate / rate_t)^(1/3) (power-law creep with
+    Glen's n = 3, Schulson & Duval 2009 ch. 6), sigma_c at and above it; off by default."""
+    from pdfem.pd.strain_rate import RateTracker
+    mat = IceMaterial(900.0, E, NU, tensile_strength=ST, compressive_strength=SC,
+                      transition_rate=1e-3)
+    law = IceFailure.from_material(mat, 0.03)
+    assert law.rate_dependent and not IceFailure.from_material(_material(), 0.03).rate_dependent
+    np.testing.assert_allclose(law.strength_factor(np.array([1e-2, 1e-3, 1.25e-4, 1e-9])),
+                               [1.0, 1.0, 0.5, 0.1], rtol=1e-12)
+    # the tracker: uniaxial compression at 1.25e-4 /s changes theta by (1 - 2 nu) rate dt
+    tracker = RateTracker(law, NU)
+    dt = 1e-3
+    theta = np.zeros(4)
+    tracker.advance(theta, dt)
+    assert tracker.factors is None  # no rate before a second step
+    tracker.advance(theta - (1 - 2 * NU) * 1.25e-4 * dt, dt)
+    np.testing.assert_allclose(tracker.factors, 0.5, rtol=1e-9)
+    # a body with the law scales its bonds' compressive bound by the factor
+    body = IceBody.from_shape("b", Box((0, 0, 0), (0.09,) * 3), mat, 0.01, 0.03015, failure=law)
+    assert body.rates is not None and body.strength_factors is None
+    body.start()
+    body.step(1e-6)
+    body.step(1e-6)
+    np.testing.assert_allclose(body.strength_factors, 0.1)  # at rest: the floor

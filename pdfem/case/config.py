@@ -45,11 +45,24 @@ class RunConfig:
 
 @dataclass(frozen=True)
 class VelocityBC:
-    """Particles in ``region`` move with ``velocity`` (m/s), ramped linearly over ``ramp_time`` (s)."""
+    """Particles in ``region`` move with ``velocity`` (m/s), ramped linearly over ``ramp_time``
+    (s), or follow the displacement ``path`` (rows ``(t, ux, uy, uz)``, s and m; ``velocity`` is
+    then zero); ``name`` names the reaction history ``loads/<body>.<name>``."""
 
     region: Shape
     velocity: tuple[float, float, float]
     ramp_time: float
+    path: tuple[tuple[float, float, float, float], ...] | None
+    name: str
+    field: str = ""
+
+
+@dataclass(frozen=True)
+class FixedRegion:
+    """Particles in ``region`` are held in place; ``name`` names the reaction history."""
+
+    region: Shape
+    name: str
     field: str = ""
 
 
@@ -76,7 +89,7 @@ class IceConfig:
     shape: Shape
     material: IceMaterialSection
     initial_velocity: tuple[float, float, float]
-    fixed: tuple[tuple[Shape, str], ...]
+    fixed: tuple[FixedRegion, ...]
     prescribed_velocity: tuple[VelocityBC, ...]
     no_fail: tuple[tuple[Shape, str], ...]
     cracks: tuple[Crack, ...]
@@ -140,6 +153,7 @@ class StructureConfig:
     velocity: tuple[float, float, float]
     angular_velocity: tuple[float, float, float]
     center: tuple[float, float, float]
+    path: tuple[tuple[float, float, float, float], ...] | None
     field: str = ""
 
 
@@ -181,8 +195,10 @@ class Case:
 
 
 def _ice(s: IceSection, at: str) -> IceConfig:
-    bcs = tuple(VelocityBC(region=r.region.geometry, velocity=r.velocity, ramp_time=r.ramp_time,
-                            field=f"{at}.prescribed_velocity[{k}]")
+    fixed_names, driven_names = s.region_names()
+    bcs = tuple(VelocityBC(region=r.region.geometry, velocity=r.velocity or (0.0, 0.0, 0.0),
+                           ramp_time=r.ramp_time, path=r.path, name=driven_names[k],
+                           field=f"{at}.prescribed_velocity[{k}]")
                 for k, r in enumerate(s.prescribed_velocity))
     cracks = tuple(Crack(point=c.point, normal=c.normal, box=c.box.build(),
                          field=f"{at}.cracks[{k}]")
@@ -190,7 +206,8 @@ def _ice(s: IceSection, at: str) -> IceConfig:
     return IceConfig(
         name=s.name, dx=s.dx, horizon=s.horizon_length(), shape=s.shape.geometry,
         material=s.material, initial_velocity=s.initial_velocity,
-        fixed=tuple((r.geometry, f"{at}.fixed[{k}]") for k, r in enumerate(s.fixed)),
+        fixed=tuple(FixedRegion(r.geometry, fixed_names[k], f"{at}.fixed[{k}]")
+                    for k, r in enumerate(s.fixed)),
         prescribed_velocity=bcs,
         no_fail=tuple((r.geometry, f"{at}.no_fail[{k}]") for k, r in enumerate(s.no_fail)),
         cracks=cracks, field=at)
@@ -212,7 +229,8 @@ def _structure(s: StructureSection, at: str) -> StructureConfig:
         supports=tuple((r.group, tuple(r.components)) for r in s.supports),
         element_order=s.element_order, contact_group=s.contact_group,
         damping_alpha=s.damping.alpha, damping_beta=s.damping.beta, loads=tuple(loads),
-        velocity=m.velocity, angular_velocity=m.angular_velocity, center=m.center, field=at)
+        velocity=m.velocity, angular_velocity=m.angular_velocity, center=m.center, path=m.path,
+        field=at)
 
 
 def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:

@@ -13,7 +13,8 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from pdfem.case.fields import Name, Number, Positive, Section, Tables, Vec3, Vector, fail
-from pdfem.case.shapes import BoxShape, RegionSection, ShapeSection
+from pdfem.case.shapes import (BoxShape, MotionPath, NamedRegionSection, RegionName,
+                               RegionSection, ShapeSection)
 
 #: Sea-ice defaults (SI), with their sources in the descriptions of :class:`IceMaterialSection`.
 SEA_ICE = {"density": 900.0, "youngs_modulus": 4.1e9, "poisson_ratio": 0.3, "fracture_energy": 10.0}
@@ -71,6 +72,15 @@ class IceMaterialSection(Section):
         "criterion: the compressive strength rises by (1 + sin phi) / (1 - sin phi) times the "
         "confining pressure. Default: 30 (Schulson & Duval 2009: friction coefficient 0.5-0.9).")
 
+    transition_rate: Annotated[float, Positive("1/s")] | None = Field(
+        None, description="Ductile-to-brittle transition strain rate (1/s) of the \"ice\" law: "
+        "below it the compressive strength falls as (rate / transition_rate)^rate_exponent "
+        "(ductile ice), at and above it it is compressive_strength. Ice: 1e-4 to 1e-3 "
+        "(Schulson & Duval 2009). Default: none (no rate dependence).")
+    rate_exponent: Annotated[float, Number(gt=0.0, le=1.0)] = Field(
+        1.0 / 3.0, description="Exponent of the ductile strength's rise with the strain rate (-), "
+        "with transition_rate. Default: 1/3 (Glen's flow law, n = 3).")
+
     @model_validator(mode="after")
     def _one_criterion(self) -> "IceMaterialSection":
         given = self.model_fields_set
@@ -93,7 +103,8 @@ class IceMaterialSection(Section):
             raise fail('failure = "ice" needs compressive_strength (Pa), e.g. 3.0e6',
                        key="compressive_strength")
         if self.failure != "ice":
-            for key in ("compressive_strength", "friction_angle"):
+            for key in ("compressive_strength", "friction_angle", "transition_rate",
+                        "rate_exponent"):
                 if key in self.model_fields_set:
                     raise fail(f'{key} is a parameter of failure = "ice"; set failure = "ice" '
                                "or remove it", key=key)
@@ -101,14 +112,37 @@ class IceMaterialSection(Section):
 
 
 class VelocitySection(Section):
-    """Particles in a region move with a prescribed velocity."""
+    """Particles in a region move as prescribed: a velocity (ramped from 0 over ramp_time) or a
+    displacement path."""
 
+    name: RegionName | None = Field(
+        None, description="Name of the region's reaction history `loads/<body>.<name>` (letters, "
+                          "digits, _ + -), unique in the body. Default: prescribed1, "
+                          "prescribed2, ... by position in the list.")
     region: RegionSection = Field(description="The region: `box`, `cylinder` or `sphere` (m). "
                                               "Required.")
-    velocity: Annotated[Vec3, Vector("m/s")] = Field(
-        description="Prescribed velocity (m/s). Required.")
+    velocity: Annotated[Vec3, Vector("m/s")] | None = Field(
+        None,
+        description="Prescribed velocity (m/s). Default: none (required unless path is given).")
     ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
-        0.0, description="Time over which the velocity ramps up linearly from 0 (s). Default: 0.")
+        0.0, description="Time over which the velocity ramps up linearly from 0 (s). With "
+                         "velocity only. Default: 0.")
+    path: MotionPath | None = Field(
+        None, description="Displacement path `[[t, ux, uy, uz], ...]` (s, m) instead of velocity: "
+                          "piecewise linear, t strictly increasing, first t >= 0; the first "
+                          "point's displacement before it (the region starts there), the last "
+                          "point's after it. Default: none (give velocity or path).")
+
+    @model_validator(mode="after")
+    def _one_motion(self) -> "VelocitySection":
+        if (self.velocity is None) == (self.path is None):
+            both = self.path is not None
+            raise fail("give either velocity (m/s) or path ([[t, ux, uy, uz], ...] in s, m)"
+                       + (", not both" if both else ""), key="path" if both else "velocity")
+        if self.path is not None and "ramp_time" in self.model_fields_set:
+            raise fail("ramp_time goes with velocity; a path prescribes the displacement at "
+                       "every time itself", key="ramp_time")
+        return self
 
 
 class CrackSection(Section):
@@ -153,14 +187,40 @@ class IceSection(Section):
                     "or `critical_stretch`. Default: sea ice (900, 4.1e9, 0.3, 10).")
     initial_velocity: Annotated[Vec3, Vector("m/s")] = Field(
         (0.0, 0.0, 0.0), description="Initial velocity of every particle (m/s). Default: [0, 0, 0].")
-    fixed: Tables(RegionSection) = Field(
-        (), description="Regions held in place (m). Default: none.")
+    fixed: Tables(NamedRegionSection) = Field(
+        (), description="Regions held in place (m): `{box = {...}}` or `{name, box = {...}}` "
+                        "(or cylinder, sphere); each region's reaction (N) is written as "
+                        "`loads/<body>.<name>` (names default to fixed1, fixed2, ...). "
+                        "Default: none.")
     prescribed_velocity: Tables(VelocitySection) = Field(
-        (), description="List of `{region, velocity (m/s), ramp_time (s)}`. Default: none.")
+        (), description="List of `{name, region, velocity (m/s), ramp_time (s)}` or `{name, "
+                        "region, path = [[t, ux, uy, uz], ...] (s, m)}`; each region's reaction "
+                        "(N) is written as `loads/<body>.<name>` (names default to prescribed1, "
+                        "...). Default: none.")
     no_fail: Tables(RegionSection) = Field(
         (), description="Regions whose bonds never break (m). Default: none.")
     cracks: Tables(CrackSection) = Field(
         (), description="Planar pre-cracks `{point, normal, box}` (m). Default: none.")
+
+    def region_names(self) -> tuple[tuple[str, ...], tuple[str, ...]]:
+        """Names of the fixed and the prescribed regions (given, or fixed<k>, prescribed<k> by
+        position in their list, from 1)."""
+        fixed = tuple(r.name or f"fixed{k + 1}" for k, r in enumerate(self.fixed))
+        driven = tuple(r.name or f"prescribed{k + 1}"
+                       for k, r in enumerate(self.prescribed_velocity))
+        return fixed, driven
+
+    @model_validator(mode="after")
+    def _unique_region_names(self) -> "IceSection":
+        seen: set[str] = set()
+        for key, names in zip(("fixed", "prescribed_velocity"), self.region_names()):
+            for k, name in enumerate(names):
+                if name in seen:
+                    raise fail(f"the region name '{name}' is used twice in this body; names of "
+                               "fixed and prescribed regions must be unique within a body "
+                               "(defaults: fixed<k>, prescribed<k>)", name, key=f"{key}[{k}].name")
+                seen.add(name)
+        return self
 
     def horizon_length(self) -> float:
         """The horizon in m (given, or horizon_factor * dx)."""

@@ -8,10 +8,13 @@ Mesh files are found relative to the case file's directory (the validation conte
 
 from __future__ import annotations
 
+import math
+import re
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, ClassVar
 
-from pydantic import ConfigDict, Field, PrivateAttr, ValidationInfo, model_validator
+from pydantic import (BeforeValidator, ConfigDict, Field, PrivateAttr, ValidationInfo,
+                      model_validator)
 
 from pdfem.case.fields import Name, Positive, Section, Vec3, Vector, fail, tidy_schema
 from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
@@ -105,15 +108,17 @@ class RegionSection(Section):
     sphere: SphereShape | None = Field(
         None, description="A sphere `{center, radius}` (m). Default: none (give exactly one shape).")
     _geometry: Any = PrivateAttr(None)
+    extra_keys: ClassVar[tuple[str, ...]] = ()  # keys allowed beside the shape
+
 
     @model_validator(mode="before")
     @classmethod
     def _known_keys(cls, data: Any) -> Any:
         if not isinstance(data, dict):
             raise fail("expected a table ({ key = value, ... })", data)
-        kinds = cls.keys()
+        kinds = [k for k in cls.keys() if k not in cls.extra_keys]
         given = [k for k in kinds if k in data]
-        extra = sorted(set(data) - set(kinds))
+        extra = sorted(set(data) - set(kinds) - set(cls.extra_keys))
         if len(given) != 1 or extra:
             what = f"unknown key '{extra[0]}'; " if extra else ""
             raise fail(what + "expected exactly one of " + ", ".join(kinds), data)
@@ -121,7 +126,8 @@ class RegionSection(Section):
 
     @model_validator(mode="after")
     def _build(self) -> "RegionSection":
-        kind = next(k for k in self.keys() if getattr(self, k) is not None)
+        kind = next(k for k in self.keys()
+                    if k not in self.extra_keys and getattr(self, k) is not None)
         try:
             self._geometry = getattr(self, kind).build()
         except ValueError as exc:
@@ -140,3 +146,60 @@ class ShapeSection(RegionSection):
     mesh: MeshShape | None = Field(
         None, description="A closed surface mesh `{file, group}`. "
                           "Default: none (give exactly one shape).")
+
+
+_REGION_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_+\-]*\Z")
+
+
+def _region_name_check(v: Any) -> str:
+    if not isinstance(v, str) or not _REGION_NAME.match(v):
+        raise fail("expected a name of letters, digits, '_', '+', '-' (no dots or spaces): it "
+                   "names the history loads/<body>.<name> of the results", v)
+    return v
+
+
+#: The name of a fixed or prescribed region (letters, digits, ``_ + -``).
+RegionName = Annotated[str, Field(pattern="^" + _REGION_NAME.pattern[:-2] + "$"),
+                       BeforeValidator(_region_name_check)]
+
+
+def _named_schema(schema: dict[str, Any]) -> None:
+    tidy_schema(schema)
+    schema.update(minProperties=1, maxProperties=2)
+
+
+class NamedRegionSection(RegionSection):
+    """A region with an optional name: exactly one of ``box``, ``cylinder`` or ``sphere``, and
+    ``name``."""
+
+    model_config = ConfigDict(json_schema_extra=_named_schema)
+    extra_keys: ClassVar[tuple[str, ...]] = ("name",)
+
+    name: RegionName | None = Field(
+        None, description="Name of the region's reaction history `loads/<body>.<name>` (letters, "
+                          "digits, _ + -), unique in the body. Default: fixed1, fixed2, ... by "
+                          "position in the list.")
+
+
+def _path_check(v: Any) -> tuple[tuple[float, float, float, float], ...]:
+    if not isinstance(v, list) or not v:
+        raise fail("expected a list of rows [t, ux, uy, uz] (s, m)", v)
+    rows = []
+    for k, row in enumerate(v):
+        if not (isinstance(row, list) and len(row) == 4 and all(
+                isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
+                for c in row)):
+            raise fail(f"row {k}: expected four finite numbers [t, ux, uy, uz] (s, m)", row)
+        if rows and row[0] <= rows[-1][0]:
+            raise fail(f"row {k}: the times must increase strictly (t = {row[0]:g} s after "
+                       f"t = {rows[-1][0]:g} s)", row)
+        rows.append(tuple(float(c) for c in row))
+    if rows[0][0] < 0.0:
+        raise fail("the first time must be >= 0 s", v[0])
+    return tuple(rows)
+
+
+#: A displacement path ``[[t, ux, uy, uz], ...]`` (s, m): piecewise linear, t strictly
+#: increasing, first t >= 0; the first point's displacement before it, the last one's after.
+MotionPath = Annotated[tuple[tuple[float, float, float, float], ...],
+                       BeforeValidator(_path_check)]

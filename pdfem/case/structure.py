@@ -13,7 +13,7 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from pdfem.case.fields import (Choice, Name, Names, Number, Positive, Section, Tables, Vec3, Vector,
                                Whole, fail)
-from pdfem.case.shapes import directory
+from pdfem.case.shapes import MotionPath, directory
 
 #: Structural steel (SI): density and elastic constants of carbon steel as used for ship hulls
 #: (e.g. EN 1993-1-1, 3.2.6: E = 210 GPa, nu = 0.3; density 7850 kg/m^3, EN 1991-1-1 Table A.4).
@@ -98,6 +98,19 @@ class MotionSection(Section):
         (0.0, 0.0, 0.0), description="Angular velocity (rad/s). Default: [0, 0, 0].")
     center: Annotated[Vec3, Vector("m")] = Field(
         (0.0, 0.0, 0.0), description="Centre of rotation at t = 0 (m). Default: [0, 0, 0].")
+    path: MotionPath | None = Field(
+        None, description="Translation path `[[t, ux, uy, uz], ...]` (s, m) instead of velocity: "
+                          "piecewise linear, t strictly increasing, first t >= 0; the first "
+                          "point's displacement before it (the body starts there), the last "
+                          "point's after it; the rotation stays angular_velocity about the "
+                          "moving centre. Default: none (constant velocity).")
+
+    @model_validator(mode="after")
+    def _velocity_or_path(self) -> "MotionSection":
+        if self.path is not None and "velocity" in self.model_fields_set:
+            raise fail("give either velocity (m/s) or path ([[t, ux, uy, uz], ...] in s, m), "
+                       "not both", key="path")
+        return self
 
 
 def _is_gmsh(path: Path) -> bool:
@@ -147,7 +160,8 @@ class StructureSection(Section):
                         "rise, hold, fall} (s)}`. Default: none.")
     motion: MotionSection = Field(
         default_factory=MotionSection,
-        description="Rigid bodies only: `velocity` (m/s), `angular_velocity` (rad/s), `center` (m). "
+        description="Rigid bodies only: `velocity` (m/s) or a translation `path` "
+                    "`[[t, ux, uy, uz], ...]` (s, m), `angular_velocity` (rad/s), `center` (m). "
                     "Default: at rest.")
 
     @field_validator("mesh")

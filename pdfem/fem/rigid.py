@@ -1,11 +1,16 @@
 """Rigid bodies with prescribed motion (indenters, a rigid bow or blade) and their contact load.
 
 A :class:`RigidBody` is a triangulated surface that translates with a constant velocity ``v``
-(m/s) and rotates with a constant angular velocity ``w`` (rad/s) about a centre ``c`` that moves
-with it. The pose is exact at any time ``t``::
+(m/s), or along a piecewise-linear displacement path ``u(t)`` (m,
+:class:`pdfem.geometry.path.DisplacementPath`), and rotates with a constant angular velocity
+``w`` (rad/s) about a centre ``c`` that moves with it. The pose is exact at any time ``t``::
 
-    x(t) = c0 + v t + R(w t) (X - c0),      R: Rodrigues' formula for the angle |w| t about w/|w|
-    x'(t) = v + w x (x(t) - c(t)),         c(t) = c0 + v t
+    x(t) = c(t) + R(w t) (X - c0),          R: Rodrigues' formula for the angle |w| t about w/|w|
+    x'(t) = c'(t) + w x (x(t) - c(t)),      c(t) = c0 + v t  or  c0 + u(t)
+
+with ``c'`` the slope of the path's current segment (its velocity jumps at the path's points;
+the coupler books the work of the contact on the body with the displacement over each step, so
+the jumps cost the energy balance nothing).
 
 so many steps accumulate no drift (the rotation is recomputed from the accumulated angle, not
 composed step by step). The body offers the same surface interface as an elastic structure
@@ -86,7 +91,7 @@ def read_surface(path: str | os.PathLike, group: str = "contact") -> tuple[np.nd
 
 
 class RigidBody(Structure):
-    """A rigid surface moving with prescribed constant translation and rotation (a
+    """A rigid surface moving with prescribed translation and constant rotation (a
     :class:`pdfem.fem.base.Structure` with ``prescribed_motion``: no step limit, no energy).
 
     Parameters
@@ -101,6 +106,9 @@ class RigidBody(Structure):
         (3,) angular velocity w (rad/s).
     centre
         (3,) centre of rotation at t = 0 (m); it moves with the translation.
+    translation
+        A :class:`~pdfem.geometry.path.DisplacementPath` of the translation instead of
+        ``velocity`` (the body starts at the path's displacement at t = 0).
     name
         Name of the body.
     orient
@@ -109,7 +117,7 @@ class RigidBody(Structure):
 
     def __init__(self, points: np.ndarray, triangles: np.ndarray, velocity=(0.0, 0.0, 0.0),
                  angular_velocity=(0.0, 0.0, 0.0), centre=(0.0, 0.0, 0.0), name: str = "rigid",
-                 orient: bool = True):
+                 orient: bool = True, translation=None):
         self.name = name
         self.x0 = np.ascontiguousarray(points, dtype=np.float64)
         if self.x0.ndim != 2 or self.x0.shape[1] != 3:
@@ -122,6 +130,7 @@ class RigidBody(Structure):
         self.velocity = np.asarray(velocity, dtype=np.float64).reshape(3).copy()
         self.angular_velocity = np.asarray(angular_velocity, dtype=np.float64).reshape(3).copy()
         self.centre0 = np.asarray(centre, dtype=np.float64).reshape(3).copy()
+        self.translation = translation
         self.time = 0.0
         self._time_carry = 0.0
         self._surface_forces = np.zeros((len(self.x0), 3))
@@ -135,8 +144,16 @@ class RigidBody(Structure):
 
     # ------------------------------------------------------------------ pose
     def centre(self) -> np.ndarray:
-        """(3,) current centre of rotation c0 + v t (m)."""
+        """(3,) current centre of rotation c0 + v t, or c0 + u(t) on a path (m)."""
+        if self.translation is not None:
+            return self.centre0 + self.translation.displacement(self.time)
         return self.centre0 + self.velocity * self.time
+
+    def translation_velocity(self) -> np.ndarray:
+        """(3,) current velocity of the centre (m/s): v, or the slope of the path's segment."""
+        if self.translation is None:
+            return self.velocity
+        return self.translation.velocity(self.time)
 
     def rotation(self) -> np.ndarray:
         """(3, 3) current rotation R(w t)."""
@@ -145,7 +162,7 @@ class RigidBody(Structure):
     def _update_pose(self) -> None:
         c = self.centre()
         self._x = c + (self.x0 - self.centre0) @ self.rotation().T
-        self._v = self.velocity + np.cross(self.angular_velocity, self._x - c)
+        self._v = self.translation_velocity() + np.cross(self.angular_velocity, self._x - c)
 
     def step(self, dt: float) -> None:
         """Advance the pose by ``dt`` (s).

@@ -38,9 +38,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pdfem.pd import kernels
+from pdfem.pd.body_diagnostics import BodyDiagnostics
 from pdfem.pd.body_state import BodyCheckpoint
 from pdfem.pd.bonds import bond_lengths, cut_crack
-from pdfem.pd.constraints import VelocityConstraint
+from pdfem.pd.constraints import VelocityConstraint, applied_forces, next_name, step_work
+from pdfem.pd.constraints import reaction_forces
 from pdfem.pd.failure import CriticalStretch, FailureLaw
 from pdfem.pd.fracture import FractureLedger
 from pdfem.pd.ice_interface import WholeBody
@@ -51,10 +53,11 @@ from pdfem.geometry.lattice import fill
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.pd.pair_kernels import SIGNED
 from pdfem.pd.search import cell_pairs
+from pdfem.pd.strain_rate import RateTracker
 
 
 @dataclass
-class IceBody(BodyCheckpoint, WholeBody):
+class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     """State of one peridynamic ice body (all arrays SI, particles in cell order).
 
     Build one with :meth:`from_points` (or :func:`pdfem.run.build_ice.build_ice_body` from a case).
@@ -94,6 +97,8 @@ class IceBody(BodyCheckpoint, WholeBody):
     # (P,) float32 stretch at which each bond broke, NaN if intact or broken for good: with a
     # failure law whose broken bonds keep pushing in compression (crushed ice), else None
     rest: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # strain rates and strength factors, for a law whose strength depends on the rate
+    rates: RateTracker | None = field(default=None, repr=False, compare=False)
     _ledger: FractureLedger = field(default_factory=FractureLedger, init=False, repr=False,
                                     compare=False)
 
@@ -105,6 +110,8 @@ class IceBody(BodyCheckpoint, WholeBody):
                 raise ValueError(f"the {self.failure.name!r} failure law needs the pair loop "
                                  "(pd_loop = \"pairs\")")
             self.rest = np.full(self.nbr.shape[0], np.nan, dtype=np.float32)
+        if self.failure.rate_dependent and self.rates is None:
+            self.rates = RateTracker(self.failure, self.material.poisson_ratio)
 
     @classmethod
     def from_points(cls, name: str, x: np.ndarray, material: IceMaterial, dx: float, delta: float,
@@ -222,6 +229,11 @@ class IceBody(BodyCheckpoint, WholeBody):
         return self.failure.stretch_limits()[0]
 
     @property
+    def strength_factors(self) -> np.ndarray | None:
+        """(N,) factors on the compressive strength from the strain rates (None: 1)."""
+        return None if self.rates is None else self.rates.factors
+
+    @property
     def limits(self) -> tuple[float, ...]:
         """The failure law's stretch bounds (t0, t1, c0, c1, d0, d1) the kernels take
         (:meth:`pdfem.pd.failure.base.FailureLaw.stretch_limits`)."""
@@ -237,17 +249,22 @@ class IceBody(BodyCheckpoint, WholeBody):
         self.broken = flags
         return count
 
-    def add_velocity_constraint(self, mask: np.ndarray, velocity, ramp_time: float = 0.0) -> None:
-        """Prescribe the velocity (m/s) of the particles in ``mask`` (ramped over ``ramp_time`` s)."""
+    def add_velocity_constraint(self, mask: np.ndarray, velocity=(0.0, 0.0, 0.0),
+                                ramp_time: float = 0.0, *, path=None, name: str = "") -> None:
+        """Prescribe the motion of the particles in ``mask``: ``velocity`` (m/s, ramped over
+        ``ramp_time`` s) or a displacement ``path`` (:mod:`pdfem.pd.constraints`, which they are
+        put on now); ``name`` (default ``prescribed<k>``) names its reaction."""
         idx = np.flatnonzero(mask).astype(np.int64)
-        c = VelocityConstraint(idx, np.asarray(velocity, dtype=np.float64), float(ramp_time))
+        c = VelocityConstraint(idx, np.asarray(velocity, dtype=np.float64), float(ramp_time), path,
+                               name or next_name(self.constraints, "prescribed"))
         self.constraints.append(c)
-        self.v[idx] = c.value(self.time)
+        c.impose(self, self.time)
 
-    def fix(self, mask: np.ndarray) -> None:
-        """Hold the particles in ``mask`` at their reference positions."""
+    def fix(self, mask: np.ndarray, name: str = "") -> None:
+        """Hold the particles in ``mask`` in place; ``name`` (default ``fixed<k>``) names the
+        region's reaction."""
+        self.add_velocity_constraint(mask, name=name or next_name(self.constraints, "fixed"))
         self.fixed |= mask
-        self.v[self.fixed] = 0.0
 
     # -- physics -------------------------------------------------------------------------------
     def compute_forces(self) -> int:
@@ -262,7 +279,8 @@ class IceBody(BodyCheckpoint, WholeBody):
                                                self.weight, br, self.vol, self.m, mat.K, mat.mu,
                                                self.limits, self.nofail, self.theta, self.f,
                                                self._ws, rest=self.rest,
-                                               crush_yield=self.failure.crush_yield)
+                                               crush_yield=self.failure.crush_yield,
+                                               strength=self.strength_factors)
         else:
             fam_ptr, fam_nbr, fam_bond = self._family
             kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
@@ -276,22 +294,16 @@ class IceBody(BodyCheckpoint, WholeBody):
             self.fracture_dissipated += self._ws.crush_dissipated
         return nb
 
-    def _apply_constraints(self, t: float) -> None:
+    def _apply_constraints(self, t: float, step: float = 0.0) -> None:
+        """The prescribed motion at ``t`` (s); with ``step``, the drift velocity over it."""
         self.v[self.fixed] = 0.0
         for c in self.constraints:
-            self.v[c.index] = c.value(t)
+            c.impose(self, t, step)
 
-    def _constraint_force(self, t: float) -> float:
-        """Sum over constraints of R.v: the power (W) that supports and drivers put in."""
-        rho = self.material.density
-        power = 0.0
-        for c in self.constraints:
-            idx = c.index
-            a = c.acceleration(t)
-            # reaction = m a_prescribed - (internal + body) force on the constrained particles
-            r = (rho * a[None, :] - self.f[idx] - rho * self.gravity[None, :]) * self.vol[idx, None]
-            power += float(np.sum(r @ c.value(t)))
-        return power
+    def reactions(self) -> dict[str, np.ndarray]:
+        """The reaction (N, global axes) of each fixed or prescribed region by name: the force
+        its support or driver exerts on the ice now (:mod:`pdfem.pd.constraints`)."""
+        return dict(zip([c.name for c in self.constraints], reaction_forces(self)))
 
     def stable_time_step(self) -> float:
         """A stable velocity-Verlet step (s) for this body, safe for every body shape.
@@ -323,9 +335,11 @@ class IceBody(BodyCheckpoint, WholeBody):
         ``f``) and :meth:`end_step`."""
         half = 0.5 * dt
         t0 = self.time
-        self._power0 = self._constraint_force(t0) if self.constraints else 0.0
+        if self.rates is not None:
+            self.rates.advance(self.theta, dt)
+        self._force0 = applied_forces(self) if self.constraints else None
         self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
-        self._apply_constraints(t0 + half)
+        self._apply_constraints(t0, dt)
         y_old = self.y.copy() if keep_old else None
         self.y += dt * self.v
         self.time = t0 + dt
@@ -338,7 +352,7 @@ class IceBody(BodyCheckpoint, WholeBody):
         self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
         self._apply_constraints(self.time)
         if self.constraints:
-            self.external_work += half * (self._power0 + self._constraint_force(self.time))
+            self.external_work += step_work(self, self._force0, dt)
 
     def step(self, dt: float, after_drift=None) -> int:
         """Advance by ``dt`` (s) with velocity Verlet; the number of bonds broken. ``after_drift
@@ -357,36 +371,3 @@ class IceBody(BodyCheckpoint, WholeBody):
         breaks (:meth:`pdfem.pd.ice_interface.IceParticles.refresh_forces`)."""
         while self.compute_forces():
             pass
-
-    # -- diagnostics ---------------------------------------------------------------------------
-    def displacement(self) -> np.ndarray:
-        """(N,3) displacement y - x0, m."""
-        return self.y - self.x0
-
-    def damage(self) -> np.ndarray:
-        """(N,) broken fraction of each particle's initial bonds."""
-        return kernels.damage(self.row_ptr, self.nbr, self._broken_arg(), self.n, self._ws,
-                              self.weight)
-
-    def kinetic_energy(self) -> float:
-        """Kinetic energy, J."""
-        return 0.5 * self.material.density * float(np.sum(self.vol * np.einsum("ij,ij->i", self.v, self.v)))
-
-    def strain_energy(self) -> float:
-        """Elastic energy of the unbroken bonds at the current positions, and of the broken
-        bonds that still push (crushed ice), J."""
-        mat = self.material
-        theta = np.empty(self.n)  # of the current bond set (bonds broken this step excluded)
-        br = self._broken_arg()
-        kernels.dilatation(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight, br,
-                           self.vol, self.m, theta, self._ws)
-        W = kernels.strain_energy(self.y, self.row_ptr, self.nbr, self.xi_len, self.weight,
-                                  br, self.vol, self.m, theta, mat.K, mat.mu, self._ws)
-        crushed = 0.0 if self.rest is None else kernels.contact_bond_energy(
-            self.y, self.row_ptr, self.nbr, self.xi_len, self.weight, br, self.rest, self.vol,
-            self.m, mat.mu)
-        return float(np.dot(W, self.vol)) + crushed
-
-    def momentum(self) -> np.ndarray:
-        """Linear momentum (3,), kg m/s."""
-        return self.material.density * (self.vol @ self.v)

@@ -31,7 +31,8 @@ import numpy as np
 
 from pdfem.pd import kernels
 from pdfem.pd.body import IceBody
-from pdfem.pd.constraints import VelocityConstraint
+from pdfem.pd.constraints import reaction_forces
+from pdfem.pd.distributed_state import DistributedCheckpoint
 
 
 @dataclasses.dataclass
@@ -83,7 +84,7 @@ def halo_plan(owner: np.ndarray, row_ptr: np.ndarray, nbr: np.ndarray, rank: int
     return HaloPlan(local, owned, pairs, send, recv)
 
 
-class DistributedIce:
+class DistributedIce(DistributedCheckpoint):
     """This rank's part of an ice body, advanced in step with the other ranks.
 
     It implements the ice-body interface of :class:`pdfem.pd.ice_interface.IceParticles`, as
@@ -123,11 +124,11 @@ class DistributedIce:
             flags=None,  # broken bonds are negative weights (replace would copy the flags)
             fixed=body.fixed[loc].copy(), constraints=[],
             loop="pairs", external_work=0.0, fracture_dissipated=0.0,
-            rest=None if body.rest is None else body.rest[pairs].copy())
+            rest=None if body.rest is None else body.rest[pairs].copy(), rates=None)
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
-            local.constraints.append(VelocityConstraint(g2l[mine], c.velocity, c.ramp_time))
+            local.constraints.append(dataclasses.replace(c, index=g2l[mine]))
         self.body = local
         self.exchange_seconds = 0.0  # wall time spent in halo exchanges, s
         # bonds whose lower end is owned here: counted once over all ranks
@@ -163,7 +164,8 @@ class DistributedIce:
                                               b.nofail, b.theta, b.f, b._ws,
                                               between=self._exchange, rest=b.rest,
                                               crush_yield=b.failure.crush_yield,
-                                              owned=self._owned_rows)
+                                              owned=self._owned_rows,
+                                              strength=b.strength_factors)
         if b.rest is not None:
             b.fracture_dissipated += b._ws.crush_dissipated
         if broke == 0:  # the usual step: no recount over the bonds
@@ -244,6 +246,13 @@ class DistributedIce:
 
     _sum = owned_sum
 
+    def reactions(self) -> dict[str, np.ndarray]:
+        """The reaction (N) of each fixed or prescribed region by name, summed over the owned
+        particles of all ranks (each rank's constraints hold only its owned particles; one sum
+        over ranks, in rank order, so every rank gets the same totals; collective)."""
+        total = self.comm.allreduce_sum(reaction_forces(self.body))
+        return dict(zip([c.name for c in self.body.constraints], total))
+
     @property
     def external_work(self) -> float:
         return float(self.comm.allreduce_sum(self.body.external_work))
@@ -313,74 +322,6 @@ class DistributedIce:
         return {"u": self.body.displacement()[own], "v": self.body.v[own],
                 "damage": self.damage()[own]}
 
-    # -- checkpoints -------------------------------------------------------------------------
-    def checkpoint_state(self) -> dict | None:
-        """The state of the whole body in global order on rank 0, as the serial body's
-        :meth:`~pdfem.pd.body.IceBody.checkpoint_state` (``None`` on the other ranks; every
-        rank must call it). ``external_work`` and ``fracture_dissipated`` are sums over ranks;
-        ``<key>_ranks`` keeps each rank's part, so a restart on as many ranks continues bit for
-        bit."""
-        b = self.body
-        arrays = {k: self.gather(getattr(b, k)) for k in ("y", "v", "f", "theta")}
-        counted = self._counted
-        rest = b.rest[counted] if b.rest is not None else None
-        bonds = self.comm.gather((self.plan.pairs[counted], b.broken[counted], rest))
-        work = self.comm.gather(float(b.external_work))
-        frac = self.comm.gather(float(b.fracture_dissipated))
-        if bonds is None:
-            return None
-        broken = np.zeros(len(self.global_body.nbr), dtype=np.uint8)
-        rests = np.full(len(self.global_body.nbr), np.nan, dtype=np.float32)
-        for idx, flags, rest in bonds:
-            broken[idx] = flags
-            if rest is not None:
-                rests[idx] = rest
-        extra = {} if b.rest is None else {"rest": rests}
-        return {**arrays, **extra, "broken": broken, "time": float(b.time),
-                "external_work": _rank_sum(work), "external_work_ranks": np.array(work),
-                "fracture_dissipated": _rank_sum(frac), "fracture_dissipated_ranks": np.array(frac)}
-
-    def restore_state(self, state: dict) -> None:
-        """Take this rank's part of a whole-body state (from a checkpoint written on any number
-        of ranks, or by a serial run).
-
-        Raises
-        ------
-        ValueError
-            If the state's sizes are not those of the body.
-        """
-        n, p = self.global_n, len(self.global_body.nbr)
-        for k, size in (("y", n), ("v", n), ("f", n), ("theta", n), ("broken", p)):
-            if len(state[k]) != size:
-                raise ValueError(f"ice body '{self.name}': {k} has {len(state[k])} entries in "
-                                 f"the checkpoint, {size} in the case")
-        loc, pairs = self.plan.local, self.plan.pairs
-        self.body.restore_state({"y": state["y"][loc], "v": state["v"][loc],
-                                 "f": state["f"][loc], "theta": state["theta"][loc],
-                                 "broken": state["broken"][pairs], "time": state["time"],
-                                 "external_work": self._rank_part(state, "external_work"),
-                                 "fracture_dissipated":
-                                     self._rank_part(state, "fracture_dissipated"),
-                                 **({} if self.body.rest is None
-                                    else {"rest": state["rest"][pairs]})})
-        self._counted_broken = self._broken_count()
-
-    def _rank_part(self, state: dict, key: str) -> float:
-        """This rank's part of a counter summed over ranks: its own from ``<key>_ranks`` if the
-        checkpoint was written on as many ranks, else the total on rank 0 and 0 elsewhere."""
-        ranks = state.get(f"{key}_ranks")
-        if ranks is not None and len(ranks) == self.comm.size:
-            return float(ranks[self.comm.rank])
-        return float(state[key]) if self.comm.rank == 0 else 0.0
-
     def damage(self) -> np.ndarray:
         """Local damage (right for owned particles)."""
         return self.body.damage()
-
-
-def _rank_sum(values) -> float:
-    """``values[0] + values[1] + ...`` in rank order, as the counters' allreduce sums them."""
-    total = 0.0
-    for v in values:
-        total = total + v
-    return total

@@ -26,7 +26,7 @@ from pdfem.pd.lps_law import (
     pair_force_scalar,
     stretch_limits,
 )
-from pdfem.pd.pair_kernels import check_broken, check_weight
+from pdfem.pd.pair_kernels import _NO_STRENGTH, check_broken, check_weight
 from pdfem.pd.workspace import c_contiguous
 
 
@@ -96,6 +96,7 @@ def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coe
     for i in range(fam_ptr.shape[0] - 1):
         can_i = nofail[i] == 0
         hth = coef[4 * i + 2]
+        hfs = coef[4 * i + 3]
         for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
             j = U64(fam_nbr[q])
             if j <= U64(i):
@@ -107,8 +108,8 @@ def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coe
             l = xi_len[k]
             d0, d1, d2 = bond_vector(y, U64(3) * j, y[3 * i], y[3 * i + 1], y[3 * i + 2])
             j4 = U64(4) * j
-            if breaks(bond_length(d0, d1, d2) - l, l, hth + coef[j4 + U64(2)], lim, can_i,
-                      nofail, j):
+            if breaks(bond_length(d0, d1, d2) - l, l, hth + coef[j4 + U64(2)],
+                      hfs + coef[j4 + U64(3)], lim, can_i, nofail, j):
                 mark_broken(signed, wt, w, broken, k)
                 nb += 1
     return nb
@@ -178,7 +179,7 @@ def forces_family(
     n = fam_ptr.shape[0] - 1
     if coef is None:
         coef = np.empty((n, 4))
-    force_coefficients(True, m, theta, K, mu, coef)
+    force_coefficients(True, m, theta, K, mu, _NO_STRENGTH, coef)
     yc, signed, wt = c_contiguous(y, "y"), check_broken(broken, xi_len), check_weight(weight, xi_len)
     _forces_family(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol,
                    c_contiguous(coef, "coef"), wt, c_contiguous(f_out, "f_out"))

@@ -64,6 +64,11 @@ class IceParticles(Protocol):
         """Sum of a local per-particle array over the owned particles of all ranks."""
         ...
 
+    def reactions(self) -> dict[str, np.ndarray]:
+        """Reaction (N, (3,)) of each fixed or prescribed region by name: the force its support
+        or driver exerts on the ice, over all ranks (collective under MPI)."""
+        ...
+
     def gather(self, values: np.ndarray) -> np.ndarray | None:
         """Owned entries of a local per-particle array in global order on rank 0, else None."""
         ...

@@ -78,14 +78,15 @@ def dilatation_of(s, m):
 
 
 @numba.njit(**_INLINE)
-def breaks(e, l, th, lim, can_i, nofail, j):
+def breaks(e, l, th, fs, lim, can_i, nofail, j):
     """The failure test: stretch e / l outside the bounds ``lim`` = (t0, t1, c0, c1, d0, d1)
-    at the bond's mean dilatation ``th`` (module doc), and neither end ``nofail``."""
+    at the bond's mean dilatation ``th`` (module doc), the compressive strength scaled by the
+    ends' mean strength factor ``fs`` (1 without a rate dependence), and neither end ``nofail``."""
     if not (can_i and nofail[j] == 0):
         return False
     if e > (lim[0] + lim[1] * th) * l:
         return True
-    return e < min(lim[2] + lim[3] * th, lim[4] + lim[5] * th) * l
+    return e < min(lim[2] * fs + lim[3] * th, lim[4] * fs + lim[5] * th) * l
 
 
 def stretch_limits(s0) -> np.ndarray:
@@ -164,9 +165,12 @@ def energy_density(K, mu, theta, s, m):
 
 
 @twin(fastmath=False)
-def force_coefficients(m, theta, K, mu, coef):
+def force_coefficients(m, theta, K, mu, strength, coef):
     """coef[:, 0] = a = theta (3K - 5mu) / m, coef[:, 1] = b = 15 mu / m (0 where m = 0);
-    coef[:, 2] = theta / 2 (a bond's mean dilatation is the sum over its ends), coef[:, 3] = 0."""
+    coef[:, 2] = theta / 2 (a bond's mean dilatation is the sum over its ends) and
+    coef[:, 3] = strength / 2, the particle's compressive-strength factor (1 if ``strength`` is
+    empty) halved likewise."""
+    unit = strength.shape[0] == 0
     c1 = 3.0 * K - 5.0 * mu
     c2 = 15.0 * mu
     for p in prange(m.shape[0]):
@@ -179,4 +183,4 @@ def force_coefficients(m, theta, K, mu, coef):
             coef[p, 0] = 0.0
             coef[p, 1] = 0.0
         coef[p, 2] = 0.5 * th
-        coef[p, 3] = 0.0
+        coef[p, 3] = 0.5 if unit else 0.5 * strength[p]

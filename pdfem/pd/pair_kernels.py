@@ -58,6 +58,7 @@ if TYPE_CHECKING:
 _NO_R = np.zeros(0)  # stands for "no bond-length buffer" (read-only by convention)
 _NO_REST = np.zeros(0, dtype=np.float32)  # "broken bonds never push" (read-only by convention)
 _ALL_ROWS = np.zeros(0, dtype=np.uint8)  # "every row's crushing energy counts" (read-only)
+_NO_STRENGTH = np.zeros(0)  # "every particle's strength factor is 1" (read-only by convention)
 
 
 def rest_arg(rest: np.ndarray | None, per_pair: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -230,6 +231,7 @@ def forces(
     rest: np.ndarray | None = None,
     crush_yield: float = np.inf,
     owned: np.ndarray | None = None,
+    strength: np.ndarray | None = None,
 ) -> int:
     """LPS force density with the bond-break check (pair loop).
 
@@ -269,6 +271,9 @@ def forces(
     owned
         Optional (N,) uint8: the rows whose crushed bonds' dissipation counts (default all).
         The energy they dissipated in this call (J) is left in ``ws.crush_dissipated``.
+    strength
+        Optional (N,) float64 factors on the compressive strength (the constant parts c0, d0 of
+        the lower bound; a bond takes its ends' mean), e.g. a strain-rate dependence; default 1.
 
     Returns
     -------
@@ -278,7 +283,8 @@ def forces(
     ws = workspace_for(ws, row_ptr, nbr)
     rest, granular = rest_arg(rest, nbr)
     owned = _ALL_ROWS if owned is None else owned
-    force_coefficients(ws.parallel_particles, m, theta, K, mu, ws.coef)
+    force_coefficients(ws.parallel_particles, m, theta, K, mu,
+                       _NO_STRENGTH if strength is None else strength, ws.coef)
     nb = int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                             check_broken(broken, nbr), vol,
                             ws.coef, check_weight(weight, nbr), nofail, ws.chunk_ptr,
@@ -309,6 +315,7 @@ def dilatation_and_forces(
     rest: np.ndarray | None = None,
     crush_yield: float = np.inf,
     owned: np.ndarray | None = None,
+    strength: np.ndarray | None = None,
 ) -> int:
     """One OSB step's internal forces: :func:`dilatation`, then :func:`forces` (pair loops).
 
@@ -321,7 +328,7 @@ def dilatation_and_forces(
     Parameters are those of :func:`dilatation` and :func:`forces`; ``theta_out`` (N,) and
     ``f_out`` (N, 3) are overwritten; ``ws`` is required. ``between``, if given, is called with
     ``theta_out`` between the two passes (an MPI rank's body exchanges its halo's dilatations
-    there). ``rest``, ``crush_yield``, ``owned``: as in :func:`forces`.
+    there). ``rest``, ``crush_yield``, ``owned``, ``strength``: as in :func:`forces`.
 
     Returns
     -------
@@ -339,7 +346,8 @@ def dilatation_and_forces(
                      m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     if between is not None:
         between(theta_out)
-    force_coefficients(ws.parallel_particles, m, theta_out, K, mu, ws.coef)
+    force_coefficients(ws.parallel_particles, m, theta_out, K, mu,
+                       _NO_STRENGTH if strength is None else strength, ws.coef)
     nb = int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
                           nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
                           ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular,

@@ -123,6 +123,7 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofai
     ai = coef[4 * i]
     bi = coef[4 * i + 1]
     hth = coef[4 * i + 2]
+    hfs = coef[4 * i + 3]
     vi = vol[i]
     can_i = nofail[i] == 0
     fx = 0.0
@@ -157,7 +158,8 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofai
             else:
                 r = bond_length(d0, d1, d2)
             e = r - l
-            if breaks(e, l, hth + coef[j4 + U64(2)], lim, can_i, nofail, j):
+            if breaks(e, l, hth + coef[j4 + U64(2)], hfs + coef[j4 + U64(3)], lim, can_i,
+                      nofail, j):
                 mark_broken(signed, wt, w, broken, k)  # it still acts in this force evaluation
                 if granular:
                     p = crushed_rest(e, l, sy)

@@ -1,9 +1,11 @@
 """The per-step history groups of a results file as post-processing sees them.
 
 Histories are named ``<kind>/<name>``: ``loads/<structure>`` (ice force on a structure),
-``contacts/<pair>`` (ice force in a contact pair), ``monitors/<probe>``,
-``structures/<name>`` (reactions, energies), and ``energy``. :func:`histories_of` picks one
-kind; ``AXES`` names the components of a (K, 3) column.
+``loads/<body>.<region>`` (reaction of an ice body's fixed or prescribed region: the force the
+support or driver exerts on the ice; ``force`` only, no ``contacts``), ``contacts/<pair>`` (ice
+force in a contact pair), ``monitors/<probe>``, ``structures/<name>`` (reactions, energies),
+and ``energy``. :func:`histories_of` picks one kind, :func:`split_loads` tells the two kinds of
+``loads`` apart; ``AXES`` names the components of a (K, 3) column.
 """
 
 from __future__ import annotations
@@ -32,3 +34,14 @@ def histories_of(hist: dict, kind: str, key: str) -> dict[str, dict]:
     prefix = kind + "/"
     return {g[len(prefix):]: h for g, h in sorted(hist.items())
             if g.startswith(prefix) and key in h}
+
+
+def split_loads(hist: dict) -> tuple[dict[str, dict], dict[str, dict]]:
+    """The force histories of ``loads/``: ``(structure loads, region reactions)``, by name.
+
+    A structure's load has the column ``contacts``; the reaction of an ice region
+    (``loads/<body>.<region>``) has ``force`` only.
+    """
+    loads = histories_of(hist, "loads", "force")
+    return ({n: h for n, h in loads.items() if "contacts" in h},
+            {n: h for n, h in loads.items() if "contacts" not in h})

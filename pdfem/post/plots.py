@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pdfem.post.groups import AXES, histories_of
+from pdfem.post.groups import AXES, histories_of, split_loads
 from pdfem.post.spectrum import amplitude_spectrum
 
 def _figure(rows: int, height: float = 3.0):
@@ -37,13 +37,14 @@ def _finish(ax, title: str, ylabel: str, ncol: int = 1) -> None:
     ax.legend(loc="best", fontsize="small", ncol=ncol)
 
 
-def _plot_loads(loads: dict[str, dict], path: Path, written: list[Path]) -> None:
+def _plot_loads(loads: dict[str, dict], path: Path, written: list[Path],
+                title: str = "Ice force on '{}'") -> None:
     fig, axes = _figure(len(loads))
     for ax, (name, h) in zip(axes, loads.items()):
         for a, c in enumerate(AXES):
             ax.plot(h["time"], h["force"][:, a], lw=0.9, label=f"$F_{c}$")
         ax.plot(h["time"], np.linalg.norm(h["force"], axis=1), "k", lw=1.2, label="$|F|$")
-        _finish(ax, f"Ice force on '{name}'", "force [N]")
+        _finish(ax, title.format(name), "force [N]")
     _save(fig, path, written)
 
 
@@ -141,7 +142,8 @@ def write_plots(results: dict, out_dir: str | os.PathLike) -> list[Path]:
         ``load_history.png`` (force components and magnitude vs time, one panel per loaded
         structure; needs a load history), ``load_spectrum.png`` (one-sided amplitude spectrum
         of the force magnitude on log-log axes, Hz, the mean left out; needs 4 or more load
-        samples), ``structure_response.png``
+        samples), ``region_reactions.png`` (the same for the reactions of the ice's fixed and
+        prescribed regions, ``loads/<body>.<region>``), ``structure_response.png``
         (max von Mises and max displacement over the structure vs time from the frames, and
         the monitors; needs a structure and a frame), ``damage.png`` (ice particles at the
         last frame coloured by damage, projected on the plane of the two largest extents;
@@ -151,9 +153,14 @@ def write_plots(results: dict, out_dir: str | os.PathLike) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     hist = results["histories"]
     written: list[Path] = []
-    loads = {n: h for n, h in histories_of(hist, "loads", "force").items() if h["time"].size}
+    structure_loads, region_loads = split_loads(hist)
+    loads = {n: h for n, h in structure_loads.items() if h["time"].size}
     if loads:
         _plot_loads(loads, out / "load_history.png", written)
+    regions = {n: h for n, h in region_loads.items() if h["time"].size}
+    if regions:
+        _plot_loads(regions, out / "region_reactions.png", written,
+                    "Reaction of ice region '{}' (force on the ice)")
     spectra = {n: h for n, h in loads.items() if h["time"].size >= 4}
     if spectra:
         _plot_spectrum(spectra, out / "load_spectrum.png", written)

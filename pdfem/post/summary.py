@@ -17,6 +17,8 @@ Definitions used in the summary:
   ``output_interval``): peaks between frames are not seen. Monitors and loads are per step.
   Locations are in the reference configuration: an element's centre is the mean of its nodes.
 - reaction of a fixed group: peak magnitude of its (3,) reaction force over the frames.
+- reaction of an ice region (``loads/<body>.<region>``, every coupling step): the force its
+  support or driver exerts on the ice, with the same figures as a load (peaks, means).
 - ice damage (broken fraction of the initial bonds) at the last frame: its maximum and its
   volume-weighted mean per body.
 """
@@ -28,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from pdfem.post.groups import AXES, histories_of
+from pdfem.post.groups import AXES, histories_of, split_loads
 from pdfem.post.windowed import peak_windowed_force
 
 
@@ -172,7 +174,9 @@ def summarize(results: dict) -> dict:
         ``file``, ``title``, ``frames``, ``end_time`` (s, last frame); ``loads``
         {structure: figures}, ``contacts`` {pair: figures}: per direction ``x``, ``y``, ``z``
         and ``magnitude`` the ``peak`` (N), its ``time`` (s) and the ``mean`` (N, time
-        average over the run, see the module docstring); ``structures`` {name:
+        average over the run, see the module docstring); ``regions`` {``<body>.<region>``:
+        the same figures of the reaction of an ice body's fixed or prescribed region (N, the
+        force on the ice)}; ``structures`` {name:
         ``max_von_mises`` / ``max_displacement`` {value, time, element or node, location},
         ``reactions`` {group: {peak, time, force_at_peak}}}; ``monitors`` {probe: ``peak_u``,
         ``peak_von_mises``}; ``ice`` {body: particles, max_damage, mean_damage (volume
@@ -186,7 +190,9 @@ def summarize(results: dict) -> dict:
     out: dict[str, Any] = {"file": results.get("file"), "title": meta.get("title", ""),
                            "version": meta.get("version", ""), "frames": int(t.size),
                            "end_time": _num(t[-1]) if t.size else None}
-    out["loads"] = {n: _load_figures(h) for n, h in histories_of(hist, "loads", "force").items()}
+    loads, regions = split_loads(hist)
+    out["loads"] = {n: _load_figures(h) for n, h in loads.items()}
+    out["regions"] = {n: _load_figures(h) for n, h in regions.items()}
     out["contacts"] = {n: _load_figures(h)
                        for n, h in histories_of(hist, "contacts", "force").items()}
     out["structures"] = {name: _structure_figures(results, name, s)

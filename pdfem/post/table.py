@@ -1,7 +1,8 @@
 """The summary of a results file as text tables for the terminal (units in the headers).
 
 :func:`format_summary` prints what :func:`pdfem.post.summary.summarize` computed: one section
-per quantity (loads, contact pairs, structures, reactions, monitors, ice, energies).
+per quantity (loads, contact pairs, reactions of ice regions, structures, reactions, monitors,
+ice, energies).
 """
 
 from __future__ import annotations
@@ -69,6 +70,8 @@ def format_summary(summary: dict) -> str:
         lines += ["", *_load_lines("Ice force on structure", name, f)]
     for name, f in s["contacts"].items():
         lines += ["", *_load_lines("Ice force in contact pair", name, f)]
+    for name, f in s.get("regions", {}).items():
+        lines += ["", *_load_lines("Reaction of ice region (force on the ice)", name, f)]
     rows = []
     for name, st in s["structures"].items():
         vm = st.get("max_von_mises", {})

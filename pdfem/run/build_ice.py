@@ -1,6 +1,7 @@
 """Ice bodies from validated case entries: fill the shape, find bonds, apply regions.
 
 Each region in the case (fixed, prescribed velocity, no-fail, cracks) must select something;
+fixed and prescribed regions carry their names (for their reaction histories) into the body;
 one that selects no particle (or cuts no bond) is a user error, reported with its field name.
 The case's material section becomes the kernels' :class:`~pdfem.pd.materials.lps.IceMaterial`
 here (:func:`ice_material`), so that the case schema does not depend on the physics.
@@ -13,6 +14,7 @@ import numpy as np
 from pdfem.case.config import IceConfig, RunConfig
 from pdfem.case.ice import IceMaterialSection
 from pdfem.errors import InputError
+from pdfem.geometry.path import DisplacementPath
 from pdfem.pd.body import IceBody
 from pdfem.pd.failure import failure_law
 from pdfem.pd.influence import isotropy_gain
@@ -40,7 +42,8 @@ def ice_material(m: IceMaterialSection, dx: float | None = None,
                        fracture_energy=m.fracture_energy if by_energy else None,
                        critical_stretch=m.critical_stretch, tensile_strength=tensile,
                        compressive_strength=m.compressive_strength,
-                       friction_angle=m.friction_angle)
+                       friction_angle=m.friction_angle, transition_rate=m.transition_rate,
+                       rate_exponent=m.rate_exponent)
 
 
 def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:
@@ -97,8 +100,10 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
         if body.cut_crack(crack.point, crack.normal, crack.box.min, crack.box.max) == 0:
             raise InputError(file, crack.field, "this crack cuts no bond; the plane through 'point' "
                              "with 'normal' must pass through the ice inside 'box'")
-    for region, field in cfg.fixed:
-        body.fix(select(region, field))
+    for fixed in cfg.fixed:
+        body.fix(select(fixed.region, fixed.field), name=fixed.name)
     for bc in cfg.prescribed_velocity:
-        body.add_velocity_constraint(select(bc.region, f"{bc.field}.region"), bc.velocity, bc.ramp_time)
+        path = None if bc.path is None else DisplacementPath(bc.path)
+        body.add_velocity_constraint(select(bc.region, f"{bc.field}.region"), bc.velocity,
+                                     bc.ramp_time, path=path, name=bc.name)
     return body

@@ -16,6 +16,7 @@ from pdfem.errors import InputError
 from pdfem.fem.base import Structure
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.rigid import RigidBody
+from pdfem.geometry.path import DisplacementPath
 from pdfem.fem.structure import ElasticStructure
 
 
@@ -38,10 +39,12 @@ def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
 
 
 def _rigid(cfg: StructureConfig, path: Path, file: str) -> RigidBody:
-    """A rigid body with the case's prescribed motion, from its contact group's surface."""
+    """A rigid body with the case's prescribed motion (velocity or translation path), from its
+    contact group's surface."""
+    motion = None if cfg.path is None else DisplacementPath(cfg.path)
     return RigidBody.from_msh(path, cfg.contact_group, velocity=cfg.velocity,
                               angular_velocity=cfg.angular_velocity, centre=cfg.center,
-                              name=cfg.name)
+                              name=cfg.name, translation=motion)
 
 
 def _elastic(cfg: StructureConfig, path: Path, file: str) -> ElasticStructure:

@@ -4,7 +4,8 @@ Rank 0 writes ``results.h5``; the other MPI ranks get a :class:`NoOutput`, a wri
 nothing by design, so every rank runs the same calls (gathers and energy sums are collective).
 With ``run.output_per_rank`` each rank also writes its own ice particles to
 ``results.rank<R>.h5``. The sources (:mod:`pdfem.output.source`) of a run are its ice bodies,
-structures, structure loads, contact pairs and monitors; :class:`Outputs` hands their data to
+structures, structure loads, reactions of the ice's fixed and prescribed regions, contact pairs
+and monitors; :class:`Outputs` hands their data to
 the writers at every output frame and coupling step, and adds the energy balance.
 """
 
@@ -121,6 +122,23 @@ class LoadSource(Source):
                                        "applied": self.structure.applied_load()}}
 
 
+class RegionSource(Source):
+    """The reactions of an ice body's fixed and prescribed regions every coupling step
+    (``loads/<body>.<region>``: ``force`` N in global axes, the force the support or driver
+    exerts on the ice, summed over the owned particles of all ranks; collective)."""
+
+    def __init__(self, body) -> None:
+        self.body, self.name = body, body.name
+
+    @classmethod
+    def of_run(cls, setup, per_rank: bool) -> list[Source]:
+        return [cls(b) for b in setup.bodies]
+
+    def step_rows(self) -> Rows:
+        return {f"loads/{self.name}.{region}": {"force": force}
+                for region, force in self.body.reactions().items()}
+
+
 class PairSource(Source):
     """A contact pair's load every coupling step (``contacts/<name>``)."""
 
@@ -152,7 +170,7 @@ class MonitorSource(Source):
         return {f"monitors/{self.name}": {"u": u, "von_mises": vm}}
 
 
-SOURCE_KINDS = (IceSource, StructureSource, LoadSource, PairSource, MonitorSource)
+SOURCE_KINDS = (IceSource, StructureSource, LoadSource, RegionSource, PairSource, MonitorSource)
 """The kinds of output source of a run, in writing order; each makes its sources of a built run
 with ``of_run(setup, per_rank)``. A new kind: its class (a new file, or here) and one entry."""
 

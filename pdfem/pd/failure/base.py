@@ -46,6 +46,14 @@ class FailureLaw(Protocol):
     """The yield compression (stretch) of those pushing bonds (:func:`pdfem.pd.lps_law.
     crushed_bond`); ``inf`` if they do not push."""
 
+    rate_dependent: bool
+    """True if the compressive strength depends on the strain rate (:meth:`strength_factor`,
+    rates from :mod:`pdfem.pd.strain_rate`)."""
+
+    def strength_factor(self, rate):
+        """Factors (-) on the compressive strength for strain rates ``rate`` (1/s, array)."""
+        ...
+
     def stretch_limits(self) -> tuple[float, ...]:
         """(t0, t1, c0, c1, d0, d1): a bond breaks when its stretch (dimensionless) is above
         t0 + t1 theta or below min(c0 + c1 theta, d0 + d1 theta) (module doc); ``inf`` /

@@ -28,6 +28,7 @@ class CriticalStretch:
     name: str = "critical_stretch"
     broken_bonds_push: bool = False
     crush_yield: float = math.inf
+    rate_dependent: bool = False
 
     @classmethod
     def from_material(cls, material, delta: float) -> "CriticalStretch":
@@ -42,6 +43,10 @@ class CriticalStretch:
     def stretch_limits(self) -> tuple[float, ...]:
         """(s0, 0, -inf, 0, -inf, 0): above s0 at any dilatation, never in compression."""
         return (self.s0, 0.0, -math.inf, 0.0, -math.inf, 0.0)
+
+    def strength_factor(self, rate):
+        """1: no compressive strength to scale."""
+        return 1.0
 
     def describe(self) -> str:
         """``critical stretch s0 = ...``."""

@@ -53,6 +53,16 @@ resistance), but no tension; it is never deleted and can be squeezed out of the 
 zone. Pairs that were never bonded meet through the short-range contact force
 (:mod:`pdfem.forces.short_range`, switched on for a body with this law).
 
+Strain rate (optional, off by default): ice is ductile at low strain rates, where its
+compressive strength rises with the rate as sigma ~ rate^(1/n) (power-law creep, Glen's n = 3),
+and brittle above a transition rate of about 1e-4 to 1e-3 /s, where the strength levels off
+and then falls slowly (Schulson & Duval 2009, ch. 6 and 11; Timco & Frederking 1990 for sea
+ice). With ``transition_rate`` given, ``compressive_strength`` is the strength at the
+transition and the strength at a lower rate is scaled by (rate / transition_rate)^n
+(``rate_exponent``, default 1/3), each particle with its own rate from the last step
+(:mod:`pdfem.pd.strain_rate`); above the transition it stays sigma_c. The brittle-range
+decline is not modelled.
+
 The friction angle of ice: Coulombic shear faulting of ice under confinement follows
 sigma_1 = sigma_c + kappa sigma_3 with an internal friction coefficient mu_i = 0.5-0.9 (Schulson
 & Duval 2009, *Creep and Fracture of Ice*, Cambridge, ch. 12), i.e. phi = atan(mu_i) = 27-42 deg;
@@ -63,6 +73,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+import numpy as np
 
 
 def coulomb_slope(friction_angle_deg: float) -> float:
@@ -91,8 +103,24 @@ class IceFailure:
     friction_angle: float
     K: float
     mu: float
+    transition_rate: float | None = None
+    rate_exponent: float = 1.0 / 3.0
     name: str = "ice"
     broken_bonds_push: bool = True
+
+    @property
+    def rate_dependent(self) -> bool:
+        """True with a ductile-to-brittle transition rate."""
+        return self.transition_rate is not None
+
+    def strength_factor(self, rate):
+        """sigma_c(rate) / sigma_c: (rate / rate_t)^n below the transition rate rate_t
+        (ductile), 1 at and above it (brittle); the rate is floored at rate_t / 1000, where
+        the factor is 1000^-n (0.1 for n = 1/3). Without a transition rate: 1."""
+        if self.transition_rate is None:
+            return 1.0
+        r = np.maximum(np.asarray(rate, dtype=np.float64), 1e-3 * self.transition_rate)
+        return np.minimum(1.0, (r / self.transition_rate) ** self.rate_exponent)
 
     @property
     def crush_yield(self) -> float:
@@ -115,7 +143,8 @@ class IceFailure:
         if st is None:
             st = material.youngs_modulus * material.s0(delta)
         return cls(float(st), float(material.compressive_strength),
-                   float(material.friction_angle), float(material.K), float(material.mu))
+                   float(material.friction_angle), float(material.K), float(material.mu),
+                   material.transition_rate, float(material.rate_exponent))
 
     def stretch_limits(self) -> tuple[float, ...]:
         """(t0, t1, c0, c1, d0, d1) of the module doc's s_max and s_min."""

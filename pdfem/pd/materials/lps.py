@@ -208,6 +208,11 @@ class IceMaterial:
         Uniaxial compressive strength (Pa), for the ``"ice"`` failure law.
     friction_angle
         Internal friction angle (degrees) of the ``"ice"`` failure law's Coulomb criterion.
+    transition_rate
+        Ductile-to-brittle transition strain rate (1/s) of the ``"ice"`` law's compressive
+        strength; None: no rate dependence.
+    rate_exponent
+        Exponent of the ductile strength's rise with the strain rate (-).
     """
 
     density: float
@@ -218,6 +223,8 @@ class IceMaterial:
     tensile_strength: float | None = None
     compressive_strength: float | None = None
     friction_angle: float = 30.0
+    transition_rate: float | None = None
+    rate_exponent: float = 1.0 / 3.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.density) and self.density > 0.0):

@@ -76,12 +76,13 @@ def pull(case: Case, directory: Path | None = None) -> dict:
     -------
     dict
         ``time`` (s), ``force`` (N, (n,3): the total force the prescribed-velocity regions
-        exert on the body), ``broken`` (bonds broken so far) at every record; ``geometry``
+        exert on the body, the sum of their reactions :meth:`pdfem.pd.body.IceBody.reactions`,
+        which a run writes as ``loads/<body>.<name>/force``), ``broken`` (bonds broken so far) at every record; ``geometry``
         (:func:`beam_geometry`) and ``dx`` (m) of the case as run.
     """
     cfg = case.ice[0]
     body = build_ice_body(cfg, case.run, case.file)
-    rho = body.material.density
+    drivers = [bc.name for bc in cfg.prescribed_velocity]
     dt = case.run.safety_factor * body.stable_time_step()
     steps = max(1, math.ceil(case.run.end_time / dt))
     every = max(1, steps // 4000)
@@ -92,10 +93,8 @@ def pull(case: Case, directory: Path | None = None) -> dict:
         nbroken += body.step(dt)
         if k % every:
             continue
-        total = np.zeros(3)
-        for c in body.constraints:
-            reaction = (rho * c.acceleration(body.time) - body.f[c.index]) * body.vol[c.index, None]
-            total += reaction.sum(axis=0)
+        reactions = body.reactions()
+        total = np.sum([reactions[name] for name in drivers], axis=0)
         times.append(body.time)
         forces.append(total)
         broken.append(nbroken)
@@ -123,7 +122,7 @@ def beam_geometry(case: Case) -> dict:
     cfg = case.ice[0]
     x = fill(cfg.shape, cfg.dx)
     lo, hi = cfg.shape.bounds()
-    supports = sorted(float(x[shape.contains(x), 0].mean()) for shape, _ in cfg.fixed)
+    supports = sorted(float(x[fx.region.contains(x), 0].mean()) for fx in cfg.fixed)
     noses = sorted(float(x[bc.region.contains(x), 0].mean()) for bc in cfg.prescribed_velocity)
     return {"supports": supports, "noses": noses, "b": float(hi[1] - lo[1]),
             "h": float(hi[2] - lo[2])}
