@@ -23,7 +23,11 @@ import numpy as np
 
 from pdfem.pd import kernels as kn
 from pdfem.pd.family import build_family
+from pdfem.pd.failure.ice import IceFailure
 from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
+
+ICE_LAW_COMPRESSIVE_STRENGTH = 3.0e6
+"""sigma_c (Pa) of the "ice" law in the step benchmark (sea ice at ice-structure rates)."""
 
 
 def _lattice(side: int, dx: float) -> np.ndarray:
@@ -73,6 +77,10 @@ def _warm_up(horizon_factor: float) -> None:
     m = kn.weighted_volume(row_ptr, nbr, xi, wt, vol, ws)
     th, f = np.empty(n), np.empty((n, 3))
     br, nf = np.zeros(len(nbr), np.uint8), np.zeros(n, np.uint8)
+    rest = np.full(len(nbr), np.nan, dtype=np.float32)
+    lim = (1.0, 0.0, -1.0, 0.0, -1.0, 0.0)
+    kn.dilatation_and_forces(x, row_ptr, nbr, xi, wt, kn.SIGNED, vol, m, 1.0, 1.0, lim, nf, th, f,
+                             ws, rest=rest, crush_yield=0.5)
     for b in (br, kn.SIGNED):
         kn.dilatation(x, row_ptr, nbr, xi, wt, b, vol, m, th, ws)
         kn.forces(x, row_ptr, nbr, xi, wt, b, vol, m, th, 1.0, 1.0, 1.0, nf, f, ws)
@@ -128,7 +136,10 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
         ``lean_pair_steps_per_s`` and ``lean_pair_steps_per_s_best`` (fused step without the
         bond-length scratch), ``bytes_per_pair`` (stored per unique pair: partner, length,
         signed weight), ``scratch_bytes_per_pair`` (the bond-length scratch of the fused step),
-        ``bonds_broken``, ``max_force_difference`` (relative,
+        ``bonds_broken``, ``ice_law_step_s``, ``ice_law_pair_steps_per_s`` and
+        ``ice_law_overhead`` (the fused step with the "ice" failure law and its crushed bonds,
+        :mod:`pdfem.pd.failure.ice`, and its extra time over the critical-stretch step, as a
+        fraction), ``max_force_difference`` (relative,
         pair vs full family after the last step), ``search`` (how the pairs were built),
         ``load_average`` and ``load_average_after`` (1-minute load before and after the
         timing: other work on the machine skews the figures), plus the inputs.
@@ -180,8 +191,22 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
     t_sep, _, _ = _timed(separate_step, wt.copy(), steps)
     del ws, ws_lean
 
+    # the "ice" failure law on the same displacements: stretch bounds in the bond's mean
+    # dilatation, broken bonds kept as crushed bonds (one float32 per pair)
+    law = IceFailure(ice.youngs_modulus * s0, ICE_LAW_COMPRESSIVE_STRENGTH, 30.0, K, mu)
+    rest = np.full(npairs, np.nan, dtype=np.float32)
+    ws_ice = kn.PairWorkspace(row_ptr, nbr)
+
+    def ice_step(w):
+        return kn.dilatation_and_forces(y, row_ptr, nbr, xi, w, kn.SIGNED, vol, m, K, mu,
+                                        law.stretch_limits(), nofail, theta, f_fam, ws_ice,
+                                        rest=rest, crush_yield=law.crush_yield)
+
+    t_ice, best_ice, _ = _timed(ice_step, wt.copy(), steps)
+    del ws_ice
+
     fam_ptr, fam_nbr, fam_bond = build_family(row_ptr, nbr, npart)
-    coef = np.empty((npart, 2))
+    coef = np.empty((npart, 4))
 
     def family_step(w):
         kn.dilatation_family(y, fam_ptr, fam_nbr, fam_bond, xi, w, kn.SIGNED, vol, m, theta)
@@ -215,6 +240,9 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
         "separate_step_s": t_sep / steps,
         "separate_pair_steps_per_s": npairs * steps / t_sep,
         "bonds_broken": int(nbroken),
+        "ice_law_step_s": t_ice / steps,
+        "ice_law_pair_steps_per_s": npairs * steps / t_ice,
+        "ice_law_overhead": t_ice / t_pair - 1.0,
         "max_force_difference": float(np.abs(f_pair - f_fam).max() / scale),
         "load_average": float(load),
         "load_average_after": float(os.getloadavg()[0]),

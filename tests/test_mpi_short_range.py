@@ -174,6 +174,7 @@ def test_demo_case_on_two_ranks_matches_one(tmp_path):
     text = re.sub(r"^end_time = .*$", "end_time = 3.0e-4", text, flags=re.M)
     text = re.sub(r"^output_interval = .*$", "output_interval = 1.5e-4", text, flags=re.M)
     text = text.replace("initial_velocity = [0.0, 0.0, -0.5]", "initial_velocity = [0.0, 0.0, -20.0]")
+    text = text.replace("velocity = [0.0, 0.0, -0.5] }", "velocity = [0.0, 0.0, -20.0] }")
     assert "-20.0" in text
     _one_and_two_ranks(tmp_path, text, "sheet", "panel", tol=1e-6)
 

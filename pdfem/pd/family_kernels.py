@@ -179,6 +179,8 @@ def forces_family(
     n = fam_ptr.shape[0] - 1
     if coef is None:
         coef = np.empty((n, 4))
+    if coef.shape != (n, 4):
+        raise ValueError(f"coef must be an (N, 4) float64 scratch array, got shape {coef.shape}")
     force_coefficients(True, m, theta, K, mu, _NO_STRENGTH, coef)
     yc, signed, wt = c_contiguous(y, "y"), check_broken(broken, xi_len), check_weight(weight, xi_len)
     _forces_family(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol,
