@@ -23,8 +23,12 @@ SEA_ICE = {"density": 900.0, "youngs_modulus": 4.1e9, "poisson_ratio": 0.3, "fra
 class IceMaterialSection(Section):
     """Elastic-brittle ice; the defaults are first-year sea ice.
 
-    Flexural strength of sea ice is 0.4-0.9 MPa (Timco & O'Brien 1994, Cold Reg. Sci. Technol.
-    22): not an input, but a calibrated ``critical_stretch`` can be checked against it.
+    The bonds break at a threshold given in one of three ways: a strength (``tensile_strength``
+    or ``flexural_strength``, Pa: what engineers measure; the threshold then does not depend on
+    the particle spacing), the fracture energy (``fracture_energy``, the default: the threshold
+    scales as horizon^-1/2) or the critical stretch itself. With a strength, the fracture energy
+    the bond law implies follows from strength and horizon (``docs/ice_strength.md``), so an
+    explicit ``fracture_energy`` beside a strength is an error.
     """
 
     density: Annotated[float, Positive("kg/m^3")] = Field(
@@ -36,10 +40,21 @@ class IceMaterialSection(Section):
     poisson_ratio: Annotated[float, Number(gt=-1.0, lt=0.5)] = Field(
         SEA_ICE["poisson_ratio"], description="Poisson's ratio (-), in (-1, 0.5). Default: 0.3 "
         "(the usual value for sea ice, e.g. Timco & Weeks 2010).")
+    # -- what breaks the bonds: one strength, or fracture_energy, or critical_stretch ---------
+    tensile_strength: Annotated[float, Positive("Pa")] | None = Field(
+        None, description="Uniaxial tensile strength (Pa); bonds break at stretch "
+        "tensile_strength / youngs_modulus at any dx. Not with flexural_strength, fracture_energy "
+        "or critical_stretch. Default: not given (sea ice 0.2-0.8 MPa, Timco & Weeks 2010).")
+    flexural_strength: Annotated[float, Positive("Pa")] | None = Field(
+        None, description="Flexural strength (Pa) from the beam formula at the peak load; the "
+        "bond threshold is derived from it (docs/ice_strength.md). Not with tensile_strength, "
+        "fracture_energy or critical_stretch. Default: not given (sea ice 0.4-0.9 MPa, "
+        "Timco & O'Brien 1994).")
     fracture_energy: Annotated[float, Positive("J/m^2")] = Field(
         SEA_ICE["fracture_energy"], description="Critical energy release rate G0 (J/m^2); gives "
-        "the critical bond stretch. Not with critical_stretch. Default: 10 (an order of magnitude; "
-        "reported values scatter with specimen size and loading rate, Timco & Weeks 2010).")
+        "the critical bond stretch. Not with critical_stretch or a strength. Default: 10 (an order "
+        "of magnitude; reported values scatter with specimen size and loading rate, Timco & Weeks "
+        "2010); not used when a strength is given.")
     critical_stretch: Annotated[float, Positive()] | None = Field(
         None, description="Critical bond stretch s0 (-), instead of fracture_energy. "
         "Default: from fracture_energy.")
@@ -68,7 +83,20 @@ class IceMaterialSection(Section):
 
     @model_validator(mode="after")
     def _one_criterion(self) -> "IceMaterialSection":
-        if {"fracture_energy", "critical_stretch"} <= self.model_fields_set:
+        given = self.model_fields_set
+        if {"tensile_strength", "flexural_strength"} <= given:
+            raise fail("give either tensile_strength or flexural_strength (Pa), not both; the "
+                       "other follows from it (docs/ice_strength.md)", key="flexural_strength")
+        strength = next((k for k in ("tensile_strength", "flexural_strength") if k in given), None)
+        if strength and "critical_stretch" in given:
+            raise fail(f"give either {strength} (Pa) or critical_stretch, not both: the strength "
+                       "sets the critical stretch", key="critical_stretch")
+        if strength and "fracture_energy" in given:
+            raise fail(f"give either {strength} (Pa) or fracture_energy (J/m^2), not both: a "
+                       "brittle bond law cannot honour both, and with a strength the fracture "
+                       "energy follows from strength and horizon (docs/ice_strength.md)",
+                       key="fracture_energy")
+        if {"fracture_energy", "critical_stretch"} <= given:
             raise fail("give either fracture_energy (J/m^2) or critical_stretch, not both",
                        key="critical_stretch")
         if self.failure == "ice" and self.compressive_strength is None:
@@ -154,8 +182,9 @@ class IceSection(Section):
                     "relative to the case file) (m). Required.")
     material: IceMaterialSection = Field(
         default_factory=IceMaterialSection,
-        description="`density` (kg/m^3), `youngs_modulus` (Pa), `poisson_ratio`, `fracture_energy` "
-                    "(J/m^2) or `critical_stretch`. Default: sea ice (900, 4.1e9, 0.3, 10).")
+        description="`density` (kg/m^3), `youngs_modulus` (Pa), `poisson_ratio`, and one of "
+                    "`tensile_strength` (Pa), `flexural_strength` (Pa), `fracture_energy` (J/m^2) "
+                    "or `critical_stretch`. Default: sea ice (900, 4.1e9, 0.3, 10).")
     initial_velocity: Annotated[Vec3, Vector("m/s")] = Field(
         (0.0, 0.0, 0.0), description="Initial velocity of every particle (m/s). Default: [0, 0, 0].")
     fixed: Tables(NamedRegionSection) = Field(

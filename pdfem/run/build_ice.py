@@ -18,16 +18,29 @@ from pdfem.geometry.path import DisplacementPath
 from pdfem.pd.body import IceBody
 from pdfem.pd.failure import failure_law
 from pdfem.pd.influence import isotropy_gain
-from pdfem.pd.materials.lps import IceMaterial
+from pdfem.pd.materials.lps import IceMaterial, tensile_from_flexural
 
 
-def ice_material(m: IceMaterialSection) -> IceMaterial:
-    """The LPS material of a case's ``material`` section (``critical_stretch``, when given,
-    replaces ``fracture_energy``)."""
+def ice_material(m: IceMaterialSection, dx: float | None = None,
+                 depth: float | None = None) -> IceMaterial:
+    """The LPS material of a case's ``material`` section.
+
+    ``critical_stretch`` or a strength, when given, replaces ``fracture_energy``. A
+    ``flexural_strength`` becomes the kernels' tensile strength through
+    :func:`pdfem.pd.materials.lps.tensile_from_flexural`, which needs the lattice spacing ``dx``
+    (m) and the body's depth ``depth`` (m, its z extent: the thickness of a sheet, the depth
+    of a beam loaded along z); ``docs/ice_strength.md``.
+    """
+    tensile = m.tensile_strength
+    if m.flexural_strength is not None:
+        if dx is None or depth is None:
+            raise ValueError("a flexural strength needs the spacing dx and the body's depth")
+        tensile = tensile_from_flexural(m.flexural_strength, dx, depth)
+    by_energy = m.critical_stretch is None and tensile is None
     return IceMaterial(density=m.density, youngs_modulus=m.youngs_modulus,
                        poisson_ratio=m.poisson_ratio,
-                       fracture_energy=m.fracture_energy if m.critical_stretch is None else None,
-                       critical_stretch=m.critical_stretch,
+                       fracture_energy=m.fracture_energy if by_energy else None,
+                       critical_stretch=m.critical_stretch, tensile_strength=tensile,
                        compressive_strength=m.compressive_strength,
                        friction_angle=m.friction_angle, transition_rate=m.transition_rate,
                        rate_exponent=m.rate_exponent)
@@ -55,8 +68,12 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.horizon_factor", str(exc),
                          cfg.horizon / cfg.dx) from None
+    lo, hi = cfg.shape.bounds()
     try:
-        material = ice_material(cfg.material)
+        material = ice_material(cfg.material, cfg.dx, float(hi[2] - lo[2]))
+    except ValueError as exc:
+        raise InputError(file, f"{cfg.field}.material.flexural_strength", str(exc)) from None
+    try:
         law = failure_law(cfg.material.failure, material, cfg.horizon)
         body = IceBody.from_shape(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon,
                                   loop=run.pd_loop, failure=law)

@@ -24,6 +24,7 @@ MODULES: tuple[str, ...] = (
     "coupled_step",        # demo_step_sweep.toml: energy and ice load at several steps
     "compression",         # ice_prism_compression*.toml: peak and residual strength, 2 dx
     "edge_crushing",       # ice_edge_crushing.toml: crushing regime against a rigid wall
+    "bending",             # ice_beam_bending_*.toml: flexural strength, 3- and 4-point, dx, dx/2
 )
 """The case modules, in the order of the report."""
 

@@ -1,8 +1,10 @@
 """The critical-stretch failure law: a bond breaks for good when its stretch exceeds s0.
 
-s0 is the material's given critical stretch, or follows from its fracture energy G0 and the
-horizon delta (:func:`pdfem.pd.materials.lps.critical_stretch`, 3-D OSB-PD); without either the
-bonds never break (s0 = inf). The numba kernels compare each bond's stretch with
+s0 is the material's given critical stretch, or its tensile strength over Young's modulus
+(``s0 = sigma_t / E``, the same at every horizon; a flexural strength is turned into sigma_t
+when the material is built, docs/ice_strength.md), or follows from its fracture energy G0 and
+the horizon delta (:func:`pdfem.pd.materials.lps.critical_stretch`, 3-D OSB-PD); without any
+of them the bonds never break (s0 = inf). The numba kernels compare each bond's stretch with
 :meth:`CriticalStretch.stretch_limit`.
 """
 

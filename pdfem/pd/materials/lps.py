@@ -2,7 +2,9 @@
 
 The ordinary state-based kernels (:mod:`pdfem.pd.kernels`) need the bulk modulus ``K`` (Pa), the
 shear modulus ``mu`` (Pa) and the critical stretch ``s0`` (dimensionless) of the bond-breaking
-criterion. This module derives them from engineering constants.
+criterion. This module derives them from engineering constants: ``s0`` from a tensile strength
+(``s0 = sigma_t / E``, independent of the spacing), from the fracture energy (``s0`` scales as
+horizon^-1/2) or given; ``docs/ice_strength.md`` derives the strength relations.
 
 Sea-ice defaults (``SEA_ICE_DEFAULTS``) and their sources:
 
@@ -14,8 +16,8 @@ Sea-ice defaults (``SEA_ICE_DEFAULTS``) and their sources:
   e.g. Timco & Weeks 2010, Cold Reg. Sci. Technol. 60);
 - fracture energy 10 J/m^2: an order of magnitude; reported values for sea ice scatter over
   roughly an order of magnitude with specimen size and loading rate (Timco & Weeks 2010);
-- flexural strength 0.4-0.9 MPa (Timco & O'Brien 1994, Cold Reg. Sci. Technol. 22). Not used by
-  the kernels; listed so that a calibrated ``s0`` can be checked against it.
+- flexural strength 0.4-0.9 MPa (Timco & O'Brien 1994, Cold Reg. Sci. Technol. 22): a typical
+  input ``flexural_strength`` of a case (:func:`tensile_from_flexural`).
 
 All values are SI.
 """
@@ -120,6 +122,63 @@ def critical_stretch(fracture_energy: float, K: float, mu: float, delta: float) 
     return math.sqrt(G0 / denom)
 
 
+def implied_fracture_energy(s0: float, K: float, mu: float, delta: float) -> float:
+    """The fracture energy (J/m^2) that a critical stretch ``s0`` implies at horizon ``delta`` (m).
+
+    The inverse of :func:`critical_stretch`: ``G0 = s0^2 (3 mu + (3/4)^4 (K - 5 mu / 3)) delta``
+    (Madenci & Oterkus 2014). With ``s0`` fixed by a strength, G0 grows in proportion to the
+    horizon: a brittle bond law honours a strength or a fracture energy, not both.
+    """
+    return float(s0) ** 2 * (3.0 * mu + 0.75**4 * (K - 5.0 * mu / 3.0)) * float(delta)
+
+
+#: Ratio of a lattice beam's flexural strength to its bond tensile strength that is left once
+#: the surface offset (1 - dx/h) is taken out: between three-point (1.10-1.14) and four-point
+#: (1.03-1.05) bending at h/dx = 10 and 20, centred on the validation runs so that both read
+#: within 8 % of the input (docs/ice_strength.md).
+FLEXURAL_EXCESS = 1.07
+
+#: Fewest particle layers across the depth for which a flexural strength is converted.
+MIN_LAYERS = 4
+
+
+def tensile_from_flexural(flexural_strength: float, dx: float, depth: float) -> float:
+    """The bond tensile strength (Pa) that makes a lattice beam's flexural strength the input.
+
+    ``sigma_t = sigma_f (1 - dx / h) / FLEXURAL_EXCESS``. The outermost particles of a lattice
+    body sit dx/2 inside its surface, so in bending the first bond breaks when the fibre at
+    h/2 - dx/2 from the neutral axis reaches sigma_t: the beam formula then reads
+    sigma_t / (1 - dx/h) at the surface. The remaining factor :data:`FLEXURAL_EXCESS` was
+    measured on three- and four-point beams (h/dx = 10 and 20, the validation cases
+    ``flexural_strength_*``); docs/ice_strength.md gives the derivation, the measurements and
+    the limits (calibrated for h/dx from 10 to 20, horizon 3.015 dx).
+
+    Parameters
+    ----------
+    flexural_strength
+        sigma_f (Pa), from the beam formula at the peak load, > 0.
+    dx
+        Lattice spacing (m), > 0.
+    depth
+        Depth h of the body in bending (m): its thickness across which it bends.
+
+    Returns
+    -------
+    float
+        sigma_t (Pa).
+
+    Raises
+    ------
+    ValueError
+        If the depth holds fewer than :data:`MIN_LAYERS` particle layers.
+    """
+    if not depth >= MIN_LAYERS * dx * (1.0 - 1e-9):
+        raise ValueError(f"a flexural strength needs at least {MIN_LAYERS} particle layers across "
+                         f"the body's depth (z extent {depth:g} m at dx = {dx:g} m); choose a "
+                         "smaller dx or give tensile_strength")
+    return float(flexural_strength) * (1.0 - dx / depth) / FLEXURAL_EXCESS
+
+
 @dataclass(frozen=True)
 class IceMaterial:
     """Elastic-brittle ice for the LPS kernels.
@@ -135,11 +194,16 @@ class IceMaterial:
     fracture_energy
         Critical energy release rate G0 (J/m^2); gives ``s0`` through :func:`critical_stretch`.
     critical_stretch
-        The critical stretch itself (dimensionless, > 0); wins over ``fracture_energy``.
-        With neither given, bonds never break (``s0 = inf``).
+        The critical stretch itself (dimensionless, > 0); wins over the others.
     tensile_strength
-        Uniaxial tensile strength (Pa), for the ``"ice"`` failure law (default there:
-        E s0).
+        The uniaxial tensile strength sigma_t (Pa, > 0) the kernels use: ``s0 = sigma_t / E``,
+        at any horizon; wins over ``fracture_energy`` (the ``"ice"`` failure law takes it as its
+        tension cut-off; without it, E s0). Under uniaxial stress sigma along x the LPS strain
+        is uniform, eps = sigma / E along x and -nu eps across, so a bond of direction n has
+        stretch eps (n_x^2 - nu (1 - n_x^2)) (small strain: the stretch of a bond is n.eps.n).
+        That is largest, eps, for the bond along the load (n_x = 1); bonds first break when
+        eps = s0, i.e. at sigma = E s0. Hence ``s0 = sigma_t / E`` exactly. With none of the
+        three given, bonds never break (``s0 = inf``).
     compressive_strength
         Uniaxial compressive strength (Pa), for the ``"ice"`` failure law.
     friction_angle
@@ -174,6 +238,12 @@ class IceMaterial:
             )
         if self.critical_stretch is not None and not (self.critical_stretch > 0.0):
             raise ValueError(f"critical stretch must be positive, got {self.critical_stretch!r}")
+        if self.tensile_strength is not None and not (
+            math.isfinite(self.tensile_strength) and self.tensile_strength > 0.0
+        ):
+            raise ValueError(
+                f"tensile strength must be a positive number of Pa, got {self.tensile_strength!r}"
+            )
 
     @property
     def K(self) -> float:
@@ -191,10 +261,23 @@ class IceMaterial:
         return math.sqrt(self.youngs_modulus / self.density)
 
     def s0(self, delta: float) -> float:
-        """Critical stretch for horizon ``delta`` (m): the given one, else from G0, else inf."""
+        """Critical stretch for horizon ``delta`` (m): the given one, else sigma_t / E, else from
+        G0, else inf."""
         if self.critical_stretch is not None:
             return float(self.critical_stretch)
+        if self.tensile_strength is not None:
+            return float(self.tensile_strength) / float(self.youngs_modulus)
         if self.fracture_energy is None:
             return math.inf
         K, mu = lps_constants(self.youngs_modulus, self.poisson_ratio)
         return critical_stretch(self.fracture_energy, K, mu, delta)
+
+    def fracture_energy_at(self, delta: float) -> float:
+        """The fracture energy (J/m^2) the bond law has at horizon ``delta`` (m): the given
+        G0, or the one ``s0`` implies (:func:`implied_fracture_energy`; inf if bonds never
+        break)."""
+        s0 = self.s0(delta)
+        if self.critical_stretch is None and self.tensile_strength is None \
+                and self.fracture_energy is not None:
+            return float(self.fracture_energy)
+        return implied_fracture_energy(s0, self.K, self.mu, delta)
