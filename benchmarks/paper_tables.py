@@ -173,7 +173,7 @@ def step_times(x: np.ndarray, steps: int, family: bool = True) -> dict:
         t0 = time.perf_counter()
         fam = build_family(row_ptr, nbr, n)
         out["family_build_s"] = time.perf_counter() - t0
-        coef = np.empty((n, 4))
+        coef = np.empty((n, 2))
 
         def family_step(w):
             kn.dilatation_family(y, *fam, xi, w, kn.SIGNED, vol, m, theta)

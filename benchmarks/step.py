@@ -206,7 +206,7 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
     del ws_ice
 
     fam_ptr, fam_nbr, fam_bond = build_family(row_ptr, nbr, npart)
-    coef = np.empty((npart, 4))
+    coef = np.empty((npart, 2))
 
     def family_step(w):
         kn.dilatation_family(y, fam_ptr, fam_nbr, fam_bond, xi, w, kn.SIGNED, vol, m, theta)

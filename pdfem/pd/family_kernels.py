@@ -60,8 +60,8 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
         yi0 = y[3 * i]
         yi1 = y[3 * i + 1]
         yi2 = y[3 * i + 2]
-        ai = coef[4 * i]
-        bi = coef[4 * i + 1]
+        ai = coef[2 * i]
+        bi = coef[2 * i + 1]
         fx = 0.0
         fy = 0.0
         fz = 0.0
@@ -75,8 +75,8 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
             d0, d1, d2 = bond_vector(y, U64(3) * j, yi0, yi1, yi2)
             r = bond_length(d0, d1, d2)
             e = r - l
-            j4 = U64(4) * j
-            g = pair_force_scalar(ai + coef[j4], bi + coef[j4 + U64(1)], l, e, w, r)
+            j2 = U64(2) * j
+            g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
             g *= vol[j]
             fx = fma(g, d0, fx)
             fy = fma(g, d1, fy)
@@ -87,16 +87,16 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
 
 
 @numba.njit(cache=True)
-def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coef2, nofail, lim):
+def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, aux2, nofail, lim):
     """Mark the bonds that break at these positions (after the forces, in which they still
     acted), each once from its smaller-index end; the number marked."""
     y = y2.reshape(y2.size)
-    coef = coef2.reshape(coef2.size)
+    aux = aux2.reshape(aux2.size)
     nb = 0
     for i in range(fam_ptr.shape[0] - 1):
         can_i = nofail[i] == 0
-        hth = coef[4 * i + 2]
-        hfs = coef[4 * i + 3]
+        hth = aux[2 * i]
+        hfs = aux[2 * i + 1]
         for q in range(U64(fam_ptr[i]), U64(fam_ptr[i + 1])):
             j = U64(fam_nbr[q])
             if j <= U64(i):
@@ -107,9 +107,9 @@ def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coe
                 continue
             l = xi_len[k]
             d0, d1, d2 = bond_vector(y, U64(3) * j, y[3 * i], y[3 * i + 1], y[3 * i + 2])
-            j4 = U64(4) * j
-            if breaks(bond_length(d0, d1, d2) - l, l, hth + coef[j4 + U64(2)],
-                      hfs + coef[j4 + U64(3)], lim, can_i, nofail, j):
+            j2 = U64(2) * j
+            if breaks(bond_length(d0, d1, d2) - l, l, hth + aux[j2], hfs + aux[j2 + U64(1)],
+                      lim, can_i, nofail, j):
                 mark_broken(signed, wt, w, broken, k)
                 nb += 1
     return nb
@@ -168,7 +168,7 @@ def forces_family(
     fam_ptr, fam_nbr, fam_bond
         Family lists from :func:`pdfem.pd.family.build_family`.
     coef
-        Optional (N, 4) float64 scratch for the per-particle coefficients.
+        Optional (N, 2) float64 scratch for the per-particle force coefficients.
     m_now
         Optional weighted volume of the intact bonds, as in
         :func:`pdfem.pd.pair_kernels.forces`.
@@ -182,15 +182,16 @@ def forces_family(
     """
     n = fam_ptr.shape[0] - 1
     if coef is None:
-        coef = np.empty((n, 4))
-    if coef.shape != (n, 4):
-        raise ValueError(f"coef must be an (N, 4) float64 scratch array, got shape {coef.shape}")
+        coef = np.empty((n, 2))
+    if coef.shape != (n, 2):
+        raise ValueError(f"coef must be an (N, 2) float64 scratch array, got shape {coef.shape}")
+    aux = np.empty((n, 2))
     force_coefficients(True, m, _INTACT if m_now is None else m_now, theta, K, mu, _NO_STRENGTH,
-                       coef)
+                       coef, aux)
     yc, signed, wt = c_contiguous(y, "y"), check_broken(broken, xi_len), check_weight(weight, xi_len)
     _forces_family(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol,
                    c_contiguous(coef, "coef"), wt, c_contiguous(f_out, "f_out"))
-    return int(_mark_breaks(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, coef,
+    return int(_mark_breaks(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, aux,
                             nofail, stretch_limits(s0)))
 
 

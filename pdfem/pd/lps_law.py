@@ -19,8 +19,9 @@ Every kernel that evaluates the law (the pair loops of :mod:`pdfem.pd.pair_step_
 :mod:`pdfem.pd.distributed`) calls these helpers. They are ``inline="always"``: numba pastes
 their IR into the caller, which compiles them with its own flags, so a helper costs nothing and
 the floating-point operations (and their order) are exactly those of the formulas above.
-:func:`force_coefficients` is the per-particle half of the force state (a_i, b_i) and half the
-particle's dilatation (so that a bond's mean dilatation is the sum of its ends', one gather each).
+:func:`force_coefficients` is the per-particle half of the force state (a_i, b_i) and, apart,
+half the particle's dilatation and strength factor (so that a bond's mean is the sum of its
+ends', one gather each).
 """
 
 from __future__ import annotations
@@ -87,6 +88,20 @@ def breaks(e, l, th, fs, lim, can_i, nofail, j):
     if e > (lim[0] + lim[1] * th) * l:
         return True
     return e < min(lim[2] * fs + lim[3] * th, lim[4] * fs + lim[5] * th) * l
+
+
+@numba.njit(**_INLINE)
+def breaks_stretch(e, l, s0, can_i, nofail, j):
+    """The critical-stretch test alone: stretch e / l above s0 and neither end ``nofail``
+    (what :func:`breaks` reduces to for bounds ``(s0, 0, -inf, 0, -inf, 0)``)."""
+    return e > s0 * l and can_i and nofail[j] == 0
+
+
+@numba.njit(**_INLINE)
+def is_plain_stretch(lim):
+    """Whether the bounds ``lim`` are a plain critical stretch (s0, 0, -inf, 0, -inf, 0)."""
+    return (lim[1] == 0.0 and lim[2] == -math.inf and lim[3] == 0.0 and lim[4] == -math.inf
+            and lim[5] == 0.0)
 
 
 def stretch_limits(s0) -> np.ndarray:
@@ -165,14 +180,14 @@ def energy_density(K, mu, theta, s, m):
 
 
 @twin(fastmath=False)
-def force_coefficients(m, m_now, theta, K, mu, strength, coef):
+def force_coefficients(m, m_now, theta, K, mu, strength, coef, aux):
     """coef[:, 0] = a = theta (3K - 5mu (2 - m'/m)) / m, coef[:, 1] = b = 15 mu / m (0 where
     m = 0), with m' = ``m_now`` the weighted volume of the intact bonds (empty: m' = m; the
     a of a damaged particle that keeps the force the energy's gradient,
-    :mod:`pdfem.pd.damaged_volume`);
-    coef[:, 2] = theta / 2 (a bond's mean dilatation is the sum over its ends) and
-    coef[:, 3] = strength / 2, the particle's compressive-strength factor (1 if ``strength`` is
-    empty) halved likewise."""
+    :mod:`pdfem.pd.damaged_volume`); aux[:, 0] = theta / 2 (a bond's mean dilatation is the
+    sum over its ends) and aux[:, 1] = strength / 2, the particle's compressive-strength factor
+    (1 if ``strength`` is empty) halved likewise. Two arrays, so that a plain critical stretch
+    gathers only ``coef`` (16 bytes per partner)."""
     unit = strength.shape[0] == 0
     intact = m_now.shape[0] == 0
     c1 = 3.0 * K - 5.0 * mu
@@ -189,5 +204,5 @@ def force_coefficients(m, m_now, theta, K, mu, strength, coef):
         else:
             coef[p, 0] = 0.0
             coef[p, 1] = 0.0
-        coef[p, 2] = 0.5 * th
-        coef[p, 3] = 0.5 if unit else 0.5 * strength[p]
+        aux[p, 0] = 0.5 * th
+        aux[p, 1] = 0.5 if unit else 0.5 * strength[p]

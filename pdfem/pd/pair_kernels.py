@@ -290,10 +290,10 @@ def forces(
     rest, granular = rest_arg(rest, nbr)
     owned = _ALL_ROWS if owned is None else owned
     force_coefficients(ws.parallel_particles, m, _INTACT if m_now is None else m_now, theta, K,
-                       mu, _NO_STRENGTH if strength is None else strength, ws.coef)
+                       mu, _NO_STRENGTH if strength is None else strength, ws.coef, ws.aux)
     nb = int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                             check_broken(broken, nbr), vol,
-                            ws.coef, check_weight(weight, nbr), nofail, ws.chunk_ptr,
+                            ws.coef, ws.aux, check_weight(weight, nbr), nofail, ws.chunk_ptr,
                             ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
                             _NO_R, False, rest, granular, float(crush_yield), owned, ws.crush,
                             stretch_limits(s0)))
@@ -354,8 +354,9 @@ def dilatation_and_forces(
     if between is not None:
         between(theta_out)
     force_coefficients(ws.parallel_particles, m, _INTACT if m_now is None else m_now, theta_out,
-                       K, mu, _NO_STRENGTH if strength is None else strength, ws.coef)
-    nb = int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef, wt,
+                       K, mu, _NO_STRENGTH if strength is None else strength, ws.coef, ws.aux)
+    nb = int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef,
+                          ws.aux, wt,
                           nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
                           ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular,
                           float(crush_yield), owned, ws.crush, stretch_limits(s0)))

@@ -22,12 +22,14 @@ from pdfem.pd.lps_law import (
     bond_length,
     bond_vector,
     breaks,
+    breaks_stretch,
     crushed_bond,
     crushed_bond_energy,
     crushed_rest,
     dilatation_of,
     dilatation_term,
     is_broken,
+    is_plain_stretch,
     mark_broken,
     pair_force_scalar,
 )
@@ -110,20 +112,27 @@ def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, s
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail, f,
-                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim):
+def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail, f,
+                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim, simple):
     """Row i of the pair-loop forces; returns the number of bonds it broke and, with
     ``granular``, the energy its crushed bonds dissipated (J, if ``counted``): a broken bond
     whose ``rest`` (p) is set (not NaN) is a crushed bond (:func:`~pdfem.pd.lps_law.
     crushed_bond`), and a bond breaking here becomes one (:func:`~pdfem.pd.lps_law.
-    crushed_rest`), the energy its spring starts with counted as negative dissipation."""
+    crushed_rest`), the energy its spring starts with counted as negative dissipation.
+    ``simple``: the law is a plain critical stretch lim[0] (no dilatation or strength terms,
+    no crushed bonds), tested without reading ``aux``."""
     yi0 = y[3 * i]
     yi1 = y[3 * i + 1]
     yi2 = y[3 * i + 2]
-    ai = coef[4 * i]
-    bi = coef[4 * i + 1]
-    hth = coef[4 * i + 2]
-    hfs = coef[4 * i + 3]
+    ai = coef[2 * i]
+    bi = coef[2 * i + 1]
+    s0 = lim[0]
+    if simple:
+        hth = 0.0
+        hfs = 0.0
+    else:
+        hth = aux[2 * i]
+        hfs = aux[2 * i + 1]
     vi = vol[i]
     can_i = nofail[i] == 0
     fx = 0.0
@@ -133,41 +142,48 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofai
     diss = 0.0
     for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
         w = wt[k]
-        j = U64(nbr[k])
-        j3 = U64(3) * j
-        j4 = U64(4) * j
-        l = xi_len[k]
         if is_broken(signed, w, broken, k):
-            if not granular:
+            if simple or not granular:
                 continue
             sb = rest[k]
             if sb != sb:  # NaN: broken for good
                 continue
+            j = U64(nbr[k])
+            j3 = U64(3) * j
+            j2 = U64(2) * j
+            l = xi_len[k]
             d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
             r = bond_length(d0, d1, d2)
-            g, p, dk = crushed_bond(bi + coef[j4 + U64(1)], l, sb, sy, abs(w), r, vi * vol[j])
+            g, p, dk = crushed_bond(bi + coef[j2 + U64(1)], l, sb, sy, abs(w), r, vi * vol[j])
             if g == 0.0:
                 continue
             if dk != 0.0:
                 rest[k] = p
                 diss += dk
         else:
+            j = U64(nbr[k])
+            j3 = U64(3) * j
+            j2 = U64(2) * j
+            l = xi_len[k]
             d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
             if use_r:
                 r = rbuf[k]
             else:
                 r = bond_length(d0, d1, d2)
             e = r - l
-            if breaks(e, l, hth + coef[j4 + U64(2)], hfs + coef[j4 + U64(3)], lim, can_i,
-                      nofail, j):
+            if simple:
+                brk = breaks_stretch(e, l, s0, can_i, nofail, j)
+            else:
+                brk = breaks(e, l, hth + aux[j2], hfs + aux[j2 + U64(1)], lim, can_i, nofail, j)
+            if brk:
                 mark_broken(signed, wt, w, broken, k)  # it still acts in this force evaluation
-                if granular:
+                if granular and not simple:
                     p = crushed_rest(e, l, sy)
                     rest[k] = p
-                    diss -= crushed_bond_energy(bi + coef[j4 + U64(1)], l, rest[k], abs(w),
+                    diss -= crushed_bond_energy(bi + coef[j2 + U64(1)], l, rest[k], abs(w),
                                                 r) * vi * vol[j]
                 nb += 1
-            g = pair_force_scalar(ai + coef[j4], bi + coef[j4 + U64(1)], l, e, w, r)
+            g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
         gi = g * vol[j]
         fx = fma(gi, d0, fx)
         fy = fma(gi, d1, fy)
@@ -191,30 +207,46 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofai
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, nofail,
-                 f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim):
-    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken and the
-    energy the crushed bonds of the ``owned`` rows (all if empty) dissipated."""
+def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt,
+                 nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim, simple):
+    """Rows i0..i1 with the overflow check ``checked``; bonds broken and energy dissipated."""
     nb = 0
     diss = 0.0
     every = owned.shape[0] == 0
-    for i in range(r0, split):
-        n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
-                           nofail, f, False, r1, ov, base, rbuf, use_r, rest, granular, sy,
-                           every or owned[i] != 0, lim)
-        nb += n
-        diss += d
-    for i in range(split, r1):
-        n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt,
-                           nofail, f, True, r1, ov, base, rbuf, use_r, rest, granular, sy,
-                           every or owned[i] != 0, lim)
+    for i in range(i0, i1):
+        n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt,
+                           nofail, f, checked, r1, ov, base, rbuf, use_r, rest, granular, sy,
+                           every or owned[i] != 0, lim, simple)
         nb += n
         diss += d
     return nb, diss
 
 
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail,
+                 f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim):
+    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken and the
+    energy the crushed bonds of the ``owned`` rows (all if empty) dissipated. A plain critical
+    stretch (:func:`~pdfem.pd.lps_law.is_plain_stretch`) runs its own copy of the loop."""
+    if is_plain_stretch(lim) and not granular:
+        n1, d1 = _forces_span(r0, split, False, y, row_ptr, nbr, xi_len, broken, signed, vol,
+                              coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
+                              granular, sy, owned, lim, True)
+        n2, d2 = _forces_span(split, r1, True, y, row_ptr, nbr, xi_len, broken, signed, vol,
+                              coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
+                              granular, sy, owned, lim, True)
+    else:
+        n1, d1 = _forces_span(r0, split, False, y, row_ptr, nbr, xi_len, broken, signed, vol,
+                              coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
+                              granular, sy, owned, lim, False)
+        n2, d2 = _forces_span(split, r1, True, y, row_ptr, nbr, xi_len, broken, signed, vol,
+                              coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
+                              granular, sy, owned, lim, False)
+    return n1 + n2, d1 + d2
+
+
 @twin()
-def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, nofail,
+def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2, wt, nofail,
                  cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r, rest, granular, sy, owned,
                  crush, lim):
     """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf;
@@ -222,6 +254,7 @@ def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, nofai
     crush[c] gets the energy chunk c's crushed bonds dissipated."""
     y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
     coef = coef2.reshape(coef2.size)
+    aux = aux2.reshape(aux2.size)
     f = fout.reshape(fout.size)
     ov = ov2.reshape(ov2.size)
     C = cb.shape[0] - 1
@@ -236,17 +269,21 @@ def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, nofai
         # one copy of the row loop per flag combination (constants inside the hot loop)
         if signed:
             if use_r:
-                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, nofail, f, r1, ov, base, rbuf, True, rest, granular, sy, owned, lim)
+                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol,
+                                      coef, aux, wt, nofail, f, r1, ov, base, rbuf, True,
+                                      rest, granular, sy, owned, lim)
             else:
-                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
-                                  wt, nofail, f, r1, ov, base, rbuf, False, rest, granular, sy, owned, lim)
+                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol,
+                                      coef, aux, wt, nofail, f, r1, ov, base, rbuf, False,
+                                      rest, granular, sy, owned, lim)
         elif use_r:
-            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, nofail, f, r1, ov, base, rbuf, True, rest, granular, sy, owned, lim)
+            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol,
+                                      coef, aux, wt, nofail, f, r1, ov, base, rbuf, True,
+                                      rest, granular, sy, owned, lim)
         else:
-            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
-                              wt, nofail, f, r1, ov, base, rbuf, False, rest, granular, sy, owned, lim)
+            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol,
+                                      coef, aux, wt, nofail, f, r1, ov, base, rbuf, False,
+                                      rest, granular, sy, owned, lim)
         counts[c] = nb
         crush[c] = dc
     for t in prange(C):

@@ -68,8 +68,11 @@ class PairWorkspace:
     ov
         float64 (ov_ptr[-1], 3) overflow buffer.
     coef
-        float64 (N, 4) per-particle force coefficients (theta (3K - 5mu) / m, 15 mu / m) and
-        halves of the stretch bounds (:func:`pdfem.pd.lps_law.force_coefficients`).
+        float64 (N, 2) per-particle force coefficients (a, b of
+        :func:`pdfem.pd.lps_law.force_coefficients`).
+    aux
+        float64 (N, 2) per-particle halves of the dilatation and of the strength factor that
+        the failure test of a bond adds over its ends.
     bond_length
         float64 (P,) current bond lengths kept by
         :func:`pdfem.pd.pair_kernels.dilatation_and_forces` (None until that is first called,
@@ -111,7 +114,8 @@ class PairWorkspace:
         self.split = chunk_split(row_ptr, nbr, cb)
         self.ov_ptr = np.concatenate(([0], np.cumsum(ov_len))).astype(np.int64)
         self.ov = np.zeros((int(self.ov_ptr[-1]), 3))
-        self.coef = np.empty((n, 4))
+        self.coef = np.empty((n, 2))
+        self.aux = np.empty((n, 2))
         self.counts = np.zeros(C, dtype=np.int64)
         self.crush = np.zeros(C)  # energy (J) each chunk's crushed bonds dissipated, last pass
         self.crush_dissipated = 0.0  # their sum in chunk order
