@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from pdfem.pd.lps_law import force_coefficients, stretch_limits
-from pdfem.pd.pair_step_kernels import dilatation_pairs, forces_pairs
+from pdfem.pd.pair_step_kernels import dilatation_pairs, forces_pairs, forces_pairs_law
 from pdfem.pd.pair_sum_kernels import family_sum_pairs
 from pdfem.pd.workspace import c_contiguous, workspace_for
 
@@ -72,6 +72,28 @@ def rest_arg(rest: np.ndarray | None, per_pair: np.ndarray) -> tuple[np.ndarray,
 
 #: Pass as ``broken`` to mean "bond k is broken iff weight[k] < 0" (read-only by convention).
 SIGNED = np.zeros(0, dtype=np.uint8)
+
+
+def plain_law(s0, granular: bool) -> bool:
+    """Whether the failure test is a plain critical stretch without crushed bonds: then the
+    plain force kernel (:func:`~pdfem.pd.pair_step_kernels.forces_pairs`) runs."""
+    lim = stretch_limits(s0)
+    return (not granular and lim[1] == 0.0 and lim[2] == -np.inf and lim[3] == 0.0
+            and lim[4] == -np.inf and lim[5] == 0.0)
+
+
+def _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail, f_out, rbuf,
+                use_r, rest, granular, crush_yield, owned) -> int:
+    """The force pass after :func:`~pdfem.pd.lps_law.force_coefficients`: the plain
+    critical-stretch kernel, or the general one for other laws (compiled only when used)."""
+    if plain_law(s0, granular):
+        return int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol,
+                                ws.coef, wt, float(stretch_limits(s0)[0]), nofail, ws.chunk_ptr,
+                                ws.split, ws.ov_ptr, ws.ov, ws.counts, f_out, rbuf, use_r))
+    return int(forces_pairs_law(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol,
+                                ws.coef, ws.aux, wt, nofail, ws.chunk_ptr, ws.split, ws.ov_ptr,
+                                ws.ov, ws.counts, f_out, rbuf, use_r, rest, granular,
+                                float(crush_yield), owned, ws.crush, stretch_limits(s0)))
 
 
 def check_broken(broken: np.ndarray, per_pair: np.ndarray) -> bool:
@@ -291,12 +313,10 @@ def forces(
     owned = _ALL_ROWS if owned is None else owned
     force_coefficients(ws.parallel_particles, m, _INTACT if m_now is None else m_now, theta, K,
                        mu, _NO_STRENGTH if strength is None else strength, ws.coef, ws.aux)
-    nb = int(forces_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                            check_broken(broken, nbr), vol,
-                            ws.coef, ws.aux, check_weight(weight, nbr), nofail, ws.chunk_ptr,
-                            ws.split, ws.ov_ptr, ws.ov, ws.counts, c_contiguous(f_out, "f_out"),
-                            _NO_R, False, rest, granular, float(crush_yield), owned, ws.crush,
-                            stretch_limits(s0)))
+    nb = _force_pass(ws, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
+                     check_broken(broken, nbr), vol, check_weight(weight, nbr), s0, nofail,
+                     c_contiguous(f_out, "f_out"), _NO_R, False, rest, granular, crush_yield,
+                     owned)
     ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
     return nb
 
@@ -355,10 +375,7 @@ def dilatation_and_forces(
         between(theta_out)
     force_coefficients(ws.parallel_particles, m, _INTACT if m_now is None else m_now, theta_out,
                        K, mu, _NO_STRENGTH if strength is None else strength, ws.coef, ws.aux)
-    nb = int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol, ws.coef,
-                          ws.aux, wt,
-                          nofail, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov,
-                          ws.counts, c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular,
-                          float(crush_yield), owned, ws.crush, stretch_limits(s0)))
+    nb = _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail,
+                     c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular, crush_yield, owned)
     ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
     return nb

@@ -29,7 +29,6 @@ from pdfem.pd.lps_law import (
     dilatation_of,
     dilatation_term,
     is_broken,
-    is_plain_stretch,
     mark_broken,
     pair_force_scalar,
 )
@@ -113,26 +112,19 @@ def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, s
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail, f,
-                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim, simple):
+                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim):
     """Row i of the pair-loop forces; returns the number of bonds it broke and, with
     ``granular``, the energy its crushed bonds dissipated (J, if ``counted``): a broken bond
     whose ``rest`` (p) is set (not NaN) is a crushed bond (:func:`~pdfem.pd.lps_law.
     crushed_bond`), and a bond breaking here becomes one (:func:`~pdfem.pd.lps_law.
-    crushed_rest`), the energy its spring starts with counted as negative dissipation.
-    ``simple``: the law is a plain critical stretch lim[0] (no dilatation or strength terms,
-    no crushed bonds), tested without reading ``aux``."""
+    crushed_rest`), the energy its spring starts with counted as negative dissipation."""
     yi0 = y[3 * i]
     yi1 = y[3 * i + 1]
     yi2 = y[3 * i + 2]
     ai = coef[2 * i]
     bi = coef[2 * i + 1]
-    s0 = lim[0]
-    if simple:
-        hth = 0.0
-        hfs = 0.0
-    else:
-        hth = aux[2 * i]
-        hfs = aux[2 * i + 1]
+    hth = aux[2 * i]
+    hfs = aux[2 * i + 1]
     vi = vol[i]
     can_i = nofail[i] == 0
     fx = 0.0
@@ -143,7 +135,7 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
     for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
         w = wt[k]
         if is_broken(signed, w, broken, k):
-            if simple or not granular:
+            if not granular:
                 continue
             sb = rest[k]
             if sb != sb:  # NaN: broken for good
@@ -171,13 +163,9 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
             else:
                 r = bond_length(d0, d1, d2)
             e = r - l
-            if simple:
-                brk = breaks_stretch(e, l, s0, can_i, nofail, j)
-            else:
-                brk = breaks(e, l, hth + aux[j2], hfs + aux[j2 + U64(1)], lim, can_i, nofail, j)
-            if brk:
+            if breaks(e, l, hth + aux[j2], hfs + aux[j2 + U64(1)], lim, can_i, nofail, j):
                 mark_broken(signed, wt, w, broken, k)  # it still acts in this force evaluation
-                if granular and not simple:
+                if granular:
                     p = crushed_rest(e, l, sy)
                     rest[k] = p
                     diss -= crushed_bond_energy(bi + coef[j2 + U64(1)], l, rest[k], abs(w),
@@ -208,7 +196,7 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt,
-                 nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim, simple):
+                 nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim):
     """Rows i0..i1 with the overflow check ``checked``; bonds broken and energy dissipated."""
     nb = 0
     diss = 0.0
@@ -216,7 +204,7 @@ def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, 
     for i in range(i0, i1):
         n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt,
                            nofail, f, checked, r1, ov, base, rbuf, use_r, rest, granular, sy,
-                           every or owned[i] != 0, lim, simple)
+                           every or owned[i] != 0, lim)
         nb += n
         diss += d
     return nb, diss
@@ -226,35 +214,93 @@ def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, 
 def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail,
                  f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim):
     """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken and the
-    energy the crushed bonds of the ``owned`` rows (all if empty) dissipated. A plain critical
-    stretch (:func:`~pdfem.pd.lps_law.is_plain_stretch`) runs its own copy of the loop."""
-    if is_plain_stretch(lim) and not granular:
-        n1, d1 = _forces_span(r0, split, False, y, row_ptr, nbr, xi_len, broken, signed, vol,
-                              coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
-                              granular, sy, owned, lim, True)
-        n2, d2 = _forces_span(split, r1, True, y, row_ptr, nbr, xi_len, broken, signed, vol,
-                              coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
-                              granular, sy, owned, lim, True)
-    else:
-        n1, d1 = _forces_span(r0, split, False, y, row_ptr, nbr, xi_len, broken, signed, vol,
-                              coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
-                              granular, sy, owned, lim, False)
-        n2, d2 = _forces_span(split, r1, True, y, row_ptr, nbr, xi_len, broken, signed, vol,
-                              coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
-                              granular, sy, owned, lim, False)
+    energy the crushed bonds of the ``owned`` rows (all if empty) dissipated, under a general
+    failure law (:func:`forces_pairs_law`)."""
+    n1, d1 = _forces_span(r0, split, False, y, row_ptr, nbr, xi_len, broken, signed, vol,
+                          coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
+                          granular, sy, owned, lim)
+    n2, d2 = _forces_span(split, r1, True, y, row_ptr, nbr, xi_len, broken, signed, vol,
+                          coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
+                          granular, sy, owned, lim)
     return n1 + n2, d1 + d2
 
 
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _plain_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail, f,
+                checked, r1, ov, base, rbuf, use_r):
+    """Row i of the pair-loop forces under a plain critical stretch ``s0``; returns the number
+    of bonds it broke."""
+    yi0 = y[3 * i]
+    yi1 = y[3 * i + 1]
+    yi2 = y[3 * i + 2]
+    ai = coef[2 * i]
+    bi = coef[2 * i + 1]
+    vi = vol[i]
+    can_i = nofail[i] == 0
+    fx = 0.0
+    fy = 0.0
+    fz = 0.0
+    nb = 0
+    for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
+        w = wt[k]
+        if is_broken(signed, w, broken, k):
+            continue
+        j = U64(nbr[k])
+        j3 = U64(3) * j
+        l = xi_len[k]
+        d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
+        if use_r:
+            r = rbuf[k]
+        else:
+            r = bond_length(d0, d1, d2)
+        e = r - l
+        if breaks_stretch(e, l, s0, can_i, nofail, j):   # it still acts in this force evaluation
+            mark_broken(signed, wt, w, broken, k)
+            nb += 1
+        j2 = U64(2) * j
+        g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
+        gi = g * vol[j]
+        fx = fma(gi, d0, fx)
+        fy = fma(gi, d1, fy)
+        fz = fma(gi, d2, fz)
+        gj = -g * vi
+        if checked and j >= r1:
+            q = U64(3) * (base + (j - r1))
+            ov[q] = fma(gj, d0, ov[q])
+            ov[q + U64(1)] = fma(gj, d1, ov[q + U64(1)])
+            ov[q + U64(2)] = fma(gj, d2, ov[q + U64(2)])
+        else:
+            f[j3] = fma(gj, d0, f[j3])
+            f[j3 + U64(1)] = fma(gj, d1, f[j3 + U64(1)])
+            f[j3 + U64(2)] = fma(gj, d2, f[j3 + U64(2)])
+    f[3 * i] += fx
+    f[3 * i + 1] += fy
+    f[3 * i + 2] += fz
+    return nb
+
+
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _plain_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, nofail,
+                 f, r1, ov, base, rbuf, use_r):
+    """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken."""
+    nb = 0
+    for i in range(r0, split):
+        nb += _plain_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
+                          nofail, f, False, r1, ov, base, rbuf, use_r)
+    for i in range(split, r1):
+        nb += _plain_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0,
+                          nofail, f, True, r1, ov, base, rbuf, use_r)
+    return nb
+
+
 @twin()
-def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2, wt, nofail,
-                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r, rest, granular, sy, owned,
-                 crush, lim):
-    """Pair-loop force density and breaking; with ``use_r`` the bond lengths come from rbuf;
-    with ``granular`` broken bonds with a ``rest`` stretch act in compression (row doc), and
-    crush[c] gets the energy chunk c's crushed bonds dissipated."""
+def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, nofail,
+                 cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r):
+    """Pair-loop force density and breaking under a plain critical stretch ``s0`` (a bond
+    breaks when its stretch exceeds s0); with ``use_r`` the bond lengths come from rbuf. The
+    general failure laws run :func:`forces_pairs_law`."""
     y = y2.reshape(y2.size)  # flat views: 3 j + c indexing, no stride multiplications
     coef = coef2.reshape(coef2.size)
-    aux = aux2.reshape(aux2.size)
     f = fout.reshape(fout.size)
     ov = ov2.reshape(ov2.size)
     C = cb.shape[0] - 1
@@ -269,21 +315,51 @@ def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2, wt,
         # one copy of the row loop per flag combination (constants inside the hot loop)
         if signed:
             if use_r:
-                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol,
-                                      coef, aux, wt, nofail, f, r1, ov, base, rbuf, True,
-                                      rest, granular, sy, owned, lim)
+                nb = _plain_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, s0, nofail, f, r1, ov, base, rbuf, True)
             else:
-                nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol,
-                                      coef, aux, wt, nofail, f, r1, ov, base, rbuf, False,
-                                      rest, granular, sy, owned, lim)
+                nb = _plain_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, True, vol, coef,
+                                  wt, s0, nofail, f, r1, ov, base, rbuf, False)
         elif use_r:
-            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol,
-                                      coef, aux, wt, nofail, f, r1, ov, base, rbuf, True,
-                                      rest, granular, sy, owned, lim)
+            nb = _plain_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, s0, nofail, f, r1, ov, base, rbuf, True)
         else:
-            nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol,
-                                      coef, aux, wt, nofail, f, r1, ov, base, rbuf, False,
-                                      rest, granular, sy, owned, lim)
+            nb = _plain_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, False, vol, coef,
+                              wt, s0, nofail, f, r1, ov, base, rbuf, False)
+        counts[c] = nb
+    for t in prange(C):
+        add_overflow3(t, cb, ov_ptr, ov2, fout)
+    total = 0
+    for c in range(C):
+        total += counts[c]
+    return total
+
+
+@twin()
+def forces_pairs_law(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2, wt, nofail,
+                     cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r, rest, granular, sy,
+                     owned, crush, lim):
+    """:func:`forces_pairs` for a failure law with dilatation-dependent bounds, strength
+    factors or crushed bonds (:mod:`pdfem.pd.failure.ice`): one copy of the row loop, with
+    ``signed`` and ``use_r`` tested per bond (a separate kernel, compiled only when a body
+    uses such a law, so that the plain loop's compile time stays what it was)."""
+    y = y2.reshape(y2.size)
+    coef = coef2.reshape(coef2.size)
+    aux = aux2.reshape(aux2.size)
+    f = fout.reshape(fout.size)
+    ov = ov2.reshape(ov2.size)
+    C = cb.shape[0] - 1
+    for c in prange(C):
+        r0 = cb[c]
+        r1 = U64(cb[c + 1])
+        base = U64(ov_ptr[c])
+        for p in range(3 * r0, 3 * r1):
+            f[p] = 0.0
+        for q in range(U64(3) * base, U64(3) * U64(ov_ptr[c + 1])):
+            ov[q] = 0.0
+        nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, signed, vol, coef,
+                              aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy,
+                              owned, lim)
         counts[c] = nb
         crush[c] = dc
     for t in prange(C):
