@@ -97,13 +97,6 @@ def breaks_stretch(e, l, s0, can_i, nofail, j):
     return e > s0 * l and can_i and nofail[j] == 0
 
 
-@numba.njit(**_INLINE)
-def is_plain_stretch(lim):
-    """Whether the bounds ``lim`` are a plain critical stretch (s0, 0, -inf, 0, -inf, 0)."""
-    return (lim[1] == 0.0 and lim[2] == -math.inf and lim[3] == 0.0 and lim[4] == -math.inf
-            and lim[5] == 0.0)
-
-
 def stretch_limits(s0) -> np.ndarray:
     """The six stretch-bound coefficients (t0, t1, c0, c1, d0, d1) the kernels take (module doc).
 

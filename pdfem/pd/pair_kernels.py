@@ -300,7 +300,7 @@ def forces(
         the lower bound; a bond takes its ends' mean), e.g. a strain-rate dependence; default 1.
     m_now
         Optional (N,) weighted volume of each particle's intact bonds (m^5,
-        :func:`pdfem.pd.damaged_volume.intact_weighted_volume`): with broken bonds the force is
+        :class:`pdfem.pd.damaged_volume.IntactVolume`): with broken bonds the force is
         then the exact gradient of the strain energy; default m (as if none were broken).
 
     Returns

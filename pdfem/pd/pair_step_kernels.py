@@ -111,6 +111,28 @@ def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, s
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _pair_force(g, vj, vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1, ov, base, f):
+    """A bond's force scalar ``g`` applied to both ends: the row's sums (fx, fy, fz) get
+    g V_j d (returned), partner j gets -g V_i d, in ``f`` or, past row r1 with ``checked``, in
+    the chunk's overflow rows."""
+    gi = g * vj
+    fx = fma(gi, d0, fx)
+    fy = fma(gi, d1, fy)
+    fz = fma(gi, d2, fz)
+    gj = -g * vi
+    if checked and j >= r1:
+        q = U64(3) * (base + (j - r1))
+        ov[q] = fma(gj, d0, ov[q])
+        ov[q + U64(1)] = fma(gj, d1, ov[q + U64(1)])
+        ov[q + U64(2)] = fma(gj, d2, ov[q + U64(2)])
+    else:
+        f[j3] = fma(gj, d0, f[j3])
+        f[j3 + U64(1)] = fma(gj, d1, f[j3 + U64(1)])
+        f[j3 + U64(2)] = fma(gj, d2, f[j3 + U64(2)])
+    return fx, fy, fz
+
+
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail, f,
                 checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim):
     """Row i of the pair-loop forces; returns the number of bonds it broke and, with
@@ -172,20 +194,8 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
                                                 r) * vi * vol[j]
                 nb += 1
             g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
-        gi = g * vol[j]
-        fx = fma(gi, d0, fx)
-        fy = fma(gi, d1, fy)
-        fz = fma(gi, d2, fz)
-        gj = -g * vi
-        if checked and j >= r1:
-            q = U64(3) * (base + (j - r1))
-            ov[q] = fma(gj, d0, ov[q])
-            ov[q + U64(1)] = fma(gj, d1, ov[q + U64(1)])
-            ov[q + U64(2)] = fma(gj, d2, ov[q + U64(2)])
-        else:
-            f[j3] = fma(gj, d0, f[j3])
-            f[j3 + U64(1)] = fma(gj, d1, f[j3 + U64(1)])
-            f[j3 + U64(2)] = fma(gj, d2, f[j3 + U64(2)])
+        fx, fy, fz = _pair_force(g, vol[j], vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1,
+                                 ov, base, f)
     f[3 * i] += fx
     f[3 * i + 1] += fy
     f[3 * i + 2] += fz
@@ -259,20 +269,8 @@ def _plain_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, no
             nb += 1
         j2 = U64(2) * j
         g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
-        gi = g * vol[j]
-        fx = fma(gi, d0, fx)
-        fy = fma(gi, d1, fy)
-        fz = fma(gi, d2, fz)
-        gj = -g * vi
-        if checked and j >= r1:
-            q = U64(3) * (base + (j - r1))
-            ov[q] = fma(gj, d0, ov[q])
-            ov[q + U64(1)] = fma(gj, d1, ov[q + U64(1)])
-            ov[q + U64(2)] = fma(gj, d2, ov[q + U64(2)])
-        else:
-            f[j3] = fma(gj, d0, f[j3])
-            f[j3 + U64(1)] = fma(gj, d1, f[j3 + U64(1)])
-            f[j3 + U64(2)] = fma(gj, d2, f[j3 + U64(2)])
+        fx, fy, fz = _pair_force(g, vol[j], vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1,
+                                 ov, base, f)
     f[3 * i] += fx
     f[3 * i + 1] += fy
     f[3 * i + 2] += fz

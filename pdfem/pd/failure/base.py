@@ -39,7 +39,7 @@ class FailureLaw(Protocol):
 
     broken_bonds_push: bool
     """True if a broken bond keeps pushing its ends apart when compressed below the length it
-    broke at (crushed ice: :func:`pdfem.pd.lps_law.contact_bond_scalar`); False: broken bonds
+    broke at (crushed ice: :func:`pdfem.pd.lps_law.crushed_bond`); False: broken bonds
     carry nothing."""
 
     crush_yield: float
