@@ -22,8 +22,8 @@ def _gravity(case: Case, bodies: list) -> Gravity:
 
 
 def _short_range(case: Case, bodies: list) -> ShortRangeContact | None:
-    # crushed ice (failure = "ice") carries compression only through this force
-    crushing = any(ice.material.failure == "ice" for ice in case.ice)
+    # crushed ice (a law whose broken bonds push) meets unbonded ice only through this force
+    crushing = any(b.failure.broken_bonds_push for b in bodies)
     on = case.run.short_range_contact or crushing
     return ShortRangeContact(bodies) if on and bodies else None
 
