@@ -10,6 +10,7 @@ from pdfem.case.ice import IceSection
 from pdfem.case.links import ContactSection, MonitorSection
 from pdfem.case.run import RunSection
 from pdfem.case.structure import StructureSection
+from pdfem.case.water import WaterSection
 
 
 def _names(kind: str, names: list[str]) -> str:
@@ -28,6 +29,8 @@ class CaseFile(Section):
     contact: Tables(ContactSection) = Field(
         (), description="Which ice body meets which structure. Default: every pair.")
     monitor: Tables(MonitorSection) = Field((), description="Probes on structures. Default: none.")
+    water: WaterSection | None = Field(None, description="Water the ice floats in (buoyancy, "
+                                       "drag; docs/water.md). Default: none.")
 
     @model_validator(mode="after")
     def _cross_references(self) -> "CaseFile":

@@ -18,6 +18,7 @@ from pdfem.case.ice import IceMaterialSection, IceSection
 from pdfem.case.shapes import Shape
 from pdfem.geometry.shapes import Box
 from pdfem.case.structure import StructureSection
+from pdfem.case.water import WaterSection, gravity_with_water
 
 
 @dataclass(frozen=True)
@@ -189,6 +190,7 @@ class Case:
     structures: tuple[StructureConfig, ...] = ()
     contacts: tuple[ContactConfig, ...] = ()
     monitors: tuple[MonitorConfig, ...] = ()
+    water: WaterSection | None = None  # [water] section, None: no water
     file: str = "<built-in>"
     text: str = ""
     directory: Path = field(default_factory=Path.cwd)
@@ -240,7 +242,8 @@ def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:
         end_time=r.end_time,
         output_interval=r.end_time / 20 if r.output_interval is None else r.output_interval,
         time_step=r.time_step or None, safety_factor=r.safety_factor, pd_loop=r.pd_loop,
-        gravity=r.gravity, title=r.title, substeps=r.substeps,
+        gravity=gravity_with_water(r.gravity, "gravity" in r.model_fields_set, data.water),
+        title=r.title, substeps=r.substeps,
         short_range_contact=r.short_range_contact,
         allow_unstable_time_step=r.allow_unstable_time_step,
         checkpoint_interval_steps=r.checkpoint_interval_steps,
@@ -260,4 +263,4 @@ def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:
                                    field=f"monitor[{k}]")
                      for k, m in enumerate(data.monitor))
     return Case(run=run, ice=ice, structures=structures, contacts=contacts, monitors=monitors,
-                file=file, text=text, directory=directory)
+                water=data.water, file=file, text=text, directory=directory)

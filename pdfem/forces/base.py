@@ -6,7 +6,8 @@ Every ice step, once the bodies' bond forces are computed at the new positions, 
 in its list, which adds force density (N/m^3) into the bodies' ``f`` arrays (for owned
 particles; under MPI every call is collective). For the energy balance each force reports the
 potential energy of its field (:meth:`ParticleForce.potential_energy`, J) under the history key
-:attr:`ParticleForce.energy_key`.
+:attr:`ParticleForce.energy_key`; a force that dissipates energy (drag) also reports the energy it
+has taken out so far (:meth:`ParticleForce.dissipated`) under :attr:`ParticleForce.dissipation_key`.
 
 Adding a force
 --------------
@@ -26,6 +27,9 @@ class ParticleForce(ABC):
     energy_key: str = ""
     """Name of this force's potential energy in the energy history (J)."""
 
+    dissipation_key: str = ""
+    """Name of the energy this force dissipates in the energy history (J); "" for none."""
+
     @abstractmethod
     def add_forces(self) -> int | None:
         """Add this force's force density (N/m^3) at the current positions into the bodies'
@@ -35,3 +39,8 @@ class ParticleForce(ABC):
     def potential_energy(self) -> float:
         """Potential energy (J) of the force at the current positions (0 for a force without
         one); the same on every rank."""
+
+    def dissipated(self) -> float:
+        """Energy (J) this force has taken out of the ice since the start (0 for a conservative
+        force); the same on every rank."""
+        return 0.0

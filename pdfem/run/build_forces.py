@@ -12,9 +12,11 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from pdfem.case.schema import Case
+from pdfem.errors import InputError
 from pdfem.forces.base import ParticleForce
 from pdfem.forces.gravity import Gravity
 from pdfem.forces.short_range import ShortRangeContact
+from pdfem.forces.water import Water
 
 
 def _gravity(case: Case, bodies: list) -> Gravity:
@@ -28,9 +30,24 @@ def _short_range(case: Case, bodies: list) -> ShortRangeContact | None:
     return ShortRangeContact(bodies) if on and bodies else None
 
 
+def _water(case: Case, bodies: list) -> Water | None:
+    w = case.water
+    if w is None or not bodies:
+        return None
+    gx, gy, gz = case.run.gravity
+    if gx != 0.0 or gy != 0.0 or gz >= 0.0:
+        raise InputError(case.file, "run.gravity", "with [water] gravity must point down z "
+                         "(the water surface is the plane z = water.level): give [0, 0, -g] "
+                         "with g > 0, or leave run.gravity out for [0, 0, -9.81]",
+                         list(case.run.gravity))
+    return Water(bodies, density=w.density, level=w.level, g=-gz, current=w.current,
+                 linear_drag=w.linear_drag, drag_coefficient=w.drag_coefficient)
+
+
 PARTICLE_FORCES: dict[type[ParticleForce], Callable[[Case, list], ParticleForce | None]] = {
     Gravity: _gravity,
     ShortRangeContact: _short_range,
+    Water: _water,
 }
 """Particle-force kind -> builder; forces act in this order every ice step."""
 
@@ -46,4 +63,14 @@ def potential_energies(forces: list[ParticleForce]) -> dict[str, float]:
     out = {kind.energy_key: 0.0 for kind in PARTICLE_FORCES}
     for f in forces:
         out[f.energy_key] = f.potential_energy()
+    return out
+
+
+def dissipated_energies(forces: list[ParticleForce]) -> dict[str, float]:
+    """``{dissipation key: energy dissipated (J)}`` of every registered kind that dissipates
+    (0 when not used)."""
+    out = {kind.dissipation_key: 0.0 for kind in PARTICLE_FORCES if kind.dissipation_key}
+    for f in forces:
+        if f.dissipation_key:
+            out[f.dissipation_key] = f.dissipated()
     return out

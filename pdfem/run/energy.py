@@ -8,7 +8,7 @@
                  + work of the structures' applied loads (``load_work``)
                  + work of moving supports (``support_work``)
     dissipated = contact (plastic impulses and friction) + fracture (energy the broken bonds
-                 held) + structural damping
+                 held) + structural damping (+ particle forces' dissipation, e.g. water drag)
     residual   = supplied - stored - dissipated
 
 Each term is kept by its owner as the run goes: the coupler keeps the work of the contact
@@ -28,7 +28,7 @@ The sums are taken in this fixed order, so the history is the same bit for bit f
 
 from __future__ import annotations
 
-from pdfem.run.build_forces import potential_energies
+from pdfem.run.build_forces import dissipated_energies, potential_energies
 
 ICE_STORED = ("kinetic", "strain", "gravity_potential")
 """Stored-energy keys summed first (the ice and its body-force field), in order."""
@@ -90,6 +90,7 @@ class EnergyBalance:
              "damping_dissipated": sum(t["damping_dissipated"] for t in terms),
              "contact_dissipated": c.contact_dissipated}
         e.update(pot)
+        e.update(dissipated_energies(self.forces))
         return e
 
     def stored(self, e: dict) -> float:
@@ -107,7 +108,7 @@ class EnergyBalance:
         e = self.energies()
         e["supplied"] = self.supplied(e)
         e["stored"] = self.stored(e)
-        e["dissipated"] = _fold(e, DISSIPATED)
+        e["dissipated"] = _fold(e, DISSIPATED + tuple(dissipated_energies([])))
         e["residual"] = e["supplied"] - e["stored"] - e["dissipated"]
         return e
 

@@ -1,0 +1,105 @@
+"""Water on ice particles: buoyancy of the submerged part of each particle's cell and drag
+against the velocity relative to the current (SI units; formulas in docs/water.md and
+:mod:`pdfem.forces.water_kernels`).
+
+Buoyancy is conservative: its potential energy (``water_potential``, J, zero at the reference
+positions) is exact, the integral of the force over z. Drag is not: the energy it takes out
+(``water_drag_dissipated``, J) is summed particle by particle over the moves between two force
+evaluations by the trapezoid rule, which is how velocity Verlet applies a force over a step, so
+the energy balance closes to the integrator's O(dt^2) error. With a current the drag can also
+put energy in (the term is then negative). Under MPI the forces go to the owned particles and
+every sum runs through the bodies' ``owned_sum``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pdfem.forces.base import ParticleForce
+from pdfem.forces.water_kernels import buoyancy_potential, drag_work, water_forces
+
+
+class _BodyWater:
+    """Per-body arrays of the water force: drag now and at the last evaluation, the positions
+    then, and the drag dissipation of each particle (J)."""
+
+    def __init__(self, body) -> None:
+        n = body.y.shape[0]
+        self.owned = np.ascontiguousarray(body.owned, dtype=np.uint8)
+        self.drag = np.zeros((n, 3))
+        self.drag_prev = np.zeros((n, 3))
+        self.y_prev: np.ndarray | None = None
+        self.dissipated = np.zeros(n)
+        self.potential = np.zeros(n)
+
+
+class Water(ParticleForce):
+    """Buoyancy and drag of still water (with a uniform current) on ice bodies.
+
+    Parameters
+    ----------
+    bodies
+        The ice bodies (:class:`pdfem.pd.ice_interface.IceParticles`).
+    density
+        Water density, kg/m^3.
+    level
+        z of the water surface, m.
+    g
+        Gravity magnitude, m/s^2 (gravity acts down z).
+    current
+        (3,) water velocity, m/s.
+    linear_drag
+        Damping rate of fully submerged ice, 1/s.
+    drag_coefficient
+        Quadratic drag coefficient Cd of a particle's cell, -.
+    """
+
+    energy_key = "water_potential"
+    dissipation_key = "water_drag_dissipated"
+
+    def __init__(self, bodies: list, *, density: float, level: float, g: float,
+                 current=(0.0, 0.0, 0.0), linear_drag: float = 0.0,
+                 drag_coefficient: float = 0.0) -> None:
+        self.bodies = list(bodies)
+        self.density, self.level, self.g = float(density), float(level), float(g)
+        self.current = np.asarray(current, dtype=np.float64).reshape(3)
+        self.linear_drag, self.drag_coefficient = float(linear_drag), float(drag_coefficient)
+        self._state = [_BodyWater(b) for b in self.bodies]
+
+    def add_forces(self) -> None:
+        """Add buoyancy and drag (N/m^3) into the bodies' ``f``; count the drag's work since the
+        last call."""
+        for b, s in zip(self.bodies, self._state):
+            water_forces(b.y, b.v, b.vol, s.owned, self.level, self.density, self.g,
+                         float(b.material.density), self.current, self.linear_drag,
+                         self.drag_coefficient, b.f, s.drag)
+            if s.y_prev is None:
+                s.y_prev = b.y.copy()
+            else:
+                drag_work(b.y, s.y_prev, b.vol, s.drag, s.drag_prev, s.dissipated)
+                s.y_prev[:] = b.y
+            s.drag_prev[:] = s.drag
+        return None
+
+    def potential_energy(self) -> float:
+        """Buoyancy potential (J) relative to the reference positions, over all ranks."""
+        total = 0.0
+        for b, s in zip(self.bodies, self._state):
+            buoyancy_potential(b.y, b.x0, b.vol, s.owned, self.level, self.density, self.g,
+                               s.potential)
+            total += float(b.owned_sum(s.potential))
+        return total
+
+    def dissipated(self) -> float:
+        """Energy (J) the drag has taken out of the ice since the start, over all ranks."""
+        return float(sum(b.owned_sum(s.dissipated * s.owned) for b, s in
+                         zip(self.bodies, self._state)))
+
+    def submerged_volume(self) -> float:
+        """Submerged volume of all bodies (m^3, over all ranks): sum of vol * phi."""
+        total = 0.0
+        for b, s in zip(self.bodies, self._state):
+            a = np.cbrt(b.vol)
+            phi = np.clip((self.level - b.y[:, 2] + 0.5 * a) / a, 0.0, 1.0)
+            total += float(b.owned_sum(b.vol * phi * s.owned))
+        return total
