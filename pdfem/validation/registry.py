@@ -25,6 +25,7 @@ MODULES: tuple[str, ...] = (
     "compression",         # ice_prism_compression*.toml: peak and residual strength, 2 dx
     "edge_crushing",       # ice_edge_crushing.toml: crushing regime against a rigid wall
     "bending",             # ice_beam_bending_*.toml: flexural strength, 3- and 4-point, dx, dx/2
+    "floating",            # floating_draught.toml, floating_heave.toml: draught, heave period
 )
 """The case modules, in the order of the report."""
 
