@@ -126,7 +126,8 @@ def test_gravity_acts_in_the_kick_and_has_a_potential():
 
 def test_every_particle_force_kind_has_an_energy_column():
     assert Gravity in PARTICLE_FORCES and ShortRangeContact in PARTICLE_FORCES
-    assert set(potential_energies([])) == {"gravity_potential", "short_range_potential"}
+    assert set(potential_energies([])) == {"gravity_potential", "short_range_potential",
+                                           "water_potential"}
     assert issubclass(ShortRangeContact, ParticleForce)
 
 

@@ -75,7 +75,7 @@ def test_schema_top_level_and_descriptions():
     schema = json_schema()
     assert schema["title"] == "pdfem case file"
     assert schema["required"] == ["run"]
-    assert set(schema["properties"]) == {"run", "ice", "structure", "contact", "monitor"}
+    assert set(schema["properties"]) == {"run", "ice", "structure", "contact", "monitor", "water"}
     assert schema["additionalProperties"] is False
     for name, section in schema["$defs"].items():
         assert section["additionalProperties"] is False, name

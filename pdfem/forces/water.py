@@ -95,11 +95,28 @@ class Water(ParticleForce):
         return float(sum(b.owned_sum(s.dissipated * s.owned) for b, s in
                          zip(self.bodies, self._state)))
 
-    def submerged_volume(self) -> float:
-        """Submerged volume of all bodies (m^3, over all ranks): sum of vol * phi."""
-        total = 0.0
+    def submerged_volumes(self) -> list[float]:
+        """Submerged volume of each body (m^3, over all ranks): sum of vol * phi."""
+        out = []
         for b, s in zip(self.bodies, self._state):
             a = np.cbrt(b.vol)
             phi = np.clip((self.level - b.y[:, 2] + 0.5 * a) / a, 0.0, 1.0)
-            total += float(b.owned_sum(b.vol * phi * s.owned))
-        return total
+            out.append(float(b.owned_sum(b.vol * phi * s.owned)))
+        return out
+
+    def out_of_equilibrium(self, tolerance: float = 0.02) -> list[str]:
+        """Messages for the bodies whose buoyancy differs from their weight by more than
+        ``tolerance`` of it at the current positions (they will heave; a level sheet of
+        thickness h floats with its bottom at ``level - (rho_ice / rho_water) h``)."""
+        out = []
+        for b, wet in zip(self.bodies, self.submerged_volumes()):
+            rho = float(b.material.density)
+            volume = float(b.owned_sum(b.vol * (b.owned > 0)))
+            need = rho * volume / self.density  # submerged volume at equilibrium, m^3
+            if abs(wet - need) > tolerance * need:
+                out.append(f"ice body '{b.name}' starts out of hydrostatic equilibrium: "
+                           f"{wet:.4g} m^3 of it is under water, floating needs {need:.4g} m^3 "
+                           f"(rho_ice / rho_water = {rho / self.density:.4f} of its volume); "
+                           "it will heave (place a level sheet of thickness h with its bottom at "
+                           "water.level - (rho_ice / rho_water) h to start at rest)")
+        return out

@@ -9,6 +9,7 @@ runs with and without it write the same columns.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 
 from pdfem.case.schema import Case
@@ -40,8 +41,11 @@ def _water(case: Case, bodies: list) -> Water | None:
                          "(the water surface is the plane z = water.level): give [0, 0, -g] "
                          "with g > 0, or leave run.gravity out for [0, 0, -9.81]",
                          list(case.run.gravity))
-    return Water(bodies, density=w.density, level=w.level, g=-gz, current=w.current,
-                 linear_drag=w.linear_drag, drag_coefficient=w.drag_coefficient)
+    water = Water(bodies, density=w.density, level=w.level, g=-gz, current=w.current,
+                  linear_drag=w.linear_drag, drag_coefficient=w.drag_coefficient)
+    for message in water.out_of_equilibrium():
+        warnings.warn(f"{case.file}: {message}", stacklevel=2)
+    return water
 
 
 PARTICLE_FORCES: dict[type[ParticleForce], Callable[[Case, list], ParticleForce | None]] = {
