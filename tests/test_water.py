@@ -12,6 +12,7 @@ SI units.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -150,3 +151,18 @@ def test_floating_validation_cases_pass_quick(name, tmp_path):
     assert load_validation_case(case.case_file).water is not None
     results = run_validation([case], tmp_path, quick=True)
     assert results[0].passed, results[0]
+
+
+def test_added_mass_lengthens_the_heave_period_by_sqrt_1_plus_ca(tmp_path):
+    """Ca = 0.5 on the quick heave block: the submerged volume carries Ca rho_w d A =
+    Ca rho_i h A of water, so T = 2 pi sqrt((1 + Ca) rho_i h / (rho_w g)), 1 %; the water's
+    kinetic energy (in water_potential) keeps the energy balance closed."""
+    case = floating.heave_quick(load_validation_case("floating_heave.toml"))
+    case = dataclasses.replace(case, water=case.water.model_copy(update={"added_mass": 0.5}))
+    res = read_results(run_case(case, tmp_path, quiet=True).results)
+    period = floating.heave_period(floating.Outcome(case, res, tmp_path, 0.0))
+    expect = 2 * math.pi * math.sqrt(1.5 * 900.0 * 0.25 / (1025.0 * 9.81))
+    assert floating.heave_reference(case) == pytest.approx(expect, rel=1e-12)
+    assert period == pytest.approx(expect, rel=0.01)
+    e = res["histories"]["energy"]
+    assert np.abs(e["residual"]).max() < 1e-5 * np.abs(e["gravity_potential"]).max()

@@ -39,6 +39,10 @@ class WaterSection(Section):
                          "(a cube of side dx): force density -0.5 rho_water Cd phi |u| u / dx "
                          "with u = v - current (fragment-scale drag; it grows with 1/dx, see "
                          "docs/water.md). Default: 0.")
+    added_mass: Annotated[float, Number(ge=0.0)] = Field(
+        0.0, description="Added-mass coefficient Ca (-): a submerged particle's inertia becomes "
+                         "rho_ice + Ca rho_water phi per unit volume (the water it carries "
+                         "along); 0 = off. Default: 0 (off).")
 
 
 def gravity_with_water(gravity: Vec3, given: bool, water: WaterSection | None) -> Vec3:

@@ -9,6 +9,13 @@ evaluations by the trapezoid rule, which is how velocity Verlet applies a force 
 the energy balance closes to the integrator's O(dt^2) error. With a current the drag can also
 put energy in (the term is then negative). Under MPI the forces go to the owned particles and
 every sum runs through the bodies' ``owned_sum``.
+
+Added mass (optional, off by default) gives a submerged particle the inertia of the water it
+carries along, ``Ca rho_w phi`` per unit volume: the water force, added last, rescales the
+particle's total force so that velocity Verlet's kick gives the acceleration
+``(f + rho_ice g) / (rho_ice + Ca rho_w phi)``. The water's kinetic energy (minus the work of
+that rescaling on the ice, by the same trapezoid rule) is stored energy and is counted in
+``water_potential``. Contact impulses from structures act on the ice's own mass.
 """
 
 from __future__ import annotations
@@ -16,7 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from pdfem.forces.base import ParticleForce
-from pdfem.forces.water_kernels import buoyancy_potential, drag_work, water_forces
+from pdfem.forces.water_kernels import (added_mass_forces, buoyancy_potential, drag_work,
+                                       water_forces)
 
 
 class _BodyWater:
@@ -31,6 +39,9 @@ class _BodyWater:
         self.y_prev: np.ndarray | None = None
         self.dissipated = np.zeros(n)
         self.potential = np.zeros(n)
+        self.am = np.zeros((n, 3))
+        self.am_prev = np.zeros((n, 3))
+        self.water_kinetic = np.zeros(n)
 
 
 class Water(ParticleForce):
@@ -52,6 +63,9 @@ class Water(ParticleForce):
         Damping rate of fully submerged ice, 1/s.
     drag_coefficient
         Quadratic drag coefficient Cd of a particle's cell, -.
+    added_mass
+        Added-mass coefficient Ca, -: a submerged particle's inertia is
+        ``rho_ice + Ca rho_w phi`` (kg/m^3); 0 = off.
     """
 
     energy_key = "water_potential"
@@ -59,11 +73,12 @@ class Water(ParticleForce):
 
     def __init__(self, bodies: list, *, density: float, level: float, g: float,
                  current=(0.0, 0.0, 0.0), linear_drag: float = 0.0,
-                 drag_coefficient: float = 0.0) -> None:
+                 drag_coefficient: float = 0.0, added_mass: float = 0.0) -> None:
         self.bodies = list(bodies)
         self.density, self.level, self.g = float(density), float(level), float(g)
         self.current = np.asarray(current, dtype=np.float64).reshape(3)
         self.linear_drag, self.drag_coefficient = float(linear_drag), float(drag_coefficient)
+        self.added_mass = float(added_mass)
         self._state = [_BodyWater(b) for b in self.bodies]
 
     def add_forces(self) -> None:
@@ -73,21 +88,29 @@ class Water(ParticleForce):
             water_forces(b.y, b.v, b.vol, s.owned, self.level, self.density, self.g,
                          float(b.material.density), self.current, self.linear_drag,
                          self.drag_coefficient, b.f, s.drag)
+            if self.added_mass:
+                added_mass_forces(b.y, b.vol, s.owned, self.level, self.density,
+                                  float(b.material.density), self.added_mass,
+                                  np.asarray(b.gravity, dtype=np.float64), b.f, s.am)
             if s.y_prev is None:
                 s.y_prev = b.y.copy()
             else:
                 drag_work(b.y, s.y_prev, b.vol, s.drag, s.drag_prev, s.dissipated)
+                drag_work(b.y, s.y_prev, b.vol, s.am, s.am_prev, s.water_kinetic)
                 s.y_prev[:] = b.y
             s.drag_prev[:] = s.drag
+            s.am_prev[:] = s.am
         return None
 
     def potential_energy(self) -> float:
-        """Buoyancy potential (J) relative to the reference positions, over all ranks."""
+        """Energy (J) stored in the water, over all ranks: the buoyancy potential relative to
+        the reference positions plus, with added mass, the kinetic energy of the water moving
+        with the ice (minus the work of the added-mass force on the ice)."""
         total = 0.0
         for b, s in zip(self.bodies, self._state):
             buoyancy_potential(b.y, b.x0, b.vol, s.owned, self.level, self.density, self.g,
                                s.potential)
-            total += float(b.owned_sum(s.potential))
+            total += float(b.owned_sum(s.potential + s.water_kinetic * s.owned))
         return total
 
     def dissipated(self) -> float:

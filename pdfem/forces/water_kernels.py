@@ -109,3 +109,26 @@ def buoyancy_potential(y, x0, vol, owned, level, rho_w, g, out):
         a = vol[i] ** (1.0 / 3.0)
         out[i] = rho_w * g * vol[i] * (buoyancy_depth(y[i, 2], a, level)
                                         - buoyancy_depth(x0[i, 2], a, level))
+
+
+@numba.njit(cache=True)
+def added_mass_forces(y, vol, owned, level, rho_w, rho_ice, ca, gravity, f, am):
+    """Give each owned submerged particle the inertia ``rho_ice + ca rho_w phi`` (kg/m^3): its
+    acceleration ``(f + rho_ice g) / (rho_ice + ca rho_w phi)`` is what velocity Verlet's kick
+    ``f / rho_ice + g`` gives after ``f`` is replaced by ``(f + rho_ice g) s - rho_ice g`` with
+    ``s = rho_ice / (rho_ice + ca rho_w phi)``. Call it after every other force is in ``f``;
+    the change (the added-mass force density, N/m^3) is written into ``am`` ((n, 3)).
+    """
+    for i in range(y.shape[0]):
+        am[i, 0] = 0.0
+        am[i, 1] = 0.0
+        am[i, 2] = 0.0
+        if owned[i] == 0:
+            continue
+        phi = submerged_fraction(y[i, 2], vol[i] ** (1.0 / 3.0), level)
+        if phi == 0.0:
+            continue
+        s = rho_ice / (rho_ice + ca * rho_w * phi)
+        for k in range(3):
+            am[i, k] = (f[i, k] + rho_ice * gravity[k]) * (s - 1.0)
+            f[i, k] += am[i, k]

@@ -42,7 +42,8 @@ def _water(case: Case, bodies: list) -> Water | None:
                          "with g > 0, or leave run.gravity out for [0, 0, -9.81]",
                          list(case.run.gravity))
     water = Water(bodies, density=w.density, level=w.level, g=-gz, current=w.current,
-                  linear_drag=w.linear_drag, drag_coefficient=w.drag_coefficient)
+                  linear_drag=w.linear_drag, drag_coefficient=w.drag_coefficient,
+                  added_mass=w.added_mass)
     for message in water.out_of_equilibrium():
         warnings.warn(f"{case.file}: {message}", stacklevel=2)
     return water
@@ -51,7 +52,7 @@ def _water(case: Case, bodies: list) -> Water | None:
 PARTICLE_FORCES: dict[type[ParticleForce], Callable[[Case, list], ParticleForce | None]] = {
     Gravity: _gravity,
     ShortRangeContact: _short_range,
-    Water: _water,
+    Water: _water,  # last: its added mass rescales the forces added before it
 }
 """Particle-force kind -> builder; forces act in this order every ice step."""
 

@@ -67,10 +67,11 @@ def heave_period(outcome: Outcome) -> float:
 
 
 def heave_reference(case: Case) -> float:
-    """T = 2 pi sqrt(rho_ice h / (rho_water g)) (s)."""
+    """T = 2 pi sqrt((1 + Ca) rho_ice h / (rho_water g)) (s); Ca = water.added_mass (0 in the
+    case file: the added mass of the submerged volume, Ca rho_w d A = Ca rho_i h A)."""
     g = -case.run.gravity[2]
-    return 2.0 * math.pi * math.sqrt(case.ice[0].material.density * _thickness(case)
-                                     / (case.water.density * g))
+    mass = (1.0 + case.water.added_mass) * case.ice[0].material.density * _thickness(case)
+    return 2.0 * math.pi * math.sqrt(mass / (case.water.density * g))
 
 
 def _smaller(case: Case, side: float, end_time: float) -> Case:
