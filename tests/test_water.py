@@ -6,15 +6,20 @@ submerged depth, exactly, since the particles' cells tile the slab); the force i
 gradient of its potential (checked by central differences); a neutrally buoyant body moving
 through water with linear drag only slows as v0 exp(-c t) (the ODE dv/dt = -c v); the energy
 balance of pdfem/run/energy.py closes with the drag's dissipation; the floating validation
-cases (Archimedes' draught, the hydrostatic heave period 2 pi sqrt(rho_i h / (rho_w g))).
-SI units.
+cases (Archimedes' draught, the hydrostatic heave period 2 pi sqrt(rho_i h / (rho_w g)), with
+added mass 2 pi sqrt((1 + Ca) rho_i h / (rho_w g))); the serial run of the same case (for 2 MPI
+ranks). SI units.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import shutil
+import subprocess
+import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -166,3 +171,44 @@ def test_added_mass_lengthens_the_heave_period_by_sqrt_1_plus_ca(tmp_path):
     assert period == pytest.approx(expect, rel=0.01)
     e = res["histories"]["energy"]
     assert np.abs(e["residual"]).max() < 1e-5 * np.abs(e["gravity_potential"]).max()
+
+
+MPI_CASE = """
+[run]
+end_time = 0.2
+output_interval = 0.05
+[water]
+linear_drag = 5.0
+drag_coefficient = 1.0
+current = [0.05, 0.0, 0.0]
+[[ice]]
+name = "block"
+dx = 0.05
+shape = { box = { min = [0.0, 0.0, -0.199512], max = [0.3, 0.3, 0.050488] } }
+material = { density = 900.0, youngs_modulus = 1.0e7, poisson_ratio = 0.3, fracture_energy = 1.0e6 }
+"""
+
+
+def test_water_on_two_mpi_ranks_gives_the_serial_run(tmp_path):
+    """Buoyancy, drag and the current on a block split over 2 ranks: the serial positions
+    bit for bit, the water's energy terms to round-off (summed in another order)."""
+    mpiexec = shutil.which("mpiexec", path=str(Path(sys.executable).parent)) or \
+        shutil.which("mpiexec")
+    if mpiexec is None:
+        pytest.skip("no mpiexec")
+    pdfem = str(Path(sys.executable).parent / "pdfem")
+    case = tmp_path / "block.toml"
+    case.write_text(MPI_CASE)
+    runs = {}
+    for ranks in (1, 2):
+        out = tmp_path / f"r{ranks}"
+        cmd = [pdfem] if ranks == 1 else [mpiexec, "-n", "2", pdfem]
+        done = subprocess.run([*cmd, "run", str(case), "--out", str(out), "--quiet"],
+                              capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr
+        runs[ranks] = read_results(out / "results.h5")
+    np.testing.assert_array_equal(runs[1]["ice"]["block"]["u"], runs[2]["ice"]["block"]["u"])
+    e1, e2 = runs[1]["histories"]["energy"], runs[2]["histories"]["energy"]
+    for key in ("water_potential", "water_drag_dissipated", "residual"):
+        np.testing.assert_allclose(e2[key], e1[key], rtol=1e-12, atol=1e-12)
+    assert e1["water_drag_dissipated"][-1] > 0
