@@ -47,5 +47,15 @@ class WaterSection(Section):
 
 def gravity_with_water(gravity: Vec3, given: bool, water: WaterSection | None) -> Vec3:
     """Gravity of a case (m/s^2): ``gravity`` if ``given`` or without water, else
-    :data:`STANDARD_GRAVITY`."""
+    :data:`STANDARD_GRAVITY`.
+
+    Parameters
+    ----------
+    gravity
+        ``run.gravity`` as read (m/s^2).
+    given
+        Whether the case file gave ``run.gravity``.
+    water
+        The ``[water]`` section, None without one.
+    """
     return gravity if given or water is None else STANDARD_GRAVITY
