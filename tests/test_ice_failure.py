@@ -212,3 +212,24 @@ def test_a_block_crushed_to_pieces_keeps_its_energy(law_name):
         drift.append(np.abs(np.array(e) - e0).max() / e0)
         assert body.broken.mean() > 0.9
     assert drift[0] < 0.015 and drift[1] < 0.15 * drift[0], drift
+
+
+def test_nominal_pressure_of_the_edge_crushing_case():
+    """A constant wall load F after a 10 ms ramp of the push gives F / (h w(t)) averaged over
+    time, with w = 2 (push + dx/2) / tan(20 deg) the wedge's width (the measure issue 14's
+    0.5-2.5 sigma_c band, after Korzhavin, applies to)."""
+    import types
+
+    from pdfem.validation.case import load_validation_case
+    from pdfem.validation.cases.edge_crushing import nominal_pressure
+
+    case = load_validation_case("ice_edge_crushing.toml")
+    t = np.linspace(0.0, 0.5, 501)
+    force = np.zeros((t.size, 3))
+    force[t >= 0.1, 0] = -50e3
+    outcome = types.SimpleNamespace(case=case, data={"histories": {"loads/wall": {
+        "time": t, "force": force}}})
+    tl = t[t >= 0.1]
+    width = np.minimum(2 * (0.1 * (tl - 0.005) + 0.02) / np.tan(np.radians(20.0)), 1.0)
+    expect = np.mean(50e3 / (0.2 * width)) / 2.0e6
+    assert nominal_pressure(outcome) == pytest.approx(expect, rel=1e-12)
