@@ -7,8 +7,9 @@ then calls :meth:`ResultsWriter.write_frame` at every output time and
 
 Robustness: the file stays open (HDF5's default, oldest file format) and every frame is
 committed in steps, each ended by a flush: its fields and the pending history columns; the
-histories' time rows; its ``/time`` row. Then the XDMF file is rewritten atomically
-(temporary file, ``os.replace``). Time datasets read NaN where unwritten, so a finite time
+histories' time rows; its ``/time`` row. Then the frame is added to the XDMF file in place
+(:class:`pdfem.output.xdmf.XdmfFile`: well-formed after every write, rewritten atomically
+when its reserve runs out), at a cost per frame that does not grow with the run. Time datasets read NaN where unwritten, so a finite time
 row means its data reached the file, and a committed frame means every history row appended
 before it did too.
 A process killed after :meth:`~ResultsWriter.write_frame` returns leaves a pair that h5py,
@@ -92,9 +93,9 @@ class ResultsWriter:
         self.xdmf_path = self.path.with_suffix(".xdmf")
         self._h5name = self.path.name
         self._grids: dict[str, xdmf.XdmfGrid] = {}
+        self._xdmf = xdmf.XdmfFile(self.xdmf_path, self._h5name)
         self._histories: dict[str, History] = {}
         self._frames = 0
-        self._xdmf_frames = -1
         self._last_time = -np.inf
         self._append = append
         self._resumed = not append
@@ -116,6 +117,7 @@ class ResultsWriter:
         growing_dataset(self._file, "time", (), HISTORY_BLOCK, fillvalue=np.nan)
         self._file.create_group("ice")
         self.flush()
+        self._xdmf.rewrite()
 
     # -- setup ---------------------------------------------------------------------------
 
@@ -215,9 +217,6 @@ class ResultsWriter:
         kept = times[:frames]
         for grid in self._grids.values():
             grid.series.resume(frames)
-            if grid.series.fields is not None:
-                for i, t in enumerate(kept):
-                    grid.add_frame_xml(self._h5name, i, float(t))
         for name, _ in history_groups(f):
             if name in history_rows:
                 self._histories[name] = History.resume(f, "/" + name, int(history_rows[name]))
@@ -226,8 +225,9 @@ class ResultsWriter:
         self._frames = frames
         self._last_time = float(kept[-1])
         self._resumed = True
-        self._xdmf_frames = -1
-        self.flush()
+        self._sync()
+        self._xdmf.grids = [g for g in self._grids.values() if g.series.fields is not None]
+        self._xdmf.set_times(kept)
 
     def history_rows(self) -> dict[str, int]:
         """``{history group: rows appended so far}`` (committed or buffered), for a checkpoint."""
@@ -279,9 +279,9 @@ class ResultsWriter:
         for k, arrays in checked.items():
             self._grids[k].series.append(index, arrays)
         self._sync(time)
-        for grid in self._grids.values():
-            grid.add_frame_xml(self._h5name, index, time)
-        self._update_xdmf()
+        if index == 0:
+            self._xdmf.grids = list(self._grids.values())
+        self._xdmf.add_frame(time)
         return index
 
     def append_history(self, group: str, time: float,
@@ -308,9 +308,9 @@ class ResultsWriter:
     # -- file state ----------------------------------------------------------------------
 
     def flush(self) -> None:
-        """Write buffered history rows, flush the HDF5 file and bring the XDMF file up to date."""
+        """Write buffered history rows and flush the HDF5 file (the XDMF file is always up to
+        date: every frame is added to it as it is written)."""
         self._sync()
-        self._update_xdmf()
 
     def _sync(self, frame_time: float | None = None) -> None:
         """Flush in steps, so that what is on disk is always a committed prefix.
@@ -333,11 +333,6 @@ class ResultsWriter:
             self._frames += 1
             self._last_time = frame_time
             f.flush()
-
-    def _update_xdmf(self) -> None:
-        if self._xdmf_frames != self._frames:
-            xdmf.write_xdmf(self.xdmf_path, self._grids.values())
-            self._xdmf_frames = self._frames
 
     def close(self) -> None:
         """Write what is buffered and close the file (closing twice is allowed)."""
