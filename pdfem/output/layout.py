@@ -25,8 +25,8 @@ Layout of ``<stem>.h5`` (all quantities SI)::
     /xdmf/...                per-frame views for the XDMF file (:mod:`pdfem.output.xdmf`), no
                              data of their own
 
-Frame fields are float64, chunked one frame per chunk and resizable along the frame axis
-(:mod:`pdfem.output.frames`). Histories are float64, chunked by ``HISTORY_BLOCK`` rows and
+Frame fields are float64, chunked by up to 64 frames (about 256 KiB a chunk) and resizable
+along the frame axis (:mod:`pdfem.output.frames`). Histories are float64, chunked by ``HISTORY_BLOCK`` rows and
 written in blocks (:mod:`pdfem.output.histories`). Groups carry an attribute ``kind``
 ("ice_body", "structure" or "history") so readers can find them.
 """

@@ -42,7 +42,7 @@ import numpy as np
 from pdfem.output import xdmf
 from pdfem.output.bodies import store_ice_body, store_structure
 from pdfem.output.datasets import growing_dataset, has_committed, put_rows
-from pdfem.output.files import refuse_if_being_written
+from pdfem.output.files import bound_metadata_cache, refuse_if_being_written
 from pdfem.output.frames import FrameSeries
 from pdfem.output.histories import HISTORY_BLOCK, History, first_row
 from pdfem.output.layout import (CELL_FIELDS, REQUIRED_ICE_FIELDS, REQUIRED_STRUCTURE_FIELDS,
@@ -102,6 +102,7 @@ class ResultsWriter:
         refuse_if_being_written(self.path)
         if append:
             self._file: h5py.File | None = h5py.File(self.path, "r+")
+            bound_metadata_cache(self._file)
             stored = attr_value(self._file["meta"].attrs.get("case", ""))
             if stored != case_text:
                 self._file.close()
@@ -109,6 +110,7 @@ class ResultsWriter:
                                  "(its /meta case text differs); cannot append to it")
             return
         self._file = h5py.File(self.path, "w")
+        bound_metadata_cache(self._file)
         try:
             write_meta(self._file, case_text, meta or {})
         except TypeError:
