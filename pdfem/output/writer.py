@@ -66,6 +66,9 @@ class ResultsWriter:
         Reopen an existing results file of the same case (``/meta`` case equal to
         ``case_text``) to continue a run from a checkpoint: register the same bodies again,
         then call :meth:`resume` before writing.
+    expected_frames
+        Frames the run expects to write, or 0: the XDMF file reserves room for them at once
+        (:class:`pdfem.output.xdmf.XdmfFile`), so its cost per frame stays the same all run.
 
     Raises
     ------
@@ -82,7 +85,8 @@ class ResultsWriter:
     """
 
     def __init__(self, path: str | os.PathLike, case_text: str = "",
-                 meta: dict | None = None, *, append: bool = False) -> None:
+                 meta: dict | None = None, *, append: bool = False,
+                 expected_frames: int = 0) -> None:
         self.path = Path(path)
         if self.path.suffix.lower() == ".xdmf":
             raise ValueError(f"results path {str(self.path)!r} must be the HDF5 file, "
@@ -93,7 +97,7 @@ class ResultsWriter:
         self.xdmf_path = self.path.with_suffix(".xdmf")
         self._h5name = self.path.name
         self._grids: dict[str, xdmf.XdmfGrid] = {}
-        self._xdmf = xdmf.XdmfFile(self.xdmf_path, self._h5name)
+        self._xdmf = xdmf.XdmfFile(self.xdmf_path, self._h5name, expected_frames)
         self._histories: dict[str, History] = {}
         self._frames = 0
         self._last_time = -np.inf

@@ -183,6 +183,9 @@ CLOSE = "\n    </Grid>\n"
 MIN_RESERVE = 4096
 """Bytes of spaces kept after each temporal collection at least (see the module docstring)."""
 
+MAX_PLANNED_RESERVE = 64 * 1024 * 1024
+"""Most bytes reserved per collection for the frames a run expects (``expected_frames``)."""
+
 
 class XdmfFile:
     """The XDMF file of a results file, appended to frame by frame at constant cost.
@@ -193,15 +196,20 @@ class XdmfFile:
         The ``.xdmf`` file (written when the first frame is added).
     h5name
         The HDF5 file's name, relative to ``path``.
+    expected_frames
+        Frames the run expects to write (0: unknown). The first write reserves room for them
+        (up to ``MAX_PLANNED_RESERVE`` bytes per collection), so that a run that writes no
+        more frames than it expected never rewrites the file after its first frame.
 
     Notes
     -----
     Only the frame times are kept in memory; a rewrite makes every frame's text again.
     """
 
-    def __init__(self, path: Path, h5name: str) -> None:
+    def __init__(self, path: Path, h5name: str, expected_frames: int = 0) -> None:
         self.path = Path(path)
         self.h5name = h5name
+        self.expected_frames = int(expected_frames)
         self.grids: list[XdmfGrid] = []
         self.times: list[float] = []
         self.rewrites = 0
@@ -239,7 +247,12 @@ class XdmfFile:
             head = g.head().encode()
             body = "".join(g.frame_xml(self.h5name, i, t)
                            for i, t in enumerate(self.times)).encode()
-            reserve = max(MIN_RESERVE, len(head) + len(body))
+            # room for the frames still expected, each as long as the last one plus the
+            # longest difference a time value (repr) makes
+            planned = ((len(g.frame_xml(self.h5name, 0, self.times[-1])) + 32)
+                       * (self.expected_frames - len(self.times)))
+            reserve = max(MIN_RESERVE, len(head) + len(body),
+                          min(planned, MAX_PLANNED_RESERVE))
             out += [head, body, b" " * reserve, CLOSE.encode()]
             at.append(pos + len(head) + len(body))
             free.append(reserve)

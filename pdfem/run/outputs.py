@@ -53,12 +53,14 @@ class NoOutput:
         """Nothing."""
 
 
-def open_results(path: Path, case_text: str, meta: dict, append: bool) -> ResultsWriter:
-    """A new results file, or (``append``, a restart) the existing one reopened."""
+def open_results(path: Path, case_text: str, meta: dict, append: bool,
+                 expected_frames: int = 0) -> ResultsWriter:
+    """A new results file, or (``append``, a restart) the existing one reopened; room is
+    reserved in the XDMF file for ``expected_frames`` frames."""
     if not append:
-        return ResultsWriter(path, case_text, meta)
+        return ResultsWriter(path, case_text, meta, expected_frames=expected_frames)
     try:
-        return ResultsWriter(path, case_text, append=True)
+        return ResultsWriter(path, case_text, append=True, expected_frames=expected_frames)
     except (OSError, ValueError) as exc:
         raise InputError(str(path), "--restart", f"cannot continue this results file ({exc}); "
                          "give the output directory of the run that wrote the checkpoint with "
@@ -275,10 +277,11 @@ def open_outputs(case, out: Path, comm, meta: dict, append: bool) -> tuple:
     per_rank = case.run.output_per_rank and comm.size > 1
     if per_rank:
         meta = dict(meta, ice_per_rank=comm.size)
-    writer = (open_results(path, case.text, meta, append) if comm.rank == 0
+    frames = int(case.run.end_time / case.run.output_interval) + 2
+    writer = (open_results(path, case.text, meta, append, frames) if comm.rank == 0
               else NoOutput(path))
     ice_writer = writer
     if per_rank:
         ice_writer = open_results(rank_file(path, comm.rank), case.text,
-                                  {"rank": comm.rank, "ranks": comm.size}, append)
+                                  {"rank": comm.rank, "ranks": comm.size}, append, frames)
     return writer, ice_writer
