@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from pdfem.coupling.facet_loads import FacetLoadSource
 from pdfem.errors import InputError
 from pdfem.output import ResultsWriter, rank_file
 from pdfem.output.source import Rows, Source
@@ -98,6 +99,9 @@ class StructureSource(Source):
     def of_run(cls, setup, per_rank: bool) -> list[Source]:
         return [cls(s) for s in setup.structures]
 
+    def output_mesh(self):
+        return self.structure.output_mesh()
+
     def frame_fields(self):
         return self.structure.output_fields()
 
@@ -172,7 +176,8 @@ class MonitorSource(Source):
         return {f"monitors/{self.name}": {"u": u, "von_mises": vm}}
 
 
-SOURCE_KINDS = (IceSource, StructureSource, LoadSource, RegionSource, PairSource, MonitorSource)
+SOURCE_KINDS = (IceSource, FacetLoadSource, StructureSource, LoadSource, RegionSource, PairSource,
+                MonitorSource)
 """The kinds of output source of a run, in writing order; each makes its sources of a built run
 with ``of_run(setup, per_rank)``. A new kind: its class (a new file, or here) and one entry."""
 
@@ -221,8 +226,9 @@ class Outputs:
             raise InputError(str(self.ice_writer.path), "--restart", f"the results file does "
                              f"not fit this run ({exc}); a run with run.output_per_rank "
                              "restarts on as many ranks as wrote it") from None
-        for s in setup.structures:
-            self.writer.add_structure(s.name, *s.output_mesh())
+        for src in self.sources:  # contact surfaces, then structures (the last shown by meshio)
+            if src.mesh_kind == "structure":
+                self.writer.add_structure(src.name, *src.output_mesh())
 
     def frame(self, t: float) -> dict[str, float]:
         """Write an output frame at ``t`` (s) with its history rows; returns the energy row
