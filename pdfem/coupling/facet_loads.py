@@ -8,7 +8,8 @@ contact pairs' contacts gave every facet (summed contact by contact in the seria
   the structure's total contact force (each contact's impulse goes whole to one facet, and
   whole to that facet's nodes by weights that sum to 1); a *patch* (a surface group of the mesh
   that shares faces with the contact group, e.g. a frame or a plate field) gets the sum over
-  its facets, written every step as ``loads/<structure>.<patch>`` (``force``, N);
+  its facets, written every step as ``loads/<structure>.<patch>`` (``force``, N, and the
+  patch's ``area``, m^2);
 * the normal impulse pressing on each facet (N s, along the facet's outward normal at the
   contact's instant), summed over the frame interval: the facet's contact pressure of a frame
   is ``p = J_n / (A T)`` (Pa): normal impulse over the facet's reference area ``A`` and the
@@ -66,9 +67,10 @@ class FacetLoads:
         self.force = impulse / step
         self.normal_impulse += normal
 
-    def patch_forces(self) -> dict[str, np.ndarray]:
-        """``{patch: (3,) force (N)}`` of the last coupling step."""
-        return {g: self.force[on].sum(axis=0) for g, on in self.patches.items()}
+    def patch_forces(self) -> dict[str, tuple[np.ndarray, float]]:
+        """``{patch: ((3,) force (N) of the last coupling step, the patch's area (m^2))}``."""
+        return {g: (self.force[on].sum(axis=0), float(self.area[on].sum()))
+                for g, on in self.patches.items()}
 
     def take_frame(self, time: float) -> tuple[np.ndarray, np.ndarray]:
         """``(pressure, max_pressure)`` (F,) (Pa) of the frame at ``time`` (s): the mean normal
@@ -144,6 +146,7 @@ class FacetLoadSource:
         return {}
 
     def step_rows(self) -> dict:
-        """``loads/<structure>.<patch>``: ``force`` (N) of the step on each patch."""
-        return {f"loads/{self.loads.name}.{g}": {"force": f}
-                for g, f in self.loads.patch_forces().items()}
+        """``loads/<structure>.<patch>``: ``force`` (N) of the step on each patch and the
+        patch's ``area`` (m^2, reference configuration)."""
+        return {f"loads/{self.loads.name}.{g}": {"force": f, "area": a}
+                for g, (f, a) in self.loads.patch_forces().items()}
