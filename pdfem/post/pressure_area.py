@@ -17,7 +17,8 @@ each frame (``/structure/<name>.contact/contact_pressure``, :mod:`pdfem.coupling
    contact area, where ``p`` is the total normal contact force over the contact area;
 3. the curves of all frames are sampled at a common set of areas (``AREAS`` log-spaced from
    the smallest facet to the largest contact area; piecewise constant: ``p`` of the largest
-   patch not larger than ``A``) and their envelope over the run is the largest ``p`` at each
+   patch not larger than ``A``, and the peak facet's pressure below its area, as a facet's
+   pressure is uniform over it) and their envelope over the run is the largest ``p`` at each
    area, with the frame it came from.
 
 Growing the patch greedily gives, at each size, a high-pressure connected area around the
@@ -91,14 +92,15 @@ def pressure_area_curve(pressure: np.ndarray, area: np.ndarray,
 
 def sample_curve(curve_area: np.ndarray, curve_pressure: np.ndarray,
                  areas: np.ndarray) -> np.ndarray:
-    """``p`` of the largest patch not larger than each of ``areas`` (m^2); 0 below the first
-    facet's area, and NaN above the full contact area (no patch that large)."""
+    """``p`` of the largest patch not larger than each of ``areas`` (m^2): below the first
+    (peak) facet's area its pressure (uniform over the facet, so over any part of it), and NaN
+    above the full contact area (no patch that large)."""
     out = np.full(len(areas), np.nan)
     if len(curve_area) == 0:
         return out
     k = np.searchsorted(curve_area, areas * (1 + 1e-12), side="right") - 1
     inside = areas <= curve_area[-1] * (1 + 1e-12)
-    out[inside] = np.where(k[inside] >= 0, curve_pressure[np.maximum(k[inside], 0)], 0.0)
+    out[inside] = curve_pressure[np.maximum(k[inside], 0)]
     return out
 
 
