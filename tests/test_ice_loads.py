@@ -211,3 +211,26 @@ def test_facet_sums_do_not_depend_on_the_rank_split():
         np.testing.assert_array_equal(nn, ns)
     np.testing.assert_allclose(fs.sum(axis=0), nodal.sum(axis=0), rtol=1e-13, atol=1e-13)
     np.testing.assert_allclose(fs.sum(axis=0), -imp.sum(axis=0), rtol=1e-13, atol=1e-13)
+
+
+def test_load_split_names_the_main_pair():
+    """Two ice bodies on one structure (pairs named by default "<ice>-<structure>"): the pair
+    with the larger impulse (time integral of the force, trapezoid rule) is the main load, the
+    shares are the impulses over their sum."""
+    from pdfem.post.ice_loads import load_split
+
+    t = np.linspace(0.0, 1.0, 11)
+    sheet = np.zeros((11, 3))
+    sheet[:, 2] = -300.0                    # 300 N s over 1 s
+    floe = np.zeros((11, 3))
+    floe[5, 2] = -1000.0                    # one hit: 1000 N x 0.1 s = 100 N s
+    case = ('[[ice]]\nname = "sheet"\n[[ice]]\nname = "floe"\n'
+            '[[structure]]\nname = "panel"\n')
+    results = {"meta": {"case": case}}
+    split = load_split(results, {"sheet-panel": {"time": t, "force": sheet},
+                                 "floe-panel": {"time": t, "force": floe}})
+    s = split["panel"]
+    assert s["main"] == "sheet-panel"
+    assert s["pairs"]["sheet-panel"]["impulse"] == pytest.approx(300.0)
+    assert s["pairs"]["floe-panel"]["impulse"] == pytest.approx(100.0)
+    assert s["pairs"]["floe-panel"]["share"] == pytest.approx(0.25)
