@@ -76,11 +76,11 @@ def test_round_trip_exact_and_meta(tmp_path):
     assert meta["case"] == '[run]\nend_time = 0.05\n'
     assert meta["ranks"] == 2 and meta["title"] == "t"
     assert datetime.datetime.fromisoformat(meta["created"]).tzinfo is not None
-    with h5py.File(path, "r") as f:  # documented layout: float64, a frame per chunk, resizable
-        u = f["ice/sheet/u"]
+    with h5py.File(path, "r") as f:  # documented layout: float64, 64 small frames a chunk,
+        u = f["ice/sheet/u"]        # resizable
         assert u.dtype == np.float64 and u.shape == (4, 50, 3)
-        assert u.chunks == (1, 50, 3) and u.maxshape == (None, 50, 3)
-        assert f["ice/sheet/damage"].shape == (4, 50) and f["ice/sheet/theta"].chunks == (1, 50)
+        assert u.chunks == (64, 50, 3) and u.maxshape == (None, 50, 3)
+        assert f["ice/sheet/damage"].shape == (4, 50) and f["ice/sheet/theta"].chunks == (64, 50)
         np.testing.assert_array_equal(f["ice/floe/v"][2], frames[2]["floe"]["v"])
 
 

@@ -100,6 +100,11 @@ def test_one_two_and_three_ranks_agree(tmp_path, text, body, structure):
         su = ref["structure"][structure]["u"]
         np.testing.assert_allclose(r["structure"][structure]["u"], su, rtol=0,
                                    atol=tol * np.abs(su).max())
+        # the contact pressure per facet: summed contact by contact in the same order
+        cp = ref["structure"][f"{structure}.contact"]["contact_pressure"]
+        assert cp.max() > 0
+        np.testing.assert_allclose(r["structure"][f"{structure}.contact"]["contact_pressure"],
+                                   cp, rtol=0, atol=tol * cp.max())
 
 
 def test_per_rank_ice_files_read_as_one_run(tmp_path):

@@ -191,11 +191,12 @@ def test_csv_round_trips(coupled, synthetic, tmp_path, capsys):
 
 
 def test_plots_are_written(coupled, tmp_path, capsys):
-    """Five non-empty PNG files for a coupled run; two (damage, energy) for an ice-only file."""
+    """Six non-empty PNG files for a coupled run (with the pressure-area curves); two (damage,
+    energy) for an ice-only file."""
     rc, out, err = run_post(capsys, coupled, "--plots", tmp_path / "plots", "--json")
     assert rc == 0, err
     names = {"load_history.png", "load_spectrum.png", "structure_response.png", "damage.png",
-             "energy.png"}
+             "energy.png", "pressure_area.png"}
     assert {Path(p).name for p in json.loads(out)["plots"]} == names
     assert {p.name for p in (tmp_path / "plots").iterdir()} == names
     for p in (tmp_path / "plots").iterdir():

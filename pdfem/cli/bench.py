@@ -1,4 +1,4 @@
-"""``pdfem bench {search,step,mpi,partition,structure} [--n N] [--json]``: performance figures.
+"""``pdfem bench {search,step,mpi,partition,structure,output} [--n N] [--json]``: performance figures.
 
 The benchmark code (the package ``pdfem.benchmarks``) is imported only when this command runs.
 """
@@ -16,10 +16,11 @@ HELP = "performance measurements (not tests)"
 
 def add_arguments(b: argparse.ArgumentParser) -> None:
     """The options of ``pdfem bench``."""
-    b.add_argument("what", choices=["search", "step", "mpi", "partition", "structure"],
+    b.add_argument("what", choices=["search", "step", "mpi", "partition", "structure", "output"],
                    help="search, step, mpi (strong scaling on 1 and 2 ranks), partition (the "
                         "partition model of the 1.44M-particle plate, 2-64 ranks), structure "
-                        "(the demo panel's FE cost per coupling step)")
+                        "(the demo panel's FE cost per coupling step), output (the results writer: "
+                        "frame 100 against frame 10,000, --n particles, default 200)")
     b.add_argument("--n", type=int, default=1_000_000, help="number of particles (default 1,000,000)")
     b.add_argument("--json", action="store_true", help="print one JSON object")
 
@@ -39,6 +40,10 @@ def run(args: argparse.Namespace) -> int:
 
         def fn(n):  # the seed's plate; n is not used
             return partition_model()
+    elif args.what == "output":
+        from pdfem.benchmarks.output_frames import bench_output_frames as fn
+        if args.n == 1_000_000:
+            args.n = 200
     else:
         from pdfem.benchmarks.structure_step import bench_structure_step
 

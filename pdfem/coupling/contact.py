@@ -339,7 +339,9 @@ class SurfaceContact:
                  self._start, self._velocities, self.inverse_mass, share, t.triangles, self.friction,
                  per_particle, totals)
         hit = np.flatnonzero(per_particle.any(axis=1))
-        self.records.add(ids[hit], self._facet[hit], self._weight[hit], per_particle[hit])
+        facets = self._facet[hit]
+        normal = np.einsum("ij,ij->i", per_particle[hit], nr[0][facets])  # pressing, N s
+        self.records.add(ids[hit], facets, self._weight[hit], per_particle[hit], normal)
         impulse = totals[:3].copy()
         self.total_impulse += impulse
         return ContactStep(int(totals[3]), impulse, per_particle)
@@ -354,6 +356,11 @@ class SurfaceContact:
         global particle order over the processes (``allgather(x)``: every process's ``x``, in
         rank order; default: this process alone), and forget those contacts."""
         return self.records.take(allgather)
+
+    def take_facet_impulse(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per facet, ``(impulse (F, 3), normal (F,))`` (N s) of the contacts handed over by
+        :meth:`take_impulse` since the last call (:meth:`ContactRecords.take_facets`)."""
+        return self.records.take_facets()
 
     def inside(self, y: np.ndarray) -> np.ndarray:
         """(N,) bool: particles behind the surface within the search radius (no changes made)."""

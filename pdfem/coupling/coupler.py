@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pdfem.coupling.contact import SurfaceContact
+from pdfem.coupling.facet_loads import FacetLoads, collect_facet_loads
 from pdfem.coupling.impulse_work import ImpulseWork
 
 
@@ -147,6 +148,8 @@ class Coupler:
         # J, work of the contact loads on each structure (as it moves under them)
         self.contact_work = {id(s): 0.0 for s in self.structures}
         self.contact_work_on_ice = 0.0  # J
+        # per structure: contact loads per facet of its surface (pressure, load patches)
+        self.facet_loads = {id(s): FacetLoads(s) for s in self.structures}
 
     @property
     def contact_dissipated(self) -> float:
@@ -162,7 +165,9 @@ class Coupler:
         """The coupler's own state, for a checkpoint: ``time`` (s), per structure (in order)
         ``load_<k>`` (the pending contact load, N per surface node) and ``contact_work_<k>``
         (J), ``contact_work_on_ice`` (J), and per pair (in order) ``force_<k>`` (N),
-        ``moment_<k>`` (N m), ``contacts_<k>`` and ``total_impulse_<k>`` (N s).
+        ``moment_<k>`` (N m), ``contacts_<k>`` and ``total_impulse_<k>`` (N s); per structure
+        its facet loads (:meth:`pdfem.coupling.facet_loads.FacetLoads.checkpoint_state`) as
+        ``facets_<k>_<key>``.
 
         With a communicator (ice split over ranks) every rank must call it: the counters each
         rank keeps for its own particles (contact work on the ice, total impulses) are summed
@@ -172,6 +177,8 @@ class Coupler:
                                               "contact_work_on_ice": self.contact_work_on_ice}
         for k, s in enumerate(self.structures):
             out[f"contact_work_{k}"] = self.contact_work[id(s)]
+            for key, v in self.facet_loads[id(s)].checkpoint_state().items():
+                out[f"facets_{k}_{key}"] = v
         for k, p in enumerate(self.pairs):
             out[f"force_{k}"] = p.force.copy()
             out[f"moment_{k}"] = p.moment.copy()
@@ -204,6 +211,10 @@ class Coupler:
         self.contact_work_on_ice = float(state["contact_work_on_ice"])
         for k, s in enumerate(self.structures):
             self.contact_work[id(s)] = float(state[f"contact_work_{k}"])
+            prefix = f"facets_{k}_"
+            facets = {key[len(prefix):]: v for key, v in state.items() if key.startswith(prefix)}
+            if facets:  # (a checkpoint written before the facet loads existed has none)
+                self.facet_loads[id(s)].restore_state(facets)
         for k, p in enumerate(self.pairs):
             p.force = np.array(state[f"force_{k}"], dtype=np.float64)
             p.moment = np.array(state[f"moment_{k}"], dtype=np.float64)
@@ -234,6 +245,7 @@ class Coupler:
                 p.contacts = int(self.comm.allreduce_sum(p.contacts))
             p.force = impulse.sum(axis=0) / D
             p.moment = np.cross(p.structure.surface_points(), impulse).sum(axis=0) / D
+        collect_facet_loads(self.facet_loads, self.pairs, D)
         self.time += D
         return broken
 

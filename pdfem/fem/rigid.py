@@ -207,6 +207,10 @@ class RigidBody(Structure):
         nodes."""
         return {"u": self.surface_points() - self.x0, "v": self.surface_velocities()}
 
+    def surface_groups(self) -> dict[str, np.ndarray]:
+        """No load patches: a rigid body's file is read for its contact group only."""
+        return {}
+
     def describe(self) -> str:
         """Surface nodes."""
         return f"rigid body '{self.name}': {len(self.x0):,} surface nodes"

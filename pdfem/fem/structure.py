@@ -129,6 +129,20 @@ class ElasticStructure(AppliedLoads, Structure):
         self._timed_loads: list = []                      # (DOF vector, t -> factor)
         self.solver.initialize()
 
+    def surface_groups(self) -> dict[str, np.ndarray]:
+        """``{surface group: (T,) bool}``: which contact-surface triangles lie on each other
+        surface group of the mesh that shares faces with the contact group (load patches)."""
+        if self.contact_group is None:
+            return {}
+        own = self.mesh.group_facet_indices(self.contact_group)
+        per_face = len(self.surface_triangles) // len(own)   # triangles of one face, in order
+        found = {}
+        for group, faces in sorted(self.mesh.facet_indices.items()):
+            on = np.repeat(np.isin(own, faces), per_face)
+            if group != self.contact_group and on.any():
+                found[group] = on
+        return found
+
     def group_nodes(self, name: str) -> np.ndarray:
         """Sorted int32 FE nodes of a named group, midside nodes on its edges, faces and
         elements included (:meth:`pdfem.fem.fe_space.FESpace.group_nodes`)."""

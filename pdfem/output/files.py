@@ -47,3 +47,24 @@ def refuse_if_being_written(path: Path) -> None:
                               "process; choose another output path") from err
     except OSError:
         return  # not a readable HDF5 file: it is overwritten
+
+
+METADATA_CACHE_BYTES = 256 * 1024
+"""Fixed size of HDF5's metadata cache for a results file being written (see
+:func:`bound_metadata_cache`)."""
+
+
+def bound_metadata_cache(file: h5py.File) -> None:
+    """Hold HDF5's metadata cache of ``file`` at ``METADATA_CACHE_BYTES`` (no adaptive growth).
+
+    Every XDMF view is an HDF5 object; with the default adaptive cache (up to 32 MiB) their
+    object headers stay cached, and each flush, which walks the cache, took time in proportion
+    to the number of frames written (10x after 6,000 frames, ``benchmarks/output_frames.py``).
+    A small fixed cache evicts them, and a flush costs the same at every frame.
+    """
+    c = file.id.get_mdc_config()
+    c.set_initial_size = True
+    c.initial_size = c.max_size = METADATA_CACHE_BYTES
+    c.min_size = METADATA_CACHE_BYTES // 2
+    c.incr_mode = c.decr_mode = c.flash_incr_mode = 0  # off
+    file.id.set_mdc_config(c)

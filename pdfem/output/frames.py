@@ -18,6 +18,26 @@ from pdfem.output.datasets import growing_dataset, put_rows
 from pdfem.output.layout import check_name
 from pdfem.output.xdmf import create_view
 
+CHUNK_BYTES = 256 * 1024
+"""Target size of a frame field's HDF5 chunk: as many frames per chunk as fit (at most
+``MAX_FRAMES_PER_CHUNK``, at least 1). One frame per chunk made the chunk index (a B-tree)
+grow by one entry per frame and the flush of every frame slower as the run went on (5-10x
+after 6,000 frames, ``benchmarks/output_frames.py``); with a chunk of many frames the index
+grows by one entry per chunk, and the chunk being filled stays in HDF5's chunk cache (1 MiB
+per dataset by default)."""
+
+MAX_FRAMES_PER_CHUNK = 64
+"""Most frames in one chunk of a frame field."""
+
+
+def frames_per_chunk(item_shape: tuple[int, ...]) -> int:
+    """Frames per HDF5 chunk of a float64 field whose frame has shape ``item_shape``: a power
+    of two with about ``CHUNK_BYTES`` per chunk, between 1 and ``MAX_FRAMES_PER_CHUNK``."""
+    row = 8 * max(1, int(np.prod(item_shape)))
+    rows = max(1, CHUNK_BYTES // row)
+    return int(min(MAX_FRAMES_PER_CHUNK, 1 << (rows.bit_length() - 1)))
+
+
 VIEW_BATCH = 64
 """Per-frame XDMF views are made this many frames ahead, so the groups that hold them change
 (and can be damaged by a kill during the flush) only every VIEW_BATCH frames."""
@@ -103,7 +123,7 @@ class FrameSeries:
             group = self.file[self.path]
             for k, a in arrays.items():
                 self.fields[k] = (self._centre(k, a.shape), a.shape[1:])
-                self._datasets[k] = growing_dataset(group, k, a.shape, 1)
+                self._datasets[k] = growing_dataset(group, k, a.shape, frames_per_chunk(a.shape))
                 self._view_groups[k] = self.file.create_group(f"/xdmf{self.path}/{k}")
         for k, a in arrays.items():
             put_rows(self._datasets[k], index, a[np.newaxis])

@@ -19,14 +19,17 @@ Layout of ``<stem>.h5`` (all quantities SI)::
     /structure/<name>/u      (F, Nn, 3) nodal displacement, m
     /structure/<name>/von_mises (F, Ne) element von Mises stress, Pa (elastic structures)
     /structure/<name>/<field> (F, Nn or Ne) or (F, Nn or Ne, 3)  any further node or cell field
+    /structure/<name>.contact/...  a structure's contact surface (triangles, u) with the cell
+                             fields contact_pressure, contact_pressure_max (F, T) in Pa
+                             (:mod:`pdfem.coupling.facet_loads`)
     /<history>/time          (K,)      e.g. /energy/time, /loads/<name>/time: step times, s
     /<history>/<key>         (K,) or (K, 3)  e.g. /energy/kinetic in J, /loads/<name>/force in N,
-                             /loads/<name>/moment in N m
+                             /loads/<name>/moment in N m, /loads/<name>.<patch>/force in N
     /xdmf/...                per-frame views for the XDMF file (:mod:`pdfem.output.xdmf`), no
                              data of their own
 
-Frame fields are float64, chunked one frame per chunk and resizable along the frame axis
-(:mod:`pdfem.output.frames`). Histories are float64, chunked by ``HISTORY_BLOCK`` rows and
+Frame fields are float64, chunked by up to 64 frames (about 256 KiB a chunk) and resizable
+along the frame axis (:mod:`pdfem.output.frames`). Histories are float64, chunked by ``HISTORY_BLOCK`` rows and
 written in blocks (:mod:`pdfem.output.histories`). Groups carry an attribute ``kind``
 ("ice_body", "structure" or "history") so readers can find them.
 """
@@ -49,7 +52,7 @@ REQUIRED_ICE_FIELDS = ("u", "v", "damage")
 REQUIRED_STRUCTURE_FIELDS = ("u",)
 """Fields every structure must give in every frame."""
 
-CELL_FIELDS = frozenset({"von_mises"})
+CELL_FIELDS = frozenset({"von_mises", "contact_pressure", "contact_pressure_max"})
 """Structure fields centred on the cells (elements); all others are nodal."""
 
 CONSTANT_DATASETS = frozenset({"x0", "volume", "index", "points", "cells"})

@@ -38,7 +38,8 @@ UNITS: dict[str, str] = {
     "rigid_body_work": "J", "dissipated": "J", "contact_dissipated": "J",
     "fracture_dissipated": "J", "damping_dissipated": "J", "structure_kinetic_correction": "J",
     "load_work": "J", "support_work": "J", "supplied": "J", "stored": "J", "residual": "J",
-    "reaction_<group>": "N",
+    "reaction_<group>": "N", "area": "m^2", "contact_pressure": "Pa",
+    "contact_pressure_max": "Pa",
 }
 """Unit of each field or history key that pdfem writes."""
 

@@ -7,8 +7,9 @@ then calls :meth:`ResultsWriter.write_frame` at every output time and
 
 Robustness: the file stays open (HDF5's default, oldest file format) and every frame is
 committed in steps, each ended by a flush: its fields and the pending history columns; the
-histories' time rows; its ``/time`` row. Then the XDMF file is rewritten atomically
-(temporary file, ``os.replace``). Time datasets read NaN where unwritten, so a finite time
+histories' time rows; its ``/time`` row. Then the frame is added to the XDMF file in place
+(:class:`pdfem.output.xdmf.XdmfFile`: well-formed after every write, rewritten atomically
+when its reserve runs out), at a cost per frame that does not grow with the run. Time datasets read NaN where unwritten, so a finite time
 row means its data reached the file, and a committed frame means every history row appended
 before it did too.
 A process killed after :meth:`~ResultsWriter.write_frame` returns leaves a pair that h5py,
@@ -41,7 +42,7 @@ import numpy as np
 from pdfem.output import xdmf
 from pdfem.output.bodies import store_ice_body, store_structure
 from pdfem.output.datasets import growing_dataset, has_committed, put_rows
-from pdfem.output.files import refuse_if_being_written
+from pdfem.output.files import bound_metadata_cache, refuse_if_being_written
 from pdfem.output.frames import FrameSeries
 from pdfem.output.histories import HISTORY_BLOCK, History, first_row
 from pdfem.output.layout import (CELL_FIELDS, REQUIRED_ICE_FIELDS, REQUIRED_STRUCTURE_FIELDS,
@@ -65,6 +66,9 @@ class ResultsWriter:
         Reopen an existing results file of the same case (``/meta`` case equal to
         ``case_text``) to continue a run from a checkpoint: register the same bodies again,
         then call :meth:`resume` before writing.
+    expected_frames
+        Frames the run expects to write, or 0: the XDMF file reserves room for them at once
+        (:class:`pdfem.output.xdmf.XdmfFile`), so its cost per frame stays the same all run.
 
     Raises
     ------
@@ -81,7 +85,8 @@ class ResultsWriter:
     """
 
     def __init__(self, path: str | os.PathLike, case_text: str = "",
-                 meta: dict | None = None, *, append: bool = False) -> None:
+                 meta: dict | None = None, *, append: bool = False,
+                 expected_frames: int = 0) -> None:
         self.path = Path(path)
         if self.path.suffix.lower() == ".xdmf":
             raise ValueError(f"results path {str(self.path)!r} must be the HDF5 file, "
@@ -92,15 +97,16 @@ class ResultsWriter:
         self.xdmf_path = self.path.with_suffix(".xdmf")
         self._h5name = self.path.name
         self._grids: dict[str, xdmf.XdmfGrid] = {}
+        self._xdmf = xdmf.XdmfFile(self.xdmf_path, self._h5name, expected_frames)
         self._histories: dict[str, History] = {}
         self._frames = 0
-        self._xdmf_frames = -1
         self._last_time = -np.inf
         self._append = append
         self._resumed = not append
         refuse_if_being_written(self.path)
         if append:
             self._file: h5py.File | None = h5py.File(self.path, "r+")
+            bound_metadata_cache(self._file)
             stored = attr_value(self._file["meta"].attrs.get("case", ""))
             if stored != case_text:
                 self._file.close()
@@ -108,6 +114,7 @@ class ResultsWriter:
                                  "(its /meta case text differs); cannot append to it")
             return
         self._file = h5py.File(self.path, "w")
+        bound_metadata_cache(self._file)
         try:
             write_meta(self._file, case_text, meta or {})
         except TypeError:
@@ -116,6 +123,7 @@ class ResultsWriter:
         growing_dataset(self._file, "time", (), HISTORY_BLOCK, fillvalue=np.nan)
         self._file.create_group("ice")
         self.flush()
+        self._xdmf.rewrite()
 
     # -- setup ---------------------------------------------------------------------------
 
@@ -215,9 +223,6 @@ class ResultsWriter:
         kept = times[:frames]
         for grid in self._grids.values():
             grid.series.resume(frames)
-            if grid.series.fields is not None:
-                for i, t in enumerate(kept):
-                    grid.add_frame_xml(self._h5name, i, float(t))
         for name, _ in history_groups(f):
             if name in history_rows:
                 self._histories[name] = History.resume(f, "/" + name, int(history_rows[name]))
@@ -226,8 +231,9 @@ class ResultsWriter:
         self._frames = frames
         self._last_time = float(kept[-1])
         self._resumed = True
-        self._xdmf_frames = -1
-        self.flush()
+        self._sync()
+        self._xdmf.grids = [g for g in self._grids.values() if g.series.fields is not None]
+        self._xdmf.set_times(kept)
 
     def history_rows(self) -> dict[str, int]:
         """``{history group: rows appended so far}`` (committed or buffered), for a checkpoint."""
@@ -279,9 +285,9 @@ class ResultsWriter:
         for k, arrays in checked.items():
             self._grids[k].series.append(index, arrays)
         self._sync(time)
-        for grid in self._grids.values():
-            grid.add_frame_xml(self._h5name, index, time)
-        self._update_xdmf()
+        if index == 0:
+            self._xdmf.grids = list(self._grids.values())
+        self._xdmf.add_frame(time)
         return index
 
     def append_history(self, group: str, time: float,
@@ -308,9 +314,9 @@ class ResultsWriter:
     # -- file state ----------------------------------------------------------------------
 
     def flush(self) -> None:
-        """Write buffered history rows, flush the HDF5 file and bring the XDMF file up to date."""
+        """Write buffered history rows and flush the HDF5 file (the XDMF file is always up to
+        date: every frame is added to it as it is written)."""
         self._sync()
-        self._update_xdmf()
 
     def _sync(self, frame_time: float | None = None) -> None:
         """Flush in steps, so that what is on disk is always a committed prefix.
@@ -333,11 +339,6 @@ class ResultsWriter:
             self._frames += 1
             self._last_time = frame_time
             f.flush()
-
-    def _update_xdmf(self) -> None:
-        if self._xdmf_frames != self._frames:
-            xdmf.write_xdmf(self.xdmf_path, self._grids.values())
-            self._xdmf_frames = self._frames
 
     def close(self) -> None:
         """Write what is buffered and close the file (closing twice is allowed)."""

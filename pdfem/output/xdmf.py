@@ -10,7 +10,15 @@ can be moved together. Each attribute references a per-frame dataset
 ``/xdmf/ice/<body>/<field>/<frame>``: an HDF5 virtual dataset that maps frame F of the
 (F, N, ...) dataset (no copy, :func:`create_view`). meshio's ``TimeSeriesReader`` cannot
 read XDMF hyperslabs; it and VTK's ``vtkXdmfReader`` (ParaView's XDMF reader) both read
-these views. The file is rewritten whole and atomically (:func:`write_xdmf`).
+these views.
+
+Constant cost per frame (:class:`XdmfFile`): each temporal collection is followed on disk by a
+run of spaces (a reserve); a new frame's grid is written over the start of each collection's
+reserve, in place, one ``write`` per collection, so the file is well-formed XML before and
+after each write. When a reserve runs out the whole file is written again (atomically, through
+a temporary file and ``os.replace``) with every reserve as large as its collection's text so
+far: the rewrites come at geometrically spaced frames, so the cost per frame is O(1) amortized
+and O(1) outside the rewrite frames (measured in ``benchmarks/output_frames.py``).
 """
 
 from __future__ import annotations
@@ -104,6 +112,20 @@ def create_view(group: h5py.Group, source: h5py.Dataset, index: int,
                     view, dcpl=dcpl).close()
 
 
+def frame_grid_xml(name: str, topology_xml: str, geometry_xml: str, constant_xml: str,
+                   h5name: str, series: FrameSeries, index: int, time: float) -> str:
+    """The XDMF uniform grid of frame ``index`` (time ``time``, s) of a body."""
+    assert series.fields is not None
+    parts = [f'<Grid Name={quoteattr(name)} GridType="Uniform">'
+             f'<Time Value="{float(time)!r}"/>', topology_xml, geometry_xml, constant_xml]
+    for k, (centre, shape) in series.fields.items():
+        full = (series.sizes[centre],) + shape
+        parts.append(attribute(k, shape, centre,
+                               data_item(h5name, view_path(series.path, k, index), full)))
+    parts.append("</Grid>")
+    return "\n      " + "\n      ".join(parts)
+
+
 class XdmfGrid:
     """A body shown as one XDMF grid per frame: fixed topology and geometry, per-frame fields.
 
@@ -126,28 +148,16 @@ class XdmfGrid:
         self.geometry_xml = geometry_xml
         self.constant_xml = constant_xml
         self.series = series
-        self.frames_xml: list[str] = []
 
-    def add_frame_xml(self, h5name: str, index: int, time: float) -> None:
-        """Build (once) the XDMF grid of frame ``index``."""
-        series = self.series
-        assert series.fields is not None
-        parts = [f'<Grid Name={quoteattr(self.name)} GridType="Uniform">'
-                 f'<Time Value="{float(time)!r}"/>',
-                 self.topology_xml, self.geometry_xml, self.constant_xml]
-        for k, (centre, shape) in series.fields.items():
-            full = (series.sizes[centre],) + shape
-            parts.append(attribute(k, shape, centre,
-                                   data_item(h5name, view_path(series.path, k, index), full)))
-        parts.append("</Grid>")
-        self.frames_xml.append("\n      ".join(parts))
+    def frame_xml(self, h5name: str, index: int, time: float) -> str:
+        """The XDMF grid of frame ``index`` at ``time`` (s)."""
+        return frame_grid_xml(self.name, self.topology_xml, self.geometry_xml,
+                              self.constant_xml, h5name, self.series, index, time)
 
-    def xml(self) -> str:
-        """The temporal collection of all frames so far."""
-        head = (f'    <Grid Name={quoteattr(self.name)} GridType="Collection" '
+    def head(self) -> str:
+        """The opening tag of the body's temporal collection."""
+        return (f'    <Grid Name={quoteattr(self.name)} GridType="Collection" '
                 'CollectionType="Temporal">')
-        body = "".join("\n      " + g for g in self.frames_xml)
-        return head + body + "\n    </Grid>\n"
 
 
 def ice_grid(h5name: str, name: str, body: str, n: int, volume: bool,
@@ -167,16 +177,89 @@ def structure_grid(h5name: str, name: str, body: str, cell_type: str, nn: int, n
                     geometry(h5name, f"{body}/points", nn), "", series)
 
 
-def write_xdmf(path: Path, grids: Iterable[XdmfGrid]) -> None:
-    """Write the XDMF file ``path`` of the grids that have frames, atomically.
+HEAD = '<?xml version="1.0" encoding="utf-8"?>\n<Xdmf Version="3.0">\n  <Domain>\n'
+TAIL = "  </Domain>\n</Xdmf>\n"
+CLOSE = "\n    </Grid>\n"
+MIN_RESERVE = 4096
+"""Bytes of spaces kept after each temporal collection at least (see the module docstring)."""
 
-    The text goes to ``<path>.tmp`` first, then replaces ``path`` (``os.replace``), so a
-    reader never sees half a file.
+MAX_PLANNED_RESERVE = 64 * 1024 * 1024
+"""Most bytes reserved per collection for the frames a run expects (``expected_frames``)."""
+
+
+class XdmfFile:
+    """The XDMF file of a results file, appended to frame by frame at constant cost.
+
+    Parameters
+    ----------
+    path
+        The ``.xdmf`` file (written when the first frame is added).
+    h5name
+        The HDF5 file's name, relative to ``path``.
+    expected_frames
+        Frames the run expects to write (0: unknown). The first write reserves room for them
+        (up to ``MAX_PLANNED_RESERVE`` bytes per collection), so that a run that writes no
+        more frames than it expected never rewrites the file after its first frame.
+
+    Notes
+    -----
+    Only the frame times are kept in memory; a rewrite makes every frame's text again.
     """
-    text = ('<?xml version="1.0" encoding="utf-8"?>\n'
-            '<Xdmf Version="3.0">\n  <Domain>\n'
-            + "".join(g.xml() for g in grids if g.frames_xml)
-            + "  </Domain>\n</Xdmf>\n")
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+
+    def __init__(self, path: Path, h5name: str, expected_frames: int = 0) -> None:
+        self.path = Path(path)
+        self.h5name = h5name
+        self.expected_frames = int(expected_frames)
+        self.grids: list[XdmfGrid] = []
+        self.times: list[float] = []
+        self.rewrites = 0
+        self._free: list[int] = []   # bytes of reserve left after each collection
+        self._at: list[int] = []     # file offset where each collection's next frame goes
+
+    def add_frame(self, time: float) -> None:
+        """Add the next frame (time ``time``, s) of every grid to the file."""
+        index = len(self.times)
+        self.times.append(float(time))
+        texts = [g.frame_xml(self.h5name, index, time).encode() for g in self.grids]
+        if not self._at or any(len(t) > free for t, free in zip(texts, self._free)):
+            self.rewrite()
+            return
+        fd = os.open(self.path, os.O_WRONLY)
+        try:
+            for k, text in enumerate(texts):
+                os.pwrite(fd, text, self._at[k])
+                self._at[k] += len(text)
+                self._free[k] -= len(text)
+        finally:
+            os.close(fd)
+
+    def set_times(self, times: Iterable[float]) -> None:
+        """Replace the frames by those at ``times`` (s) (a restart) and write the file again."""
+        self.times = [float(t) for t in times]
+        self.rewrite()
+
+    def rewrite(self) -> None:
+        """Write the whole file, atomically, each reserve as large as its collection's text."""
+        out = [HEAD.encode()]
+        at, free = [], []
+        pos = len(out[0])
+        for g in (self.grids if self.times else []):
+            head = g.head().encode()
+            body = "".join(g.frame_xml(self.h5name, i, t)
+                           for i, t in enumerate(self.times)).encode()
+            # room for the frames still expected, each as long as the last one plus the
+            # longest difference a time value (repr) makes
+            planned = ((len(g.frame_xml(self.h5name, 0, self.times[-1])) + 32)
+                       * (self.expected_frames - len(self.times)))
+            reserve = max(MIN_RESERVE, len(head) + len(body),
+                          min(planned, MAX_PLANNED_RESERVE))
+            out += [head, body, b" " * reserve, CLOSE.encode()]
+            at.append(pos + len(head) + len(body))
+            free.append(reserve)
+            pos += len(head) + len(body) + reserve + len(CLOSE)
+        out.append(TAIL.encode())
+        tmp = self.path.with_name(self.path.name + ".tmp")
+        tmp.write_bytes(b"".join(out))
+        os.replace(tmp, self.path)
+        self._at, self._free = at, free
+        self.rewrites += 1

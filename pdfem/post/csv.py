@@ -15,7 +15,8 @@ from pdfem.post.groups import AXES
 LOAD_PREFIXES = ("loads/", "contacts/", "monitors/")
 """History groups written at every coupling step (the CSV columns)."""
 
-UNITS = {"force": "N", "moment": "N m", "contacts": "-", "applied": "N", "u": "m", "von_mises": "Pa"}
+UNITS = {"force": "N", "moment": "N m", "contacts": "-", "applied": "N", "u": "m", "von_mises": "Pa",
+         "area": "m^2"}
 """Unit of each per-step history key (``-``: a count)."""
 
 

@@ -13,8 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from pdfem.post.groups import AXES, histories_of, split_loads
+from pdfem.post.groups import AXES, histories_of, patch_loads, split_loads
+from pdfem.post.lowpass import lowpass as lowpassed
+from pdfem.post.pressure_area import pressure_area
 from pdfem.post.spectrum import amplitude_spectrum
+
 
 def _figure(rows: int, height: float = 3.0):
     from matplotlib.figure import Figure  # no pyplot: no global figure state, Agg canvas
@@ -38,12 +41,16 @@ def _finish(ax, title: str, ylabel: str, ncol: int = 1) -> None:
 
 
 def _plot_loads(loads: dict[str, dict], path: Path, written: list[Path],
-                title: str = "Ice force on '{}'") -> None:
+                title: str = "Ice force on '{}'", cutoff: float | None = None) -> None:
     fig, axes = _figure(len(loads))
     for ax, (name, h) in zip(axes, loads.items()):
         for a, c in enumerate(AXES):
             ax.plot(h["time"], h["force"][:, a], lw=0.9, label=f"$F_{c}$")
         ax.plot(h["time"], np.linalg.norm(h["force"], axis=1), "k", lw=1.2, label="$|F|$")
+        if cutoff is not None:
+            f = lowpassed(h["time"], h["force"], cutoff)
+            ax.plot(h["time"], np.linalg.norm(f, axis=1), "r", lw=1.5,
+                    label=f"$|F|$ low-passed {cutoff:g} Hz")
         _finish(ax, title.format(name), "force [N]")
     _save(fig, path, written)
 
@@ -79,11 +86,33 @@ def _plot_response(results: dict, path: Path, written: list[Path]) -> None:
         _finish(ax, "Structural response: von Mises stress", "von Mises stress [Pa]")
     ax = axes[-1]
     for n, s in sorted(results["structure"].items()):
+        if "contact_pressure" in s:  # a contact surface: its structure is plotted
+            continue
         ax.plot(t, np.linalg.norm(s["u"], axis=2).max(axis=1), "o-", ms=3,
                 label=f"max over '{n}' (frames)")
     for n, h in monitors.items():
         ax.plot(h["time"], np.linalg.norm(h["u"], axis=1), lw=0.9, label=f"monitor '{n}'")
     _finish(ax, "Structural response: displacement magnitude", "|u| [m]")
+    _save(fig, path, written)
+
+
+def _plot_pressure_area(results: dict, path: Path, written: list[Path]) -> None:
+    """Per structure: every frame's pressure-area curve (grey) and their envelope (black)."""
+    surfaces = {n: s for n, s in sorted(results["structure"].items())
+                if "contact_pressure" in s and np.any(s["contact_pressure"] > 0)}
+    if not surfaces:
+        return
+    fig, axes = _figure(len(surfaces))
+    for ax, (name, s) in zip(axes, surfaces.items()):
+        pa = pressure_area(results["time"], s)
+        for curve in pa["curves"]:
+            ax.loglog(pa["area"], curve, color="0.75", lw=0.7)
+        ax.loglog(pa["area"], pa["envelope"], "k", lw=1.6, label="envelope over the run")
+        ax.set_title(f"Pressure-area on '{name}' (patch grown from the peak facet, per frame)")
+        ax.set_xlabel("contact area [m$^2$]")
+        ax.set_ylabel("mean pressure [Pa]")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(loc="best", fontsize="small")
     _save(fig, path, written)
 
 
@@ -125,7 +154,8 @@ def _plot_energy(h: dict, path: Path, written: list[Path]) -> None:
     _save(fig, path, written)
 
 
-def write_plots(results: dict, out_dir: str | os.PathLike) -> list[Path]:
+def write_plots(results: dict, out_dir: str | os.PathLike,
+                cutoff: float | None = None) -> list[Path]:
     """Write the report plots (PNG, 150 dpi) of a results file into a directory.
 
     Parameters
@@ -147,7 +177,11 @@ def write_plots(results: dict, out_dir: str | os.PathLike) -> list[Path]:
         (max von Mises and max displacement over the structure vs time from the frames, and
         the monitors; needs a structure and a frame), ``damage.png`` (ice particles at the
         last frame coloured by damage, projected on the plane of the two largest extents;
-        needs ice and a frame), ``energy.png`` (the energy history; needs 1 or more rows).
+        needs ice and a frame), ``energy.png`` (the energy history; needs 1 or more rows),
+        ``patch_loads.png`` (the force on each load patch), ``pressure_area.png`` (the
+        pressure-area curves of the frames and their envelope; needs contact pressure).
+    cutoff
+        With a cut-off (Hz), the load plots also show the zero-phase low-passed |F|.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -156,7 +190,11 @@ def write_plots(results: dict, out_dir: str | os.PathLike) -> list[Path]:
     structure_loads, region_loads = split_loads(hist)
     loads = {n: h for n, h in structure_loads.items() if h["time"].size}
     if loads:
-        _plot_loads(loads, out / "load_history.png", written)
+        _plot_loads(loads, out / "load_history.png", written, cutoff=cutoff)
+    patches = {n: h for n, h in patch_loads(hist).items() if h["time"].size}
+    if patches:
+        _plot_loads(patches, out / "patch_loads.png", written, "Ice force on patch '{}'",
+                    cutoff)
     regions = {n: h for n, h in region_loads.items() if h["time"].size}
     if regions:
         _plot_loads(regions, out / "region_reactions.png", written,
@@ -166,6 +204,8 @@ def write_plots(results: dict, out_dir: str | os.PathLike) -> list[Path]:
         _plot_spectrum(spectra, out / "load_spectrum.png", written)
     if results["structure"] and results["time"].size:
         _plot_response(results, out / "structure_response.png", written)
+    if results["time"].size:
+        _plot_pressure_area(results, out / "pressure_area.png", written)
     if results["ice"] and results["time"].size:
         _plot_damage(results, out / "damage.png", written)
     e = hist.get("energy")

@@ -30,7 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from pdfem.post.groups import AXES, histories_of, split_loads
+from pdfem.post.groups import AXES, histories_of, patch_loads, split_loads
+from pdfem.post.ice_loads import (SURFACE_SUFFIX, filtered_figures, is_contact_surface,
+                                  load_split, pressure_figures)
 from pdfem.post.windowed import peak_windowed_force
 
 
@@ -76,8 +78,9 @@ def time_average(time: np.ndarray, values: np.ndarray) -> np.ndarray:
     return np.trapezoid(y, t, axis=0) / span
 
 
-def _load_figures(h: dict) -> dict:
-    """Peak (signed, with time) and mean of each force component and of |F| of one history."""
+def _load_figures(h: dict, cutoff: float | None = None) -> dict:
+    """Peak (signed, with time) and mean of each force component and of |F| of one history;
+    with a ``cutoff`` (Hz) also those of the low-passed history (``filtered``)."""
     t, force = h["time"], h["force"]
     out: dict[str, Any] = {"samples": int(t.size)}
     if t.size == 0:
@@ -95,6 +98,10 @@ def _load_figures(h: dict) -> dict:
     out["windowed"] = {"peak": _num(peak), "time": _num(when), "window": _num(window)}
     if "contacts" in h:
         out["max_contacts"] = int(np.max(h["contacts"]))
+    if "area" in h:
+        out["area"] = _num(h["area"][0])
+    if cutoff is not None:
+        out["filtered"] = filtered_figures(t, force, cutoff, _num)
     return out
 
 
@@ -160,7 +167,7 @@ def _ice_figures(results: dict, body: dict) -> dict:
     return out
 
 
-def summarize(results: dict) -> dict:
+def summarize(results: dict, lowpass: float | None = None) -> dict:
     """The summary figures of a results file, as a JSON-ready dict (SI units).
 
     Parameters
@@ -191,12 +198,18 @@ def summarize(results: dict) -> dict:
                            "version": meta.get("version", ""), "frames": int(t.size),
                            "end_time": _num(t[-1]) if t.size else None}
     loads, regions = split_loads(hist)
-    out["loads"] = {n: _load_figures(h) for n, h in loads.items()}
-    out["regions"] = {n: _load_figures(h) for n, h in regions.items()}
-    out["contacts"] = {n: _load_figures(h)
-                       for n, h in histories_of(hist, "contacts", "force").items()}
+    contacts = histories_of(hist, "contacts", "force")
+    out["loads"] = {n: _load_figures(h, lowpass) for n, h in loads.items()}
+    out["regions"] = {n: _load_figures(h, lowpass) for n, h in regions.items()}
+    out["contacts"] = {n: _load_figures(h, lowpass) for n, h in contacts.items()}
+    out["patches"] = {n: _load_figures(h, lowpass) for n, h in patch_loads(hist).items()}
+    out["load_split"] = load_split(results, contacts)
+    surfaces = {n: s for n, s in results["structure"].items() if is_contact_surface(s)}
+    out["contact_pressure"] = {n.removesuffix(SURFACE_SUFFIX): pressure_figures(results, n, s, _num)
+                               for n, s in sorted(surfaces.items())}
     out["structures"] = {name: _structure_figures(results, name, s)
-                         for name, s in sorted(results["structure"].items())}
+                         for name, s in sorted(results["structure"].items())
+                         if name not in surfaces}
     out["monitors"] = {n: _monitor_figures(h)
                        for n, h in histories_of(hist, "monitors", "u").items()}
     out["ice"] = {name: _ice_figures(results, b) for name, b in sorted(results["ice"].items())}

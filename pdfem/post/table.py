@@ -43,6 +43,45 @@ def _load_lines(what: str, name: str, f: dict) -> list[str]:
                      "does not)")
     if "max_contacts" in f:
         lines.append(f"  most particles in contact at once: {f['max_contacts']}")
+    if f.get("area") is not None:
+        lines.append(f"  patch area: {_g(f['area'])} m^2")
+    lp = f.get("filtered")
+    if lp:
+        rows = [[d, _g(f[d]["peak"]), _g(lp[d]["peak"]), _g(lp[d]["time"])]
+                for d in (*AXES, "magnitude")]
+        lines.append(f"  peaks raw and low-passed (zero-phase Butterworth, {_g(lp['cutoff'])} Hz)")
+        lines += _table(["direction", "raw peak [N]", "filtered peak [N]", "at t [s]"], rows,
+                        "    ")
+        lines.append(f"    largest residual |raw - filtered| (impacts): "
+                     f"{_g(lp['residual']['peak'])} N at t = {_g(lp['residual']['time'])} s")
+    return lines
+
+
+def _ice_load_lines(s: dict) -> list[str]:
+    """Patches, contact pressure and pressure-area envelope, load split by contact pair."""
+    lines: list[str] = []
+    for name, f in s.get("patches", {}).items():
+        lines += ["", *_load_lines("Ice force on load patch", name, f)]
+    for name, c in s.get("contact_pressure", {}).items():
+        mp = c.get("max_pressure")
+        if not mp:
+            continue
+        lines += ["", f"Contact pressure on '{name}' ({c['facets']} facets; mean over each frame "
+                      "interval)",
+                  f"  max facet pressure {_g(mp['value'])} Pa at t = {_g(mp['time'])} s, "
+                  f"at {_loc(mp['location'])} m",
+                  f"  largest contact area {_g(c['max_contact_area']['value'])} m^2 at "
+                  f"t = {_g(c['max_contact_area']['time'])} s",
+                  "  pressure-area envelope (patch grown from the peak facet):"]
+        pa = c["pressure_area"]
+        rows = [[_g(a), _g(p), _g(t)] for a, p, t in zip(pa["area"], pa["envelope"], pa["time"])
+                if p is not None][::4]
+        lines += _table(["area [m^2]", "pressure [Pa]", "at t [s]"], rows, "    ")
+    for name, sp in s.get("load_split", {}).items():
+        if len(sp["pairs"]) > 1:
+            rows = [[k, _g(v["impulse"]), f"{100 * v['share']:.1f}"] for k, v in sp["pairs"].items()]
+            lines += ["", f"Load on '{name}' by contact pair (main: '{sp['main']}'; {sp['note']})"]
+            lines += _table(["pair", "impulse [N s]", "share [%]"], rows)
     return lines
 
 
@@ -72,6 +111,7 @@ def format_summary(summary: dict) -> str:
         lines += ["", *_load_lines("Ice force in contact pair", name, f)]
     for name, f in s.get("regions", {}).items():
         lines += ["", *_load_lines("Reaction of ice region (force on the ice)", name, f)]
+    lines += _ice_load_lines(s)
     rows = []
     for name, st in s["structures"].items():
         vm = st.get("max_von_mises", {})

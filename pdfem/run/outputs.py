@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from pdfem.coupling.facet_loads import FacetLoadSource
 from pdfem.errors import InputError
 from pdfem.output import ResultsWriter, rank_file
 from pdfem.output.source import Rows, Source
@@ -53,12 +54,14 @@ class NoOutput:
         """Nothing."""
 
 
-def open_results(path: Path, case_text: str, meta: dict, append: bool) -> ResultsWriter:
-    """A new results file, or (``append``, a restart) the existing one reopened."""
+def open_results(path: Path, case_text: str, meta: dict, append: bool,
+                 expected_frames: int = 0) -> ResultsWriter:
+    """A new results file, or (``append``, a restart) the existing one reopened; room is
+    reserved in the XDMF file for ``expected_frames`` frames."""
     if not append:
-        return ResultsWriter(path, case_text, meta)
+        return ResultsWriter(path, case_text, meta, expected_frames=expected_frames)
     try:
-        return ResultsWriter(path, case_text, append=True)
+        return ResultsWriter(path, case_text, append=True, expected_frames=expected_frames)
     except (OSError, ValueError) as exc:
         raise InputError(str(path), "--restart", f"cannot continue this results file ({exc}); "
                          "give the output directory of the run that wrote the checkpoint with "
@@ -95,6 +98,9 @@ class StructureSource(Source):
     @classmethod
     def of_run(cls, setup, per_rank: bool) -> list[Source]:
         return [cls(s) for s in setup.structures]
+
+    def output_mesh(self):
+        return self.structure.output_mesh()
 
     def frame_fields(self):
         return self.structure.output_fields()
@@ -170,7 +176,8 @@ class MonitorSource(Source):
         return {f"monitors/{self.name}": {"u": u, "von_mises": vm}}
 
 
-SOURCE_KINDS = (IceSource, StructureSource, LoadSource, RegionSource, PairSource, MonitorSource)
+SOURCE_KINDS = (IceSource, FacetLoadSource, StructureSource, LoadSource, RegionSource, PairSource,
+                MonitorSource)
 """The kinds of output source of a run, in writing order; each makes its sources of a built run
 with ``of_run(setup, per_rank)``. A new kind: its class (a new file, or here) and one entry."""
 
@@ -219,8 +226,9 @@ class Outputs:
             raise InputError(str(self.ice_writer.path), "--restart", f"the results file does "
                              f"not fit this run ({exc}); a run with run.output_per_rank "
                              "restarts on as many ranks as wrote it") from None
-        for s in setup.structures:
-            self.writer.add_structure(s.name, *s.output_mesh())
+        for src in self.sources:  # contact surfaces, then structures (the last shown by meshio)
+            if src.mesh_kind == "structure":
+                self.writer.add_structure(src.name, *src.output_mesh())
 
     def frame(self, t: float) -> dict[str, float]:
         """Write an output frame at ``t`` (s) with its history rows; returns the energy row
@@ -275,10 +283,11 @@ def open_outputs(case, out: Path, comm, meta: dict, append: bool) -> tuple:
     per_rank = case.run.output_per_rank and comm.size > 1
     if per_rank:
         meta = dict(meta, ice_per_rank=comm.size)
-    writer = (open_results(path, case.text, meta, append) if comm.rank == 0
+    frames = int(case.run.end_time / case.run.output_interval) + 2
+    writer = (open_results(path, case.text, meta, append, frames) if comm.rank == 0
               else NoOutput(path))
     ice_writer = writer
     if per_rank:
         ice_writer = open_results(rank_file(path, comm.rank), case.text,
-                                  {"rank": comm.rank, "ranks": comm.size}, append)
+                                  {"rank": comm.rank, "ranks": comm.size}, append, frames)
     return writer, ice_writer
