@@ -84,6 +84,11 @@ class Structure(SurfaceBody, ABC):
         """One history row per output frame (energies J, support reactions N); empty: none."""
         return {}
 
+    def motion_history(self) -> dict[str, float | np.ndarray]:
+        """One row of rigid-body motion every coupling step (a free ship: position, rotation,
+        velocities); empty: none."""
+        return {}
+
     def describe(self) -> str:
         """One line for the start-up report."""
         return f"structure '{self.name}'"

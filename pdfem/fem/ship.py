@@ -33,6 +33,7 @@ import math
 
 import numpy as np
 
+from pdfem.errors import InputError
 from pdfem.fem.base import Structure
 from pdfem.fem.hydrostatics import hydrostatics
 from pdfem.fem.rigid import read_surface
@@ -148,6 +149,35 @@ class Ship(Structure):
         """Build from a closed surface group of a gmsh file; ``kwargs`` as the constructor's."""
         pts, tri = read_surface(path, group)
         return cls(pts, tri, **kwargs)
+
+    @classmethod
+    def from_case(cls, cfg, path, file: str = "<case>") -> "Ship":
+        """The ship of a case's ``kind = "ship"`` structure (a
+        :class:`~pdfem.case.config.StructureConfig` with its ``ship``), from its contact group.
+
+        Raises
+        ------
+        InputError
+            If the case has no ``[water]`` section.
+        """
+        ship = cfg.ship
+        if ship.water_density is None:
+            raise InputError(file, f"{cfg.field}.kind", "a ship floats: the case needs a [water] "
+                             "section (density, level) for its hydrostatics", cfg.kind)
+        s = ship.section
+        pts, tri = read_surface(path, cfg.contact_group)
+        k = s.radii_of_gyration
+        if k is None:
+            wet = pts[pts[:, 2] <= ship.water_level]
+            span = np.ptp(wet if len(wet) else pts, axis=0)
+            k = (0.4 * span[1], 0.25 * span[0], 0.25 * span[0])
+        return cls(pts, tri, density=ship.water_density, level=ship.water_level,
+                   gravity=ship.gravity, radii_of_gyration=k, mass=s.mass,
+                   centre_of_gravity=s.center_of_gravity,
+                   initial_displacement=s.initial_displacement,
+                   initial_rotation=s.initial_rotation, initial_velocity=s.initial_velocity,
+                   initial_angular_velocity=s.initial_angular_velocity, thrust=s.thrust,
+                   surge_speed=s.surge_speed, ramp_time=s.ramp_time, name=cfg.name)
 
     # ------------------------------------------------------------------ dynamics
     def _update(self) -> None:
