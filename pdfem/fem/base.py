@@ -102,6 +102,11 @@ class Structure(SurfaceBody, ABC):
         """Elastic energy (J) the structure holds (0 for a rigid body)."""
         return 0.0
 
+    def potential_energy(self) -> float:
+        """Potential energy (J) of the structure in fields it moves through (a floating ship:
+        gravity and hydrostatics); 0 by default."""
+        return 0.0
+
     def applied_load(self) -> np.ndarray:
         """(3,) resultant (N) of the loads applied to the structure now (pressures, tractions,
         nodal forces; not the contact). Default: zero."""

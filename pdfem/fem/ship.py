@@ -19,11 +19,11 @@ and its moment about ``c``; its work, the kinetic-energy change, is booked by th
 the contact the hull counts as infinitely heavy at each node (:meth:`surface_inverse_mass` is
 zero), fine for a ship thousands of times heavier than an ice particle.
 
-Energy: gravity, hydrostatics and thrust are the ship's applied loads: ``load_work`` = minus the
-change of their potential (``-m g . c + rho g int_V (level - z) dV``, exact) plus the work of
-the thrust (trapezoid rule); a held surge speed books the work of holding it as
-``support_work``. The ship's kinetic energy ``m v^2 / 2 + L . w / 2`` is the structure kinetic
-energy of the balance. Not modelled: radiation damping, added mass and viscous forces of the
+Energy: the ship's kinetic energy ``m v^2 / 2 + L . w / 2`` and its potential energy in gravity
+and the water, ``m |g| (z_G - level + H) + rho g int_V (level - z) dV`` (exact; the datum, H
+the hull's height, makes it positive while any of the hull is above the keel's depth), are
+stored energies of the balance (``structure_kinetic``, ``structure_potential``); the thrust's
+work (trapezoid rule) is ``load_work`` and the work of holding a surge speed ``support_work``. Not modelled: radiation damping, added mass and viscous forces of the
 hull, waves (docs/ship.md).
 """
 
@@ -141,8 +141,9 @@ class Ship(Structure):
         self.time = 0.0
         self.thrust_work = self.surge_work = 0.0
         self._surface_forces = np.zeros((len(self.x_mesh), 3))
+        height = float(np.ptp(self.x_mesh[:, 2]))
+        self.datum = np.array([0.0, 0.0, self.level - height])  # m, potential datum
         self._update()
-        self.potential0 = self.potential_energy()
 
     @classmethod
     def from_msh(cls, path, group: str = "contact", **kwargs) -> "Ship":
@@ -243,13 +244,15 @@ class Ship(Structure):
         return 0.5 * self.mass * float(self.v @ self.v) + 0.5 * float(self.L @ self.omega)
 
     def potential_energy(self) -> float:
-        """Gravity and hydrostatic potential (J): ``-m g . c + rho g int_V (level - z) dV``."""
-        return -self.mass * float(self.gravity @ self.c) + self.hydro.potential
+        """Gravity and hydrostatic potential (J): ``-m g . (c - c_datum) + rho g int_V (level - z)
+        dV`` with ``c_datum`` the hull's height H below the water surface."""
+        return (-self.mass * float(self.gravity @ (self.c - self.datum))
+                + self.hydro.potential)
 
     def energy_terms(self) -> dict[str, float]:
-        """``load_work``: work of gravity, hydrostatics and thrust (J); ``support_work``: of
-        holding the surge speed."""
-        return {"load_work": self.potential0 - self.potential_energy() + self.thrust_work,
+        """``load_work``: work of the thrust (J); ``support_work``: of holding the surge
+        speed."""
+        return {"load_work": self.thrust_work,
                 "support_work": self.surge_work, "damping_dissipated": 0.0,
                 "kinetic_correction": 0.0}
 
