@@ -8,8 +8,11 @@ axes. The body-axes inertia is ``I_b = m diag(k_x^2, k_y^2, k_z^2)`` (radii of g
 the centre of gravity), the angular velocity ``w = R I_b^-1 R^T L``. One step of ``h`` is
 velocity Verlet for the translation and the angular momentum with an exact rotation update::
 
-    v += h/2 F / m,  L += h/2 M;   c += h v;   q <- exp(h w / 2) q   (Rodrigues, unit quaternion)
+    v += h/2 F / m,  L += h/2 M;   c += h v;   q <- exp(h w_mid) q   (unit quaternions)
     F, M at the new pose;           v += h/2 F / m,  L += h/2 M
+
+with ``w_mid`` the angular velocity of ``L`` at the attitude rotated by ``h w / 2`` (a
+midpoint predictor, so the rotation is second-order accurate like the translation).
 
 ``F = m g + F_hydrostatic + thrust R e_x`` and ``M`` the hydrostatic moment about ``c``
 (:func:`pdfem.fem.hydrostatics.hydrostatics`: the pressure rho g (level - z) integrated over the
@@ -201,6 +204,8 @@ class Ship(Structure):
         self.L += 0.5 * h * self.moment
         c_old = self.c.copy()
         omega = self.R @ ((self.R.T @ self.L) / self.inertia)
+        half = quaternion_matrix(quaternion_product(rotation_quaternion(0.5 * h * omega), self.q))
+        omega = half @ ((half.T @ self.L) / self.inertia)   # at mid-step: second order
         self.c = self.c + h * self.v
         q = quaternion_product(rotation_quaternion(h * omega), self.q)
         self.q = q / np.linalg.norm(q)
@@ -209,6 +214,7 @@ class Ship(Structure):
         self.L += 0.5 * h * self.moment
         self.thrust_work += float(0.5 * (thrust0 + self.thrust_force) @ (self.c - c_old))
         self.time += h
+        self._update_velocity()
         self._hold_surge()
 
     def _hold_surge(self) -> None:
