@@ -201,24 +201,32 @@ def _triangulate(p: dict):
                 a, b, c, d = ids[j][i], ids[j][i + 1], ids[j + 1][i + 1], ids[j + 1][i]
                 quad = [(a, b, c), (a, c, d)] if sign < 0 else [(a, c, b), (a, d, c)]
                 tris += quad
-    n_across = max(2, math.ceil(p["beam"] / p["element_size"]))
-    eta = np.linspace(-1.0, 1.0, n_across + 1)
     for j, up in ((0, False), (nz - 1, True)):             # bottom (normal -z) and deck (+z)
-        cols = [[node(X[j, 0], 0.0, zs[j])]]
-        cols += [[node(X[j, i], e * H[j, i], zs[j]) for e in eta] for i in range(1, nu)]
-        cols += [[node(X[j, nu], 0.0, zs[j])]]
+        cols = []
+        for i in range(nu + 1):                             # node chains across, ~element_size
+            n = 0 if H[j, i] == 0.0 else max(1, math.ceil(2 * H[j, i] / p["element_size"]))
+            eta = np.linspace(-1.0, 1.0, n + 1) if n else np.zeros(1)
+            cols.append((eta, [node(X[j, i], e * H[j, i], zs[j]) for e in eta]))
         for i in range(nu):
-            left, right = cols[i], cols[i + 1]
-            new = []
-            if len(left) == 1:
-                new = [(left[0], right[k + 1], right[k]) for k in range(len(right) - 1)]
-            elif len(right) == 1:
-                new = [(left[k], left[k + 1], right[0]) for k in range(len(left) - 1)]
-            else:
-                for k in range(len(left) - 1):
-                    new += [(left[k], left[k + 1], right[k + 1]), (left[k], right[k + 1], right[k])]
+            new = _zip(*cols[i], *cols[i + 1])
             tris += [(a, c, b) for a, b, c in new] if up else new
     return np.array(nodes), np.array(tris, dtype=np.int64)
+
+
+def _zip(eta_l: np.ndarray, left: list, eta_r: np.ndarray, right: list) -> list[tuple]:
+    """Triangles between two node chains across the hull (parameters ``eta`` from -1 to 1),
+    advancing on the chain whose next node comes first, so that chains of different lengths
+    meet without slivers."""
+    i = k = 0
+    out = []
+    while i < len(left) - 1 or k < len(right) - 1:
+        if k == len(right) - 1 or (i < len(left) - 1 and eta_l[i + 1] <= eta_r[k + 1]):
+            out.append((left[i], left[i + 1], right[k]))
+            i += 1
+        else:
+            out.append((left[i], right[k + 1], right[k]))
+            k += 1
+    return out
 
 
 def groups(p: dict, nodes: np.ndarray, tris: np.ndarray) -> dict[str, np.ndarray]:
