@@ -15,7 +15,9 @@ and of the hydrostatics under test: heave ``T = 2 pi sqrt(m / (rho g A_wp))``, p
 ``m`` is the case's mass or ``rho V``.
 
 Measured (``pdfem validate --case ship_rest_drift --case ship_heave_period --case
-ship_pitch_period``): see docs/ship.md.
+ship_pitch_period``): drift 2.8e-5 m over 10 s; heave period 0.897138 s against 0.897140 s
+(-0.0002 %); pitch period 1.01725 s against 1.01726 s (-0.0015 %); ``--quick`` (2 s, 2 s,
+2.2 s) the same periods.
 """
 
 from __future__ import annotations
