@@ -26,8 +26,9 @@ Energy: the ship's kinetic energy ``m v^2 / 2 + L . w / 2`` and its potential en
 and the water, ``m |g| (z_G - level + H) + rho g int_V (level - z) dV`` (exact; the datum, H
 the hull's height, makes it positive while any of the hull is above the keel's depth), are
 stored energies of the balance (``structure_kinetic``, ``structure_potential``); the thrust's
-work (trapezoid rule) is ``load_work`` and the work of holding a surge speed ``support_work``. Not modelled: radiation damping, added mass and viscous forces of the
-hull, waves (docs/ship.md).
+work (trapezoid rule) is ``load_work`` and the work of holding a surge speed ``support_work``.
+Not modelled: radiation damping, added mass and viscous forces of the hull, waves
+(docs/ship.md).
 """
 
 from __future__ import annotations
