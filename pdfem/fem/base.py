@@ -8,7 +8,8 @@ the energy balance, a mesh check, checkpoints, and a line for the start-up repor
 calls only these methods, so it never asks which kind of structure it holds.
 
 Implementations: :class:`pdfem.fem.structure.ElasticStructure` (linear-elastic FE, explicit)
-and :class:`pdfem.fem.rigid.RigidBody` (prescribed rigid motion).
+and :class:`pdfem.fem.rigid.RigidBody` (prescribed rigid motion) and
+:class:`pdfem.fem.ship.Ship` (a free-floating rigid hull).
 
 Adding a kind
 -------------

@@ -11,7 +11,8 @@ of a coupling step:
   bond), ``theta``; attrs ``time`` (s), ``external_work`` (J, the work of the velocity
   constraints) and, from a run on several ranks, ``external_work_ranks`` (each rank's part);
 - ``/structure/<name>``: the ``checkpoint_state()`` of each structure (elastic: u, v, a, v_half, f_ext,
-  f_damp, time, surface_forces; rigid: time, time_carry, surface_forces);
+  f_damp, time, surface_forces; rigid: time, time_carry, surface_forces; ship: c, q, v, L,
+  time, thrust and surge work, surface_forces);
 - ``/coupler``: :meth:`pdfem.coupling.coupler.Coupler.checkpoint_state` (time, pending contact loads,
   contact work counters, last pair loads);
 - ``/forces/<i>``: the ``checkpoint_state()`` of the coupler's particle forces that keep one
