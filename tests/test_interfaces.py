@@ -59,7 +59,7 @@ def _plate() -> RigidBody:
 
 
 def test_structure_kinds_are_registered_structures(block):
-    assert set(STRUCTURE_KINDS) == {"elastic", "rigid"}
+    assert set(STRUCTURE_KINDS) == {"elastic", "rigid", "ship"}
     for s in (block, _plate()):
         assert isinstance(s, Structure)
         points, cells, cell_type = s.output_mesh()

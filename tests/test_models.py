@@ -86,6 +86,8 @@ MODEL_CASES = {
     "hull_panel": (HULL_PARAMS, {"hull": 3, "contact": 2, "fixed": 2}),
     "propeller_blade": (BLADE_PARAMS, {"blade": 3, "contact": 2, "root": 2}),
     "indenters": (dict(shape="sphere", element_size=0.25), {"contact": 2}),
+    "icebreaker": (dict(element_size=0.1), {"bow": 2, "shoulder": 2, "midship": 2, "stern": 2,
+                                            "bow_panel": 2, "contact": 2}),
 }
 
 

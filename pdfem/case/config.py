@@ -17,7 +17,7 @@ from pdfem.case.links import ContactSection
 from pdfem.case.ice import IceMaterialSection, IceSection
 from pdfem.case.shapes import Shape
 from pdfem.geometry.shapes import Box
-from pdfem.case.structure import StructureSection
+from pdfem.case.structure import ShipConfig, StructureSection, ship_config
 from pdfem.case.water import WaterSection, gravity_with_water
 
 
@@ -156,6 +156,7 @@ class StructureConfig:
     center: tuple[float, float, float]
     path: tuple[tuple[float, float, float, float], ...] | None
     field: str = ""
+    ship: ShipConfig | None = None  # kind = "ship" only
 
 
 @dataclass(frozen=True)
@@ -215,7 +216,8 @@ def _ice(s: IceSection, at: str) -> IceConfig:
         cracks=cracks, field=at)
 
 
-def _structure(s: StructureSection, at: str) -> StructureConfig:
+def _structure(s: StructureSection, at: str, water=None,
+               gravity=(0.0, 0.0, -9.81)) -> StructureConfig:
     loads = []
     for k, r in enumerate(s.loads):
         p = r.pulse
@@ -232,7 +234,7 @@ def _structure(s: StructureSection, at: str) -> StructureConfig:
         element_order=s.element_order, contact_group=s.contact_group,
         damping_alpha=s.damping.alpha, damping_beta=s.damping.beta, loads=tuple(loads),
         velocity=m.velocity, angular_velocity=m.angular_velocity, center=m.center, path=m.path,
-        field=at)
+        field=at, ship=ship_config(s, water, gravity))
 
 
 def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:
@@ -251,7 +253,8 @@ def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:
         stability_check_interval_steps=r.stability_check_interval_steps,
         output_per_rank=r.output_per_rank)
     ice = tuple(_ice(s, f"ice[{k}]") for k, s in enumerate(data.ice))
-    structures = tuple(_structure(s, f"structure[{k}]") for k, s in enumerate(data.structure))
+    structures = tuple(_structure(s, f"structure[{k}]", data.water, run.gravity)
+                       for k, s in enumerate(data.structure))
     sections = data.contact or tuple(  # default: every ice body meets every structure
         ContactSection(ice=b.name, structure=s.name) for b in ice for s in structures)
     contacts = tuple(ContactConfig(name=c.name or f"{c.ice}-{c.structure}", ice=c.ice,

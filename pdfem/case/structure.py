@@ -1,11 +1,14 @@
 """The ``[[structure]]`` section of a case file: an elastic finite-element structure (its mesh or
-mesh model, material, supports, damping and loads) or a rigid body with prescribed motion.
+mesh model, material, supports, damping and loads), a rigid body with prescribed motion, or a
+free-floating ship hull (``kind = "ship"``: its ``ship`` table, :class:`ShipSection`, and the
+:class:`ShipConfig` the run builds it from; docs/ship.md).
 
 The steel defaults are declared here with their source.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -20,7 +23,7 @@ from pdfem.case.shapes import MotionPath, directory
 STEEL = {"density": 7850.0, "youngs_modulus": 210e9, "poisson_ratio": 0.3}
 
 #: What a structure is.
-Kind = Choice("elastic", "rigid")
+Kind = Choice("elastic", "rigid", "ship")
 
 
 class SteelSection(Section):
@@ -113,6 +116,60 @@ class MotionSection(Section):
         return self
 
 
+class ShipSection(Section):
+    """A free-floating rigid hull (``kind = "ship"``): mass, inertia, start and propulsion."""
+
+    mass: Annotated[float, Positive("kg")] | None = Field(
+        None, description="Mass (kg). Default: the displaced mass of the hull as meshed "
+                          "(water density x submerged volume), i.e. floating at its mesh draught.")
+    center_of_gravity: Annotated[Vec3, Vector("m")] | None = Field(
+        None, description="Centre of gravity in the mesh's coordinates (m). Default: above "
+                          "the hull's centre of buoyancy, at the water surface.")
+    radii_of_gyration: Annotated[Vec3, Vector("m")] | None = Field(
+        None, description="Radii of gyration about the body x (roll), y (pitch), z (yaw) axes "
+                          "through the centre of gravity (m). Default: 0.4 x breadth, "
+                          "0.25 x length, 0.25 x length of the hull's waterline (typical ship "
+                          "values).")
+    initial_displacement: Annotated[Vec3, Vector("m")] = Field(
+        (0.0, 0.0, 0.0), description="Rigid displacement of the hull at t = 0 from the mesh "
+                                     "(m), e.g. to release it off equilibrium. Default: 0.")
+    initial_rotation: Annotated[Vec3, Vector("rad")] = Field(
+        (0.0, 0.0, 0.0), description="Rotation vector (axis x angle, rad) about the centre of "
+                                     "gravity applied at t = 0. Default: 0.")
+    initial_velocity: Annotated[Vec3, Vector("m/s")] = Field(
+        (0.0, 0.0, 0.0), description="Velocity of the centre of gravity at t = 0 (m/s). "
+                                     "Default: 0.")
+    initial_angular_velocity: Annotated[Vec3, Vector("rad/s")] = Field(
+        (0.0, 0.0, 0.0), description="Angular velocity at t = 0 (rad/s, world axes). "
+                                     "Default: 0.")
+    thrust: Annotated[float, Number("N")] = Field(
+        0.0, description="Constant thrust along the hull's x axis (N). Default: 0.")
+    surge_speed: Annotated[float, Number("m/s")] | None = Field(
+        None, description="Hold the x velocity of the centre of gravity at this speed (m/s), "
+                          "reached linearly over ramp_time. Default: free surge.")
+    ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Time to reach surge_speed from 0 (s). Default: 0 (at once).")
+
+
+@dataclass(frozen=True)
+class ShipConfig:
+    """A ship's inputs with the water and gravity of its case (SI)."""
+
+    section: ShipSection
+    water_density: float | None      # kg/m^3; None: the case has no [water]
+    water_level: float               # m
+    gravity: tuple[float, float, float]  # m/s^2
+
+
+def ship_config(s: "StructureSection", water, gravity) -> ShipConfig | None:
+    """The :class:`ShipConfig` of a ``kind = "ship"`` structure (``None`` for other kinds);
+    ``water``: the case's water section or ``None``."""
+    if s.kind != "ship":
+        return None
+    return ShipConfig(s.ship or ShipSection(), None if water is None else water.density,
+                      0.0 if water is None else water.level, tuple(gravity))
+
+
 def _is_gmsh(path: Path) -> bool:
     """Whether ``path`` starts like a gmsh .msh file (ASCII or binary: ``$MeshFormat``)."""
     try:
@@ -127,7 +184,8 @@ class StructureSection(Section):
 
     name: Name = Field(description="Structure name, unique among bodies and structures. Required.")
     kind: Kind = Field(
-        "elastic", description='"elastic" (finite elements) or "rigid" (prescribed motion). '
+        "elastic", description='"elastic" (finite elements), "rigid" (prescribed motion) or '
+                               '"ship" (free-floating rigid hull, 6 DOF, needs [water]). '
                                'Default: "elastic".')
     mesh: Name = Field(
         description="A model of models/ by name (hull_panel, propeller_blade, indenters), a .py "
@@ -164,6 +222,14 @@ class StructureSection(Section):
                     "`[[t, ux, uy, uz], ...]` (s, m), `angular_velocity` (rad/s), `center` (m). "
                     "Default: at rest.")
 
+    ship: ShipSection | None = Field(
+        None, description="Ships only (kind = \"ship\"): `mass` (kg), `center_of_gravity` (m), "
+                          "`radii_of_gyration` (m), `initial_displacement` (m), "
+                          "`initial_rotation` (rad), `initial_velocity` (m/s), "
+                          "`initial_angular_velocity` (rad/s), `thrust` (N), `surge_speed` "
+                          "(m/s), `ramp_time` (s). Default: floating at the mesh draught, at "
+                          "rest (docs/ship.md).")
+
     @field_validator("mesh")
     @classmethod
     def _mesh_file(cls, mesh: str, info: ValidationInfo) -> str:
@@ -197,6 +263,12 @@ class StructureSection(Section):
             key = "fixed_groups" if self.fixed_groups else "supports" if self.supports else "loads"
             raise fail("a rigid structure moves as prescribed by 'motion'; it takes no supports "
                        "or loads", key=key)
-        if self.kind == "elastic" and "motion" in self.model_fields_set:
+        if self.kind != "rigid" and "motion" in self.model_fields_set:
             raise fail("only a rigid structure (kind = \"rigid\") takes a motion", key="motion")
+        if self.kind != "ship" and self.ship is not None:
+            raise fail("only a ship (kind = \"ship\") takes a ship table", key="ship")
+        if self.kind == "ship" and (self.fixed_groups or self.loads or self.supports):
+            key = "fixed_groups" if self.fixed_groups else "supports" if self.supports else "loads"
+            raise fail("a ship floats free under gravity, water and ice; it takes no supports "
+                       "or loads (use ship.thrust or ship.surge_speed)", key=key)
         return self

@@ -8,7 +8,8 @@ the energy balance, a mesh check, checkpoints, and a line for the start-up repor
 calls only these methods, so it never asks which kind of structure it holds.
 
 Implementations: :class:`pdfem.fem.structure.ElasticStructure` (linear-elastic FE, explicit)
-and :class:`pdfem.fem.rigid.RigidBody` (prescribed rigid motion).
+and :class:`pdfem.fem.rigid.RigidBody` (prescribed rigid motion) and
+:class:`pdfem.fem.ship.Ship` (a free-floating rigid hull).
 
 Adding a kind
 -------------
@@ -84,6 +85,11 @@ class Structure(SurfaceBody, ABC):
         """One history row per output frame (energies J, support reactions N); empty: none."""
         return {}
 
+    def motion_history(self) -> dict[str, float | np.ndarray]:
+        """One row of rigid-body motion every coupling step (a free ship: position, rotation,
+        velocities); empty: none."""
+        return {}
+
     def describe(self) -> str:
         """One line for the start-up report."""
         return f"structure '{self.name}'"
@@ -95,6 +101,11 @@ class Structure(SurfaceBody, ABC):
 
     def strain_energy(self) -> float:
         """Elastic energy (J) the structure holds (0 for a rigid body)."""
+        return 0.0
+
+    def potential_energy(self) -> float:
+        """Potential energy (J) of the structure in fields it moves through (a floating ship:
+        gravity and hydrostatics); 0 by default."""
         return 0.0
 
     def applied_load(self) -> np.ndarray:

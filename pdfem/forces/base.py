@@ -44,3 +44,12 @@ class ParticleForce(ABC):
         """Energy (J) this force has taken out of the ice since the start (0 for a conservative
         force); the same on every rank."""
         return 0.0
+
+    def checkpoint_state(self) -> dict:
+        """Counters this force keeps between steps (energy taken out, positions at its last
+        evaluation), for a checkpoint: per-particle arrays in global order on rank 0 (``None``
+        elsewhere; collective under MPI). Default: nothing (a force without memory)."""
+        return {}
+
+    def restore_state(self, state: dict) -> None:
+        """Put a state from :meth:`checkpoint_state` back, exactly. Default: nothing."""

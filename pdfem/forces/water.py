@@ -118,6 +118,38 @@ class Water(ParticleForce):
         return float(sum(b.owned_sum(s.dissipated * s.owned) for b, s in
                          zip(self.bodies, self._state)))
 
+    _SAVED = ("dissipated", "water_kinetic", "drag_prev", "am_prev", "y_prev")
+
+    def checkpoint_state(self) -> dict:
+        """Per body ``k`` (in order) the drag loss ``dissipated_<k>`` and the water's kinetic
+        energy ``water_kinetic_<k>`` per particle (J), the drag and added-mass forces at the
+        last evaluation ``drag_prev_<k>``, ``am_prev_<k>`` (N/m^3) and the positions then
+        ``y_prev_<k>`` (m), in global particle order on rank 0 (``None`` elsewhere; collective
+        under MPI), so that a restart continues the energy history bit for bit."""
+        out: dict = {}
+        for k, (b, s) in enumerate(zip(self.bodies, self._state)):
+            for key in self._SAVED:
+                values = getattr(s, key)
+                out[f"{key}_{k}"] = b.gather(b.y if values is None else values)
+        return None if any(v is None for v in out.values()) else out
+
+    def restore_state(self, state: dict) -> None:
+        """Put a state from :meth:`checkpoint_state` back into the owned particles (a
+        checkpoint from any number of ranks: the arrays are in global order)."""
+        for k, (b, s) in enumerate(zip(self.bodies, self._state)):
+            ids = b.owned_reference()[0]
+            own = np.asarray(b.owned, dtype=bool)
+            if s.y_prev is None:
+                s.y_prev = b.y.copy()
+            for key in self._SAVED:
+                saved = np.asarray(state[f"{key}_{k}"], dtype=np.float64)
+                target = getattr(s, key)
+                if len(saved) != len(b.global_body.x0):
+                    raise ValueError(f"water on ice body '{b.name}': {key} has {len(saved)} "
+                                     f"entries in the checkpoint, the body "
+                                     f"{len(b.global_body.x0)}")
+                target[own] = saved[ids]
+
     def submerged_volumes(self) -> list[float]:
         """Submerged volume of each body (m^3, over all ranks): sum of vol * phi."""
         out = []

@@ -16,6 +16,7 @@ from pdfem.errors import InputError
 from pdfem.fem.base import Structure
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.rigid import RigidBody
+from pdfem.fem.ship import Ship
 from pdfem.geometry.path import DisplacementPath
 from pdfem.fem.structure import ElasticStructure
 
@@ -66,6 +67,7 @@ def _elastic(cfg: StructureConfig, path: Path, file: str) -> ElasticStructure:
 STRUCTURE_KINDS: dict[str, Callable[[StructureConfig, Path, str], Structure]] = {
     "elastic": _elastic,
     "rigid": _rigid,
+    "ship": Ship.from_case,
 }
 """The case's structure ``kind`` -> builder ``(config, mesh path, case file) -> Structure``.
 A new kind: its :class:`~pdfem.fem.base.Structure` in a new file of :mod:`pdfem.fem` and one

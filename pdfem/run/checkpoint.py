@@ -11,9 +11,12 @@ of a coupling step:
   bond), ``theta``; attrs ``time`` (s), ``external_work`` (J, the work of the velocity
   constraints) and, from a run on several ranks, ``external_work_ranks`` (each rank's part);
 - ``/structure/<name>``: the ``checkpoint_state()`` of each structure (elastic: u, v, a, v_half, f_ext,
-  f_damp, time, surface_forces; rigid: time, time_carry, surface_forces);
+  f_damp, time, surface_forces; rigid: time, time_carry, surface_forces; ship: c, q, v, L,
+  time, thrust and surge work, surface_forces);
 - ``/coupler``: :meth:`pdfem.coupling.coupler.Coupler.checkpoint_state` (time, pending contact loads,
   contact work counters, last pair loads);
+- ``/forces/<i>``: the ``checkpoint_state()`` of the coupler's particle forces that keep one
+  (water: drag loss and water kinetic energy per particle, J, in global order);
 - root attrs ``format``, ``pdfem_version``, ``case_sha256`` (SHA-256 of the case text: a
   checkpoint refuses to restart another case).
 
@@ -73,6 +76,7 @@ class Checkpoint:
     ice: dict[str, dict]
     structures: dict[str, dict]
     coupler: dict
+    forces: dict = field(default_factory=dict)
 
 
 def case_hash(text: str) -> str:
@@ -124,6 +128,7 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
     """
     ice = [(b.name, b.checkpoint_state()) for b in bodies]  # collective under MPI
     coupler_state = coupler.checkpoint_state()  # collective under MPI
+    forces = [f.checkpoint_state() for f in coupler.forces]  # collective under MPI
     if rank != 0:
         return None
     path = Path(path)
@@ -144,6 +149,9 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         for s in structures:
             _put(f.create_group(f"structure/{s.name}"), s.checkpoint_state())
         _put(f.create_group("coupler"), coupler_state)
+        for i, state in enumerate(forces):
+            if state:
+                _put(f.create_group(f"forces/{i}"), state)
     with open(tmp, "rb+") as fh:
         os.fsync(fh.fileno())
     os.replace(tmp, path)
@@ -197,7 +205,8 @@ def read_checkpoint(path: str | os.PathLike, case_text: str, case_file: str) -> 
         ice = {k: _get(g) for k, g in f.get("ice", {}).items()}
         structures = {k: _get(g) for k, g in f.get("structure", {}).items()}
         coupler = _get(f["coupler"])
-    return Checkpoint(p, driver, ice, structures, coupler)
+        forces = {int(k): _get(g) for k, g in f.get("forces", {}).items()}
+    return Checkpoint(p, driver, ice, structures, coupler, forces)
 
 
 def restore(checkpoint: Checkpoint, bodies: list, structures: list, coupler) -> None:
@@ -219,6 +228,9 @@ def restore(checkpoint: Checkpoint, bodies: list, structures: list, coupler) -> 
         for s in structures:
             s.restore_state(checkpoint.structures[s.name])
         coupler.restore_state(checkpoint.coupler)
+        for i, force in enumerate(coupler.forces):
+            if i in checkpoint.forces:
+                force.restore_state(checkpoint.forces[i])
     except (KeyError, ValueError) as exc:
         raise InputError(str(checkpoint.path), "--restart",
                          f"the checkpoint does not fit the case's bodies: {exc}") from None

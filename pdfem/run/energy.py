@@ -3,6 +3,7 @@
     stored     = ice kinetic + ice strain + gravity potential + short-range potential
                  (+ further particle-force potentials)
                  + structure kinetic + structure kinetic correction + structure strain
+                 + structure potential (a floating ship's gravity and hydrostatics)
     supplied   = initial stored + work of the ice's constraints (``external_work``)
                  + work of prescribed structure motions (``rigid_body_work``)
                  + work of the structures' applied loads (``load_work``)
@@ -34,7 +35,7 @@ ICE_STORED = ("kinetic", "strain", "gravity_potential")
 """Stored-energy keys summed first (the ice and its body-force field), in order."""
 
 SYSTEM_STORED = ("structure_kinetic", "structure_kinetic_correction", "structure_strain",
-                 "short_range_potential")
+                 "structure_potential", "short_range_potential")
 """Stored-energy keys summed next (structures and interactions), in order."""
 
 SUPPLIED = ("external_work", "rigid_body_work", "load_work", "support_work")
@@ -84,6 +85,7 @@ class EnergyBalance:
              "structure_kinetic": sum(x.kinetic_energy() for x in s),
              "structure_kinetic_correction": sum(t["kinetic_correction"] for t in terms),
              "structure_strain": sum(x.strain_energy() for x in s),
+             "structure_potential": sum(x.potential_energy() for x in s),
              "rigid_body_work": -sum(c.contact_work[id(x)] for x in s if x.prescribed_motion),
              "load_work": sum(t["load_work"] for t in terms),
              "support_work": sum(t["support_work"] for t in terms),

@@ -113,7 +113,8 @@ class StructureSource(Source):
 class LoadSource(Source):
     """The loads on a structure every coupling step (``loads/<name>``): the ice load (``force``
     N, ``moment`` N m about the origin, particle ``contacts``), summed over its contact pairs,
-    and the resultant of its applied loads (``applied``, N)."""
+    and the resultant of its applied loads (``applied``, N); for a structure that moves freely
+    (a ship) its motion (``motions/<name>``, :meth:`~pdfem.fem.base.Structure.motion_history`)."""
 
     def __init__(self, structure, coupler) -> None:
         self.structure, self.coupler, self.name = structure, coupler, structure.name
@@ -124,8 +125,10 @@ class LoadSource(Source):
 
     def step_rows(self) -> Rows:
         force, moment, n = self.coupler.structure_load(self.structure)
+        motion = self.structure.motion_history()  # a free ship's 6 DOF (motions/<name>)
         return {f"loads/{self.name}": {"force": force, "moment": moment, "contacts": n,
-                                       "applied": self.structure.applied_load()}}
+                                       "applied": self.structure.applied_load()},
+                **({f"motions/{self.name}": motion} if motion else {})}
 
 
 class RegionSource(Source):
