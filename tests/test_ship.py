@@ -252,3 +252,19 @@ def test_floe_striking_the_side_pushes_the_ship(tmp_path):
     assert ship == pytest.approx(p[0] - p[-1], rel=1e-4)
     e = r["histories"]["energy"]
     assert np.abs(e["residual"]).max() < 5e-3 * e["kinetic"][0]
+
+
+def test_hull_groups_are_load_patches_that_tile_the_hull(hull):
+    """The hull's bow, shoulder, midship and stern groups are load patches that together cover
+    every contact triangle exactly once, and the bow panel lies on the bow (the partition the
+    model builds; patch forces then sum to the hull's total load)."""
+    from pdfem.fem.surface_patches import surface_patches
+
+    pts, tri = read_surface(hull, "contact")
+    patches = surface_patches(hull, "contact", pts, tri)
+    parts = ("bow", "shoulder", "midship", "stern")
+    assert set(parts) <= set(patches)
+    cover = sum(patches[p].astype(int) for p in parts)
+    assert np.all(cover == 1)
+    assert patches["bow_panel"].any()
+    assert not np.any(patches["bow_panel"] & ~patches["bow"])

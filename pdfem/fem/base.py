@@ -90,6 +90,11 @@ class Structure(SurfaceBody, ABC):
         velocities); empty: none."""
         return {}
 
+    def surface_groups(self) -> dict[str, np.ndarray]:
+        """``{patch name: (T,) bool}`` over the contact triangles: the load patches whose force
+        histories the run writes (:mod:`pdfem.coupling.facet_loads`); empty: none."""
+        return {}
+
     def describe(self) -> str:
         """One line for the start-up report."""
         return f"structure '{self.name}'"

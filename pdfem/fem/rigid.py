@@ -28,6 +28,7 @@ import numpy as np
 from pdfem.fem.mesh import load_mesh, read_msh_groups
 from pdfem.fem.base import Structure
 from pdfem.fem.surface import orient_outward, split_quads
+from pdfem.fem.surface_patches import surface_patches
 
 
 def rotation_matrix(rotation_vector) -> np.ndarray:
@@ -134,13 +135,16 @@ class RigidBody(Structure):
         self.time = 0.0
         self._time_carry = 0.0
         self._surface_forces = np.zeros((len(self.x0), 3))
+        self.patches: dict[str, np.ndarray] = {}
         self._update_pose()
 
     @classmethod
     def from_msh(cls, path: str | os.PathLike, group: str = "contact", **kwargs) -> "RigidBody":
         """Build from a named surface group of a gmsh file; ``kwargs`` as for the constructor."""
         pts, tri = read_surface(path, group)
-        return cls(pts, tri, **kwargs)
+        body = cls(pts, tri, **kwargs)
+        body.patches = surface_patches(path, group, body.x0, body.surface_triangles)
+        return body
 
     # ------------------------------------------------------------------ pose
     def centre(self) -> np.ndarray:
@@ -208,8 +212,9 @@ class RigidBody(Structure):
         return {"u": self.surface_points() - self.x0, "v": self.surface_velocities()}
 
     def surface_groups(self) -> dict[str, np.ndarray]:
-        """No load patches: a rigid body's file is read for its contact group only."""
-        return {}
+        """The load patches: the surface mesh's other groups on the contact surface
+        (:func:`pdfem.fem.surface_patches.surface_patches`; set by :meth:`from_msh`)."""
+        return self.patches
 
     def describe(self) -> str:
         """Surface nodes."""

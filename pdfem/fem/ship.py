@@ -41,6 +41,7 @@ from pdfem.errors import InputError
 from pdfem.fem.base import Structure
 from pdfem.fem.hydrostatics import hydrostatics
 from pdfem.fem.rigid import read_surface
+from pdfem.fem.surface_patches import surface_patches
 from pdfem.fem.surface import orient_outward
 
 
@@ -117,6 +118,7 @@ class Ship(Structure):
                  thrust: float = 0.0, surge_speed: float | None = None, ramp_time: float = 0.0,
                  name: str = "ship") -> None:
         self.name = name
+        self.patches: dict[str, np.ndarray] = {}
         self.x_mesh = np.ascontiguousarray(points, dtype=np.float64)
         self.surface_triangles = orient_outward(self.x_mesh, np.asarray(triangles, np.int64))
         self.density, self.level = float(density), float(level)
@@ -153,7 +155,9 @@ class Ship(Structure):
     def from_msh(cls, path, group: str = "contact", **kwargs) -> "Ship":
         """Build from a closed surface group of a gmsh file; ``kwargs`` as the constructor's."""
         pts, tri = read_surface(path, group)
-        return cls(pts, tri, **kwargs)
+        ship = cls(pts, tri, **kwargs)
+        ship.patches = surface_patches(path, group, ship.x_mesh, ship.surface_triangles)
+        return ship
 
     @classmethod
     def from_case(cls, cfg, path, file: str = "<case>") -> "Ship":
@@ -176,13 +180,16 @@ class Ship(Structure):
             wet = pts[pts[:, 2] <= ship.water_level]
             span = np.ptp(wet if len(wet) else pts, axis=0)
             k = (0.4 * span[1], 0.25 * span[0], 0.25 * span[0])
-        return cls(pts, tri, density=ship.water_density, level=ship.water_level,
+        body = cls(pts, tri, density=ship.water_density, level=ship.water_level,
                    gravity=ship.gravity, radii_of_gyration=k, mass=s.mass,
                    centre_of_gravity=s.center_of_gravity,
                    initial_displacement=s.initial_displacement,
                    initial_rotation=s.initial_rotation, initial_velocity=s.initial_velocity,
                    initial_angular_velocity=s.initial_angular_velocity, thrust=s.thrust,
                    surge_speed=s.surge_speed, ramp_time=s.ramp_time, name=cfg.name)
+        body.patches = surface_patches(path, cfg.contact_group, body.x_mesh,
+                                       body.surface_triangles)
+        return body
 
     # ------------------------------------------------------------------ dynamics
     def _update(self) -> None:
@@ -285,6 +292,11 @@ class Ship(Structure):
     def output_fields(self) -> dict[str, np.ndarray]:
         """``u`` displacement (m) and ``v`` velocity (m/s) of the hull nodes."""
         return {"u": self._x - self.x0, "v": self._v.copy()}
+
+    def surface_groups(self) -> dict[str, np.ndarray]:
+        """The load patches: the hull mesh's other groups (bow, shoulder, midship, stern,
+        bow_panel) on the contact surface (:mod:`pdfem.fem.surface_patches`)."""
+        return self.patches
 
     def describe(self) -> str:
         """Mass, displacement, inertia."""
