@@ -25,7 +25,10 @@ Shape of a case file::
                                # (exit 2) unless this is true (then only a warning)
     checkpoint_interval_steps = 0      # write <out>/checkpoint.h5 every N coupling steps (0 = off)
     checkpoint_interval_minutes = 30.0 # ... and every M minutes of wall time (0 = off)
-    stability_check_interval_steps = 10  # coupling steps between blow-up checks (speed, NaN)
+    stability_check_interval_steps = 10  # coupling steps between blow-up checks (speed, NaN,
+                               # energy balance)
+    energy_tolerance = 0.01    # energy the run may create, fraction of the energy supplied;
+                               # more stops the run (exit 3) with the energy budget
     output_per_rank = false    # MPI: each rank writes its ice particles to results.rank<R>.h5
 
     [[ice]]
@@ -67,7 +70,8 @@ Shape of a case file::
 Checkpoints hold the whole state (ice, structures, contact, clock, output counters); continue
 a run with ``pdfem run CASE --restart <out>/checkpoint.h5``, which appends to the same results
 file. A run whose state blows up (NaN/Inf, a particle moving more than a horizon in one step,
-energy growing without work input) stops with exit 3 and a diagnosis (:mod:`pdfem.run.blowup`).
+energy created beyond ``run.energy_tolerance`` of the energy supplied) stops with exit 3
+and a diagnosis (:mod:`pdfem.run.blowup`).
 
 The coupling step is the larger of the ice and structure stable steps; the faster side takes
 ``run.substeps`` steps per coupling step (0 or absent = chosen automatically).

@@ -32,7 +32,7 @@ from pdfem.parallel.comm import world
 from pdfem.run.blowup import BlowupMonitor
 from pdfem.run.build import Setup, build
 from pdfem.run.checkpoint import CHECKPOINT_NAME, read_checkpoint, restore
-from pdfem.run.energy import EnergyBalance
+from pdfem.run.energy import EnergyBalance, budget_text
 from pdfem.run.loop import LoopState, run_loop
 from pdfem.run.outputs import Outputs, open_outputs, sources
 from pdfem.run.preflight import preflight
@@ -52,14 +52,22 @@ class RunSummary:
     bonds: int
     broken_bonds: int
     frames: int
+    energy: dict | None = None   # the energy row of the last frame (J), for the budget
+
+    def budget(self) -> str:
+        """The energy budget at the end of the run (:func:`pdfem.run.energy.budget_text`)."""
+        if not self.energy:
+            return ""
+        return f"  energy budget at t = {self.end_time:.4e} s (% of the work in):\n" + \
+            budget_text(self.energy)
 
     def text(self) -> str:
-        """A few lines for the terminal."""
+        """A few lines for the terminal, the energy budget last."""
         return (f"pdfem: {self.steps} steps of {self.time_step:.3e} s to t = {self.end_time:.4e} s "
                 f"in {self.wall_seconds:.1f} s wall\n"
                 f"  particles {self.particles:,}, bonds {self.bonds:,}, broken {self.broken_bonds:,}\n"
                 f"  results: {self.results} ({self.frames} frames; open {self.results.with_suffix('.xdmf')} "
-                "in ParaView)")
+                "in ParaView)" + ("\n" + self.budget() if self.energy else ""))
 
 
 def _start(case: Case, setup: Setup, outputs: Outputs, ckpt, say) -> LoopState:
@@ -145,7 +153,8 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     try:
         outputs.register(setup)
         monitor = BlowupMonitor(setup.bodies, setup.dt / setup.n_ice, setup.stable,
-                                case.run.stability_check_interval_steps)
+                                case.run.stability_check_interval_steps,
+                                energy_tolerance=case.run.energy_tolerance)
         state = _start(case, setup, outputs, ckpt, say)
     except BaseException:
         outputs.close()
@@ -158,11 +167,13 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
                                         (f"every {minutes:g} min" if minutes else "")) if w)
         say(f"  checkpoints {when} to {ckpt_path}")
     say(f"  set-up {time.perf_counter() - t_setup:.1f} s; running")
-    bar = Progress(case.run.end_time, enabled=False if quiet else progress)
+    bar = Progress(case.run.end_time, enabled=False if quiet else progress,
+                   start_time=(state.first - 1) * setup.dt, start_step=state.first - 1)
     try:
         done = run_loop(case, setup, outputs, monitor, state, comm, bar, ckpt_path)
     finally:  # -- 3. finish
         wall = bar.finish()
         outputs.close()
     return RunSummary(writer.path, done.step, setup.dt, setup.nsteps * setup.dt, wall,
-                      setup.particles, setup.bonds, setup.cut + done.broken, done.frames)
+                      setup.particles, setup.bonds, setup.cut + done.broken, done.frames,
+                      done.energy)
