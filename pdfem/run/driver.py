@@ -28,12 +28,14 @@ from pathlib import Path
 
 from pdfem import __version__
 from pdfem.case.schema import Case
+from pdfem.output.files import inside
 from pdfem.parallel.comm import world
 from pdfem.run.blowup import BlowupMonitor
 from pdfem.run.build import Setup, build
 from pdfem.run.checkpoint import CHECKPOINT_NAME, read_checkpoint, restore
 from pdfem.run.energy import EnergyBalance, budget_text
 from pdfem.run.loop import LoopState, run_loop
+from pdfem.run.outdir import OutDirLock, check_out_dir
 from pdfem.run.outputs import Outputs, open_outputs, sources
 from pdfem.run.preflight import preflight
 from pdfem.run.progress import Progress
@@ -102,7 +104,8 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     case
         The validated case (:func:`pdfem.case.schema.load_case`).
     out_dir
-        Output directory (created).
+        Output directory (created; checked to be writable and locked for this run:
+        :mod:`pdfem.run.outdir`).
     quiet
         No messages on standard output and no progress line.
     progress
@@ -123,21 +126,28 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     ------
     InputError
         Bad input (including a run too large for the memory, an unstable ``run.time_step``, a
-        checkpoint of another case).
+        checkpoint of another case, an output directory that is a file, not writable or in use
+        by another run).
     InstabilityError
         The run blew up; the results file holds every frame up to then (and one at the
         failure when the state is still finite).
     """
     comm = comm or world()
+    out = check_out_dir(out_dir)
+    with OutDirLock(out, enabled=comm.rank == 0):  # one run per output directory
+        return _run(case, out, quiet, progress, log, restart, comm)
+
+
+def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart, comm
+         ) -> RunSummary:
+    """:func:`run_case` in its checked and locked output directory ``out``."""
     quiet = quiet or comm.rank != 0  # one rank speaks for all
     say = (lambda s: None) if quiet else (log or (lambda s: print(s, flush=True)))
-    out = Path(out_dir)
     ckpt = read_checkpoint(restart, case.text, case.file) if restart is not None else None
     report = preflight(case)
     say(f"pdfem {__version__}: {case.file}{(' - ' + case.run.title) if case.run.title else ''}")
     for line in report:
         say(line)
-    out.mkdir(parents=True, exist_ok=True)
     t_setup = time.perf_counter()
     # -- 1. build
     steps = None if ckpt is None else (ckpt.driver.time_step, ckpt.driver.ice_substeps,
@@ -160,7 +170,7 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         outputs.close()
         raise
     # -- 2. loop
-    ckpt_path = out / CHECKPOINT_NAME
+    ckpt_path = inside(out, CHECKPOINT_NAME)
     every, minutes = case.run.checkpoint_interval_steps, case.run.checkpoint_interval_minutes
     if every or minutes:
         when = " and ".join(w for w in ((f"every {every:,} steps" if every else ""),

@@ -116,8 +116,7 @@ class EnergyBalance:
         return self.initial + _fold(e, SUPPLIED)
 
 
-BUDGET_LINES = (("work in (initial energy + work of constraints, loads, supports, rigid bodies)",
-                 ("supplied",)),
+BUDGET_LINES = (("work in (initial energy + work done on the system)", ("supplied",)),
                 ("ice kinetic", ("kinetic",)),
                 ("ice strain", ("strain",)),
                 ("structure kinetic", ("structure_kinetic", "structure_kinetic_correction")),
@@ -146,5 +145,5 @@ def budget(row: dict[str, float]) -> list[tuple[str, float, float]]:
 
 def budget_text(row: dict[str, float]) -> str:
     """The energy budget as aligned lines (J and % of the energy supplied)."""
-    return "\n".join(f"    {label:<76s} {value:12.5g} J {pct:8.3f} %"
+    return "\n".join(f"    {label:<52s} {value:12.5g} J {pct:8.3f} %"
                      for label, value, pct in budget(row))
