@@ -8,7 +8,8 @@ with its meaning, unit and default, in a section model (:mod:`pdfem.case.run`,
 unknown field raises :class:`pdfem.errors.InputError` naming the file, the field, the value and
 what would be valid. The validated case (:mod:`pdfem.case.config`) is what :mod:`pdfem.run`
 reads. :func:`json_schema` is the JSON Schema of the file (``pdfem schema``). Case files are
-data: nothing in them is evaluated.
+data: nothing in them is evaluated, but a ``.py`` model script named by a structure's ``mesh``
+is executed (Python code, :mod:`pdfem.meshing.runner`) when the run meshes the structure.
 
 Shape of a case file::
 

@@ -9,6 +9,11 @@ A model is a module of ``pdfem.models`` named by its name, or any ``.py`` file, 
 (see :mod:`pdfem.meshing` for the helpers a model uses). :func:`parse_set` splits ``--set``
 strings; :func:`mesh_model` converts them to the parameters' types
 (:func:`pdfem.meshing.parameters.coerce_parameters`) and runs the model's ``build``.
+
+A model script is Python code and is executed (imported, then its ``build`` called) with the
+user's permissions. An exception it raises is reported as bad input
+(:class:`~pdfem.meshing.parameters.ModelParameterError`, exit 2) naming the script and the line
+(:func:`script_error`).
 """
 
 from __future__ import annotations
