@@ -153,7 +153,8 @@ class BlowupMonitor:
             f"the {supplied:.4g} J supplied, above run.energy_tolerance = "
             f"{self.energy_tolerance:g} of it (+ round-off floor {self.energy_floor:.2g} J); "
             f"{'; '.join(parts)}. Energy budget:\n{budget_text(row)}\nThe fastest particles "
-            f"are in ice body '{name}'; {self._fix(name)}")
+            f"are in ice body '{name}'; {self._fix(name)}; or, if an energy error of this size "
+            "is acceptable for the case, raise run.energy_tolerance")
 
     def _worst(self) -> str:
         """Name of the body with the fastest particle (the likely seat of the instability)."""
