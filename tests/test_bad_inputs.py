@@ -102,7 +102,7 @@ CORPUS = [
     ("structure_mesh_not_a_mesh", RUN + ICE + STRUCT, {"block.msh": "this is not a mesh\n"},
      ["structure[0].mesh", "not a gmsh"]),
     ("structure_group_missing", RUN + ICE + STRUCT.replace("['fixed']", "['clamped']"),
-     {"block.msh": None}, ["structure[0].mesh", "clamped", "fixed"]),
+     {"block.msh": None}, ["structure[0].fixed_groups[0]", "clamped", "fixed"]),
     ("structure_degenerate_element", RUN + ICE + STRUCT.replace("fixed_groups = ['fixed']\n", ""),
      {"block.msh": DEGENERATE_MSH}, ["structure[0].mesh", "degenerate"]),
     ("structure_kind_unknown", RUN + ICE + STRUCT + "kind = 'plastic'\n", {"block.msh": None},

@@ -106,15 +106,28 @@ def test_motion_check_speed_limit_and_nan():
     BlowupMonitor([bad], h, {"b": h}, 5).check_motion(1e-3, 3)  # not a check step
 
 
+def _row(supplied, residual, **terms):
+    row = {"supplied": supplied, "residual": residual, "stored": supplied - residual,
+           "contact_dissipated": 0.0, "fracture_dissipated": 0.0, "damping_dissipated": 0.0,
+           "kinetic": supplied - residual, "strain": 0.0}
+    row.update(terms)
+    return row
+
+
 def test_energy_check_threshold():
-    """Energy created up to the energy supplied (plus the round-off floor 1/2 E V 1e-10) passes;
-    more stops the run."""
+    """Energy created up to energy_tolerance (1 %) of the energy supplied plus the round-off
+    floor (1/2 E V 1e-10) passes; more stops the run with the budget. A negative dissipation
+    term counts as energy created (second law: dissipation only takes energy out)."""
     b = _body([[0.0, 0.0, 0.0]])
     m = BlowupMonitor([b], 1e-6, {"b": 1e-6}, 1)
     floor = 0.5 * 4e9 * 1e-6 * 1e-10
     assert m.energy_floor == pytest.approx(floor)
-    m.check_energy(0.1, 10, created=2.0 + 0.9 * floor, supplied=2.0)
-    with pytest.raises(InstabilityError, match="energy grew without work input"):
-        m.check_energy(0.1, 10, created=2.0 + 1.1 * floor, supplied=2.0)
+    m.check_energy(0.1, 10, _row(2.0, -(0.02 + 0.9 * floor)))
+    with pytest.raises(InstabilityError, match=r"created energy.*1\.0\d* %.*residual.*budget"):
+        m.check_energy(0.1, 10, _row(2.0, -(0.02 + 1.1 * floor)))
+    with pytest.raises(InstabilityError, match="fracture_dissipated.*negative"):
+        m.check_energy(0.1, 10, _row(2.0, 0.0, fracture_dissipated=-0.03))
+    loose = BlowupMonitor([b], 1e-6, {"b": 1e-6}, 1, energy_tolerance=0.5)
+    loose.check_energy(0.1, 10, _row(2.0, -0.9))  # 45 % created, 50 % allowed
     with pytest.raises(InstabilityError, match="NaN/Inf"):
-        m.check_energy(0.1, 10, created=np.nan, supplied=2.0)
+        m.check_energy(0.1, 10, _row(2.0, np.nan))

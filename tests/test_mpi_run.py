@@ -23,6 +23,7 @@ CYLINDER = """
 [run]
 end_time = 1.2e-3
 output_interval = 4.0e-4
+energy_tolerance = 0.1  # coarse first contact: 1.3-3.2 % of the input (not what this tests)
 [[ice]]
 name = "plate"
 dx = 0.02
@@ -40,6 +41,7 @@ PANEL = """
 [run]
 end_time = 1.0e-3
 output_interval = 5.0e-4
+energy_tolerance = 0.1  # coarse first contact: 1.3-3.2 % of the input (not what this tests)
 [[ice]]
 name = "floe"
 dx = 0.04

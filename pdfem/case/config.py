@@ -41,6 +41,7 @@ class RunConfig:
     checkpoint_interval_steps: int
     checkpoint_interval_minutes: float
     stability_check_interval_steps: int
+    energy_tolerance: float
     output_per_rank: bool
 
 
@@ -251,6 +252,7 @@ def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:
         checkpoint_interval_steps=r.checkpoint_interval_steps,
         checkpoint_interval_minutes=r.checkpoint_interval_minutes,
         stability_check_interval_steps=r.stability_check_interval_steps,
+        energy_tolerance=r.energy_tolerance,
         output_per_rank=r.output_per_rank)
     ice = tuple(_ice(s, f"ice[{k}]") for k, s in enumerate(data.ice))
     structures = tuple(_structure(s, f"structure[{k}]", data.water, run.gravity)

@@ -13,6 +13,7 @@ TOML gives no nulls, so ``None`` in a field means "not given".
 from __future__ import annotations
 
 import math
+import re
 from typing import Annotated, Any, Iterator, Literal
 
 from annotated_types import GroupedMetadata, Interval
@@ -118,6 +119,22 @@ def _name_check(v: Any) -> str:
 
 #: A non-empty string (a name, a mesh group, a file).
 Name = Annotated[str, Field(min_length=1), BeforeValidator(_name_check)]
+
+
+_IDENTIFIER = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]*\Z")
+
+
+def _identifier_check(v: Any) -> str:
+    if not isinstance(v, str) or not _IDENTIFIER.match(v):
+        raise fail("expected a name of letters, digits, '_', '-' and '.' (not first; no spaces, "
+                   "slashes or other characters): it names files and groups of the results", v)
+    return v
+
+
+#: A name that becomes a file or HDF5 group name (ice bodies, structures, contacts, monitors):
+#: letters, digits, ``_``, ``-`` and ``.`` (not first).
+Identifier = Annotated[str, Field(pattern="^" + _IDENTIFIER.pattern[:-2] + "$"),
+                       BeforeValidator(_identifier_check)]
 
 
 def _text_check(v: Any) -> str:

@@ -12,7 +12,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from pdfem.case.fields import Name, Number, Positive, Section, Tables, Vec3, Vector, fail
+from pdfem.case.fields import (Identifier, Name, Number, Positive, Section, Tables, Vec3,
+                               Vector, fail)
 from pdfem.case.shapes import (BoxShape, MotionPath, NamedRegionSection, RegionName,
                                RegionSection, ShapeSection)
 
@@ -170,7 +171,8 @@ class CrackSection(Section):
 class IceSection(Section):
     """One peridynamic ice body."""
 
-    name: Name = Field(description="Body name, unique among bodies and structures. Required.")
+    name: Identifier = Field(description="Body name (letters, digits, _ - and ., not first), "
+                                         "unique among bodies and structures. Required.")
     dx: Annotated[float, Positive("m")] = Field(description="Lattice spacing (m). Required.")
     horizon_factor: Annotated[float, Number(gt=1.0)] = Field(
         3.015, description="Horizon as a multiple of dx (-). Not with horizon. Default: 3.015.")

@@ -10,7 +10,7 @@ from typing import Annotated
 
 from pydantic import Field
 
-from pdfem.case.fields import Name, Number, Section, Vec3, Vector
+from pdfem.case.fields import Identifier, Name, Number, Section, Vec3, Vector
 
 
 class ContactSection(Section):
@@ -20,7 +20,7 @@ class ContactSection(Section):
                                   "every ice body meets every structure).")
     structure: Name = Field(description="Name of the structure whose contact surface it meets. "
                                         "Required.")
-    name: Name | None = Field(
+    name: Identifier | None = Field(
         None, description='Name of the pair (its load history). Default: `"<ice>-<structure>"`.')
     friction: Annotated[float, Number(ge=0.0)] = Field(
         0.0, description="Coulomb friction coefficient (-). Default: 0.")
@@ -32,7 +32,8 @@ class ContactSection(Section):
 class MonitorSection(Section):
     """A probe on an elastic structure, recorded at every coupling step."""
 
-    name: Name = Field(description="Probe name, unique among monitors. Required.")
+    name: Identifier = Field(description="Probe name (letters, digits, _ - and ., not first), "
+                                         "unique among monitors. Required.")
     structure: Name = Field(description="Name of the (elastic) structure. Required.")
     point: Annotated[Vec3, Vector("m")] = Field(
         description="Probe point (m): displacement of the nearest node and von Mises stress of "

@@ -3,7 +3,9 @@ pydantic) -> :class:`~pdfem.case.config.Case`.
 
 The first validation error becomes one :class:`pdfem.errors.InputError` naming the file, the
 dotted field path (``run.end_time``, ``ice[0].material.poisson_ratio``), the value and what
-would be valid. Case files are data: nothing in them is evaluated.
+would be valid. Case files are data: nothing in them
+is evaluated, but a ``.py`` model script named by a structure's ``mesh`` is executed
+(Python code, :mod:`pdfem.meshing.runner`) when the run meshes the structure.
 """
 
 from __future__ import annotations

@@ -51,7 +51,12 @@ class RunSection(Section):
                           "0 = never. Default: 30.")
     stability_check_interval_steps: Annotated[int, Whole(1)] = Field(
         10, description="Coupling steps between blow-up checks (NaN, runaway particles, energy "
-                        "growth). Default: 10.")
+                        "created beyond energy_tolerance). Default: 10.")
+    energy_tolerance: Annotated[float, Number(gt=0.0, le=1.0)] = Field(
+        0.01, description="Energy the run may create, as a fraction (-) of the energy supplied "
+                          "(initial energy + work in, J), checked every "
+                          "stability_check_interval_steps; more stops the run (exit 3) with the "
+                          "energy budget. In (0, 1]. Default: 0.01 (1 %).")
     output_per_rank: Boolean = Field(
         False, description="On several MPI ranks, each rank writes its own ice particles to "
                            "`results.rank<R>.h5` instead of sending them to rank 0 (for very large "

@@ -8,7 +8,8 @@ with its meaning, unit and default, in a section model (:mod:`pdfem.case.run`,
 unknown field raises :class:`pdfem.errors.InputError` naming the file, the field, the value and
 what would be valid. The validated case (:mod:`pdfem.case.config`) is what :mod:`pdfem.run`
 reads. :func:`json_schema` is the JSON Schema of the file (``pdfem schema``). Case files are
-data: nothing in them is evaluated.
+data: nothing in them is evaluated, but a ``.py`` model script named by a structure's ``mesh``
+is executed (Python code, :mod:`pdfem.meshing.runner`) when the run meshes the structure.
 
 Shape of a case file::
 
@@ -25,7 +26,10 @@ Shape of a case file::
                                # (exit 2) unless this is true (then only a warning)
     checkpoint_interval_steps = 0      # write <out>/checkpoint.h5 every N coupling steps (0 = off)
     checkpoint_interval_minutes = 30.0 # ... and every M minutes of wall time (0 = off)
-    stability_check_interval_steps = 10  # coupling steps between blow-up checks (speed, NaN)
+    stability_check_interval_steps = 10  # coupling steps between blow-up checks (speed, NaN,
+                               # energy balance)
+    energy_tolerance = 0.01    # energy the run may create, fraction of the energy supplied;
+                               # more stops the run (exit 3) with the energy budget
     output_per_rank = false    # MPI: each rank writes its ice particles to results.rank<R>.h5
 
     [[ice]]
@@ -67,7 +71,8 @@ Shape of a case file::
 Checkpoints hold the whole state (ice, structures, contact, clock, output counters); continue
 a run with ``pdfem run CASE --restart <out>/checkpoint.h5``, which appends to the same results
 file. A run whose state blows up (NaN/Inf, a particle moving more than a horizon in one step,
-energy growing without work input) stops with exit 3 and a diagnosis (:mod:`pdfem.run.blowup`).
+energy created beyond ``run.energy_tolerance`` of the energy supplied) stops with exit 3
+and a diagnosis (:mod:`pdfem.run.blowup`).
 
 The coupling step is the larger of the ice and structure stable steps; the faster side takes
 ``run.substeps`` steps per coupling step (0 or absent = chosen automatically).

@@ -14,8 +14,8 @@ from typing import Annotated, Any
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from pdfem.case.fields import (Choice, Name, Names, Number, Positive, Section, Tables, Vec3, Vector,
-                               Whole, fail)
+from pdfem.case.fields import (Choice, Identifier, Name, Names, Number, Positive, Section, Tables,
+                               Vec3, Vector, Whole, fail)
 from pdfem.case.shapes import MotionPath, directory
 
 #: Structural steel (SI): density and elastic constants of carbon steel as used for ship hulls
@@ -182,7 +182,8 @@ def _is_gmsh(path: Path) -> bool:
 class StructureSection(Section):
     """One structure: an elastic FE model or a rigid body with prescribed motion."""
 
-    name: Name = Field(description="Structure name, unique among bodies and structures. Required.")
+    name: Identifier = Field(description="Structure name (letters, digits, _ - and ., not "
+                                         "first), unique among bodies and structures. Required.")
     kind: Kind = Field(
         "elastic", description='"elastic" (finite elements), "rigid" (prescribed motion) or '
                                '"ship" (free-floating rigid hull, 6 DOF, needs [water]). '

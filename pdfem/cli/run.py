@@ -42,6 +42,15 @@ def demo_case_file() -> contextlib.AbstractContextManager[Path]:
     return importlib.resources.as_file(importlib.resources.files("pdfem.models") / DEMO_CASE)
 
 
+def _budget(row: dict | None) -> list[dict] | None:
+    """The energy budget of the last frame as ``[{"term", "joules", "percent_of_input"}, ...]``."""
+    if not row:
+        return None
+    from pdfem.run.energy import budget
+    return [{"term": label, "joules": value, "percent_of_input": pct}
+            for label, value, pct in budget(row)]
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the case (or the demo); exit status."""
     from pdfem.case.schema import load_case
@@ -82,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
                   "time_step": summary.time_step, "end_time": summary.end_time,
                   "wall_seconds": summary.wall_seconds, "particles": summary.particles,
                   "bonds": summary.bonds, "broken_bonds": summary.broken_bonds,
-                  "frames": summary.frames}
+                  "frames": summary.frames,
+                  "energy_budget": _budget(summary.energy)}
         if demo:
             from pdfem.post import load_results, summarize
             report["case"] = str(case.file)

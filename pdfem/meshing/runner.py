@@ -9,6 +9,11 @@ A model is a module of ``pdfem.models`` named by its name, or any ``.py`` file, 
 (see :mod:`pdfem.meshing` for the helpers a model uses). :func:`parse_set` splits ``--set``
 strings; :func:`mesh_model` converts them to the parameters' types
 (:func:`pdfem.meshing.parameters.coerce_parameters`) and runs the model's ``build``.
+
+A model script is Python code and is executed (imported, then its ``build`` called) with the
+user's permissions. An exception it raises is reported as bad input
+(:class:`~pdfem.meshing.parameters.ModelParameterError`, exit 2) naming the script and the line
+(:func:`script_error`).
 """
 
 from __future__ import annotations
@@ -17,10 +22,12 @@ import importlib
 import importlib.util
 import pkgutil
 import sys
+import traceback
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from pdfem.errors import InputError
 from pdfem.meshing.parameters import ModelParameterError, coerce_parameters, parse_set
 from pdfem.meshing.report import MeshReport
 
@@ -80,9 +87,12 @@ def resolve_model(name_or_path: str | Path) -> ModuleType:
         sys.modules[modname] = module
         try:
             spec.loader.exec_module(module)
-        except Exception:
+        except InputError:
             sys.modules.pop(modname, None)
             raise
+        except Exception as exc:
+            sys.modules.pop(modname, None)
+            raise script_error(text, path, exc) from None
     else:
         names = available_models()
         if text not in names:
@@ -114,7 +124,8 @@ def mesh_model(model: str | Path, params: dict[str, Any] | None = None, out: Pat
     Raises
     ------
     ModelParameterError
-        Unknown model, unknown parameter (listing the valid ones), or a bad value.
+        Unknown model, unknown parameter (listing the valid ones), a bad value, or a model
+        script that raised (naming the script and its line).
     MeshQualityError
         The mesh has inverted or zero-volume elements.
     """
@@ -127,4 +138,24 @@ def mesh_model(model: str | Path, params: dict[str, Any] | None = None, out: Pat
         typed = raw
     stem = Path(str(model)).stem
     path = Path(out) if out is not None else Path.cwd() / f"{stem}.msh"
-    return module.build(path, **typed)
+    try:
+        return module.build(path, **typed)
+    except InputError:
+        raise
+    except Exception as exc:
+        raise script_error(str(model), Path(module.__file__ or str(model)), exc) from None
+
+
+def script_error(model: str, script: Path, exc: BaseException) -> ModelParameterError:
+    """A model script's exception as an input error naming the script and the line of it
+    where the exception arose (the innermost frame in the script; a model script is Python
+    code that pdfem executes)."""
+    frames = [f for f in traceback.extract_tb(exc.__traceback__)
+              if Path(f.filename).resolve() == script.resolve()]
+    where = f", line {frames[-1].lineno}" if frames else ""
+    line = f" ({frames[-1].line.strip()})" if frames and frames[-1].line else ""
+    if isinstance(exc, SyntaxError) and exc.lineno:  # raised by the parser, not from a frame
+        where, line = f", line {exc.lineno}", f" ({(exc.text or '').strip()})"
+    return ModelParameterError("model", model, f"the model script {script}{where}{line} "
+                               f"raised {type(exc).__name__}: {exc}; fix the script or its "
+                               "parameters")

@@ -2,7 +2,8 @@
 
 A writer holds HDF5's lock on its file for the whole run. Readers open a locked file without
 locking (they see the committed prefix, see :mod:`pdfem.output.writer`); a second writer is
-refused before HDF5 would truncate the file.
+refused before HDF5 would truncate the file. :func:`inside` keeps every file a run writes
+inside its output directory.
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ import os
 from pathlib import Path
 
 import h5py
+
+from pdfem.errors import InputError
 
 
 def open_for_reading(path: str | os.PathLike) -> h5py.File:
@@ -68,3 +71,24 @@ def bound_metadata_cache(file: h5py.File) -> None:
     c.min_size = METADATA_CACHE_BYTES // 2
     c.incr_mode = c.decr_mode = c.flash_incr_mode = 0  # off
     file.id.set_mdc_config(c)
+
+
+def inside(directory: str | os.PathLike, name: str) -> Path:
+    """The path of the file ``name`` in the output ``directory``, checked to stay inside it.
+
+    Names in a case are validated when it is loaded (:mod:`pdfem.case`); this is the writers'
+    own guard that nothing a run writes lands outside its ``--out``.
+
+    Raises
+    ------
+    InputError
+        If ``name`` is empty, absolute, or leads out of ``directory`` (``..``, a separator).
+    """
+    base = Path(directory).resolve()
+    path = (base / name).resolve()
+    if not name or Path(name).is_absolute() or path.parent != base:
+        raise InputError(None, "--out", f"the output file name {name!r} would not be written "
+                         f"directly into the output directory {base}; names of bodies, "
+                         "structures, contacts and monitors may hold letters, digits, '_', '-' "
+                         "and '.' (not first)")
+    return path

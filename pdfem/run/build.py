@@ -5,7 +5,8 @@
 builders of :mod:`pdfem.run` (ice: :func:`pdfem.run.build_ice.build_ice_body`; structures: the
 kinds of :data:`pdfem.run.build_structures.STRUCTURE_KINDS`; particle forces: the kinds of
 :data:`pdfem.run.build_forces.PARTICLE_FORCES`), checks what can only be checked on the built
-objects (meshes, ice starting inside a structure, the time step), splits the ice over the MPI
+objects (meshes, overlapping ice bodies, monitors off their structure, ice starting inside a
+structure, the time step), splits the ice over the MPI
 ranks and reports what it built with ``say``.
 """
 
@@ -55,6 +56,65 @@ def check_mesh(st, cfg, file: str) -> None:
     except MeshQualityError as exc:
         raise InputError(file, f"{cfg.field}.mesh", f"the mesh of structure '{st.name}' has bad "
                          f"elements: {exc}; fix or re-mesh it", cfg.mesh) from None
+
+
+def check_overlaps(case: Case, bodies: list) -> None:
+    """Refuse ice bodies that overlap: bounding boxes first, then whether a particle of one
+    lies inside the other's shape (bodies that only touch, face to face, are valid).
+
+    Raises
+    ------
+    InputError
+        Naming both bodies (the field of the later one's shape) and the overlap box (m).
+    """
+    for j, (b, cb) in enumerate(zip(bodies, case.ice)):
+        for a, ca in zip(bodies[:j], case.ice[:j]):
+            lo = np.maximum(*(c.shape.bounds()[0] for c in (ca, cb)))
+            hi = np.minimum(*(c.shape.bounds()[1] for c in (ca, cb)))
+            if np.any(hi <= lo):
+                continue  # bounding boxes apart or touching
+            inside = np.concatenate([cb.shape.contains(a.x0[_in_box(a.x0, lo, hi)]),
+                                     ca.shape.contains(b.x0[_in_box(b.x0, lo, hi)])])
+            if inside.any():
+                raise InputError(case.file, f"{cb.field}.shape",
+                                 f"ice bodies '{ca.name}' and '{cb.name}' overlap "
+                                 f"({int(inside.sum()):,} particles of one lie inside the other) "
+                                 f"in the box min = {lo.round(6).tolist()}, max = "
+                                 f"{hi.round(6).tolist()} m; move or shrink one of them (bodies "
+                                 "may touch but not overlap)")
+
+
+def _in_box(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Whether each point of ``x`` (N, 3) lies in the box ``lo``..``hi`` (m)."""
+    return np.all((x >= lo) & (x <= hi), axis=1)
+
+
+def make_probes(case: Case, structures: list) -> list:
+    """``(monitor name, structure, probe)`` of every monitor, refused when the point lies
+    farther from its structure's nearest node than the size of the element there (the
+    diagonal of its bounding box).
+
+    Raises
+    ------
+    InputError
+        Naming the monitor's point field, the distance and the element size (m).
+    """
+    by_name = {s.name: s for s in structures}
+    probes = []
+    for m in case.monitors:
+        st = by_name[m.structure]
+        probe = st.probe(m.point)
+        points, cells, _ = st.output_mesh()
+        size = float(np.linalg.norm(np.ptp(points[cells[probe.element]], axis=0)))
+        gap = float(np.linalg.norm(points[probe.node] - np.asarray(m.point)))
+        if gap > size:
+            raise InputError(case.file, f"{m.field}.point",
+                             f"the point is {gap:.4g} m from the nearest node of structure "
+                             f"'{st.name}' ({points[probe.node].round(6).tolist()} m), more than "
+                             f"the element size there ({size:.4g} m): it is not on the "
+                             "structure; give a point on or in it (m)", list(m.point))
+        probes.append((m.name, st, probe))
+    return probes
 
 
 def contact_pairs(case: Case, bodies: list, structures: list, comm) -> list[ContactPair]:
@@ -110,9 +170,8 @@ def build(case: Case, out: Path, comm, say, steps: tuple[float, int, int] | None
     structures = build_structures(case.structures, out, case.file, comm)
     for st, cfg in zip(structures, case.structures):
         check_mesh(st, cfg, case.file)
-    st_by_name = {s.name: s for s in structures}
-    probes = [(m.name, st_by_name[m.structure], st_by_name[m.structure].probe(m.point))
-              for m in case.monitors]
+    check_overlaps(case, bodies)
+    probes = make_probes(case, structures)
     dt, n_ice, n_st = choose_time_steps(case, bodies, structures)
     stable = {b.name: b.stable_time_step() for b in bodies}
     for b in bodies:

@@ -19,6 +19,8 @@ from pdfem.fem.rigid import RigidBody
 from pdfem.fem.ship import Ship
 from pdfem.geometry.path import DisplacementPath
 from pdfem.fem.structure import ElasticStructure
+from pdfem.output.files import inside
+from pdfem.run.mesh_groups import check_groups
 
 
 def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
@@ -28,14 +30,14 @@ def structure_mesh(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
     if cfg.mesh.endswith(".msh"):
         return Path(cfg.mesh)
     from pdfem.meshing.runner import mesh_model
-    target = Path(out_dir) / f"{cfg.name}.msh"
+    target = inside(out_dir, f"{cfg.name}.msh")
     if not remesh:
         return target
     try:
         mesh_model(cfg.mesh, {k: v for k, v in cfg.params.items()}, target)
     except InputError as exc:
-        raise InputError(file, f"{cfg.field}.params" if exc.field not in (None, "model")
-                         else f"{cfg.field}.mesh", exc.message, exc.value) from None
+        raise InputError(file, f"{cfg.field}.params.{exc.field}" if exc.field not in
+                         (None, "model") else f"{cfg.field}.mesh", exc.message, exc.value) from None
     return target
 
 
@@ -86,6 +88,7 @@ def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
         For a mesh or group the structure cannot be built from.
     """
     path = structure_mesh(cfg, out_dir, file, remesh)
+    check_groups(cfg, path, file)
     try:
         return STRUCTURE_KINDS[cfg.kind](cfg, path, file)
     except InputError:

@@ -28,12 +28,14 @@ from pathlib import Path
 
 from pdfem import __version__
 from pdfem.case.schema import Case
+from pdfem.output.files import inside
 from pdfem.parallel.comm import world
 from pdfem.run.blowup import BlowupMonitor
 from pdfem.run.build import Setup, build
 from pdfem.run.checkpoint import CHECKPOINT_NAME, read_checkpoint, restore
-from pdfem.run.energy import EnergyBalance
+from pdfem.run.energy import EnergyBalance, budget_text
 from pdfem.run.loop import LoopState, run_loop
+from pdfem.run.outdir import OutDirLock, check_out_dir
 from pdfem.run.outputs import Outputs, open_outputs, sources
 from pdfem.run.preflight import preflight
 from pdfem.run.progress import Progress
@@ -52,14 +54,22 @@ class RunSummary:
     bonds: int
     broken_bonds: int
     frames: int
+    energy: dict | None = None   # the energy row of the last frame (J), for the budget
+
+    def budget(self) -> str:
+        """The energy budget at the end of the run (:func:`pdfem.run.energy.budget_text`)."""
+        if not self.energy:
+            return ""
+        return f"  energy budget at t = {self.end_time:.4e} s (% of the work in):\n" + \
+            budget_text(self.energy)
 
     def text(self) -> str:
-        """A few lines for the terminal."""
+        """A few lines for the terminal, the energy budget last."""
         return (f"pdfem: {self.steps} steps of {self.time_step:.3e} s to t = {self.end_time:.4e} s "
                 f"in {self.wall_seconds:.1f} s wall\n"
                 f"  particles {self.particles:,}, bonds {self.bonds:,}, broken {self.broken_bonds:,}\n"
                 f"  results: {self.results} ({self.frames} frames; open {self.results.with_suffix('.xdmf')} "
-                "in ParaView)")
+                "in ParaView)" + ("\n" + self.budget() if self.energy else ""))
 
 
 def _start(case: Case, setup: Setup, outputs: Outputs, ckpt, say) -> LoopState:
@@ -94,7 +104,8 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     case
         The validated case (:func:`pdfem.case.schema.load_case`).
     out_dir
-        Output directory (created).
+        Output directory (created; checked to be writable and locked for this run:
+        :mod:`pdfem.run.outdir`).
     quiet
         No messages on standard output and no progress line.
     progress
@@ -115,21 +126,28 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     ------
     InputError
         Bad input (including a run too large for the memory, an unstable ``run.time_step``, a
-        checkpoint of another case).
+        checkpoint of another case, an output directory that is a file, not writable or in use
+        by another run).
     InstabilityError
         The run blew up; the results file holds every frame up to then (and one at the
         failure when the state is still finite).
     """
     comm = comm or world()
+    out = check_out_dir(out_dir)
+    with OutDirLock(out, enabled=comm.rank == 0):  # one run per output directory
+        return _run(case, out, quiet, progress, log, restart, comm)
+
+
+def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart, comm
+         ) -> RunSummary:
+    """:func:`run_case` in its checked and locked output directory ``out``."""
     quiet = quiet or comm.rank != 0  # one rank speaks for all
     say = (lambda s: None) if quiet else (log or (lambda s: print(s, flush=True)))
-    out = Path(out_dir)
     ckpt = read_checkpoint(restart, case.text, case.file) if restart is not None else None
     report = preflight(case)
     say(f"pdfem {__version__}: {case.file}{(' - ' + case.run.title) if case.run.title else ''}")
     for line in report:
         say(line)
-    out.mkdir(parents=True, exist_ok=True)
     t_setup = time.perf_counter()
     # -- 1. build
     steps = None if ckpt is None else (ckpt.driver.time_step, ckpt.driver.ice_substeps,
@@ -145,24 +163,27 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     try:
         outputs.register(setup)
         monitor = BlowupMonitor(setup.bodies, setup.dt / setup.n_ice, setup.stable,
-                                case.run.stability_check_interval_steps)
+                                case.run.stability_check_interval_steps,
+                                energy_tolerance=case.run.energy_tolerance)
         state = _start(case, setup, outputs, ckpt, say)
     except BaseException:
         outputs.close()
         raise
     # -- 2. loop
-    ckpt_path = out / CHECKPOINT_NAME
+    ckpt_path = inside(out, CHECKPOINT_NAME)
     every, minutes = case.run.checkpoint_interval_steps, case.run.checkpoint_interval_minutes
     if every or minutes:
         when = " and ".join(w for w in ((f"every {every:,} steps" if every else ""),
                                         (f"every {minutes:g} min" if minutes else "")) if w)
         say(f"  checkpoints {when} to {ckpt_path}")
     say(f"  set-up {time.perf_counter() - t_setup:.1f} s; running")
-    bar = Progress(case.run.end_time, enabled=False if quiet else progress)
+    bar = Progress(case.run.end_time, enabled=False if quiet else progress,
+                   start_time=(state.first - 1) * setup.dt, start_step=state.first - 1)
     try:
         done = run_loop(case, setup, outputs, monitor, state, comm, bar, ckpt_path)
     finally:  # -- 3. finish
         wall = bar.finish()
         outputs.close()
     return RunSummary(writer.path, done.step, setup.dt, setup.nsteps * setup.dt, wall,
-                      setup.particles, setup.bonds, setup.cut + done.broken, done.frames)
+                      setup.particles, setup.bonds, setup.cut + done.broken, done.frames,
+                      done.energy)

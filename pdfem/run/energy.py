@@ -117,3 +117,36 @@ class EnergyBalance:
     def supplied(self, e: dict) -> float:
         """Energy (J) supplied so far: the initial stored energy plus the work put in."""
         return self.initial + _fold(e, SUPPLIED)
+
+
+BUDGET_LINES = (("work in (initial energy + work done on the system)", ("supplied",)),
+                ("ice kinetic", ("kinetic",)),
+                ("ice strain", ("strain",)),
+                ("structure kinetic", ("structure_kinetic", "structure_kinetic_correction")),
+                ("structure strain", ("structure_strain",)),
+                ("potentials (gravity, short-range contact, ...)", None),
+                ("dissipated by contact (plastic impulses, friction)", ("contact_dissipated",)),
+                ("dissipated by fracture", ("fracture_dissipated",)),
+                ("dissipated by damping", ("damping_dissipated",)),
+                ("residual (supplied - stored - dissipated)", ("residual",)))
+"""The lines of the energy budget: label and the energy-row keys summed (``None``: every
+potential-energy term)."""
+
+
+def budget(row: dict[str, float]) -> list[tuple[str, float, float]]:
+    """The energy budget of an energy row (:meth:`EnergyBalance.row`): ``(label, J, % of the
+    energy supplied)`` per line of :data:`BUDGET_LINES`; the lines after the first sum to the
+    first (the residual closes it)."""
+    potentials = ("gravity_potential", "short_range_potential") + _further_potentials()
+    supplied = row["supplied"]
+    out = []
+    for label, keys in BUDGET_LINES:
+        value = _fold(row, tuple(k for k in (keys or potentials) if k in row))
+        out.append((label, float(value), 100.0 * value / supplied if supplied else 0.0))
+    return out
+
+
+def budget_text(row: dict[str, float]) -> str:
+    """The energy budget as aligned lines (J and % of the energy supplied)."""
+    return "\n".join(f"    {label:<52s} {value:12.5g} J {pct:8.3f} %"
+                     for label, value, pct in budget(row))

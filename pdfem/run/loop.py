@@ -2,8 +2,8 @@
 
 :func:`run_loop` is the second of the driver's three steps (:mod:`pdfem.run.driver`). Every
 coupling step it advances the coupler, writes the step's history rows and checks the motion for
-a blow-up (:class:`pdfem.run.blowup.BlowupMonitor`); every ``output_interval`` it writes a frame
-and checks the energy balance; every ``checkpoint_interval_steps`` steps or
+a blow-up (:class:`pdfem.run.blowup.BlowupMonitor`), and every check interval and every frame
+the energy balance (energy created stops the run); every ``output_interval`` it writes a frame; every ``checkpoint_interval_steps`` steps or
 ``checkpoint_interval_minutes`` of wall time it writes a checkpoint
 (:func:`pdfem.run.checkpoint.write_checkpoint`).
 """
@@ -37,6 +37,7 @@ class LoopResult:
     step: int
     frames: int
     broken: int
+    energy: dict | None = None  # the energy row of the last frame (J)
 
 
 def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
@@ -56,6 +57,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
     step = state.first - 1
     t = step * dt
     last_frame = t
+    energy = None
     try:
         for step in range(state.first, setup.nsteps + 1):
             t = step * dt
@@ -66,14 +68,18 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
                 raise InstabilityError(f"at t = {t:.6e} s (step {step:,}): {exc}") from None
             outputs.step(t)
             monitor.check_motion(t, step)
-            if t >= next_out * (1 - 1e-9) or step == setup.nsteps:
+            frame = t >= next_out * (1 - 1e-9) or step == setup.nsteps
+            if monitor.due(step) and not frame:  # the balance every check interval
+                monitor.check_energy(t, step, outputs.energy.row())
+            if frame:
                 monitor.check_motion(t, step, force=True)
                 e = outputs.frame(t)
                 last_frame = t
                 frames += 1
                 while next_out <= t * (1 + 1e-9):
                     next_out += run.output_interval
-                monitor.check_energy(t, step, -e["residual"], e["supplied"])
+                energy = e
+                monitor.check_energy(t, step, e)
             due = bool(every) and step % every == 0
             if minutes and not due:  # rank 0's clock decides for all ranks
                 due = comm.bcast(time.monotonic() - last_checkpoint >= 60 * minutes)
@@ -97,7 +103,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
         outputs.close()
         raise InstabilityError(f"{exc}. The results so far are kept: {outputs.writer.path} "
                                f"({outputs.writer.n_frames} frames{note})") from None
-    return LoopResult(step, frames, broken)
+    return LoopResult(step, frames, broken, energy)
 
 
 def _finite_state(setup) -> bool:
