@@ -1,0 +1,94 @@
+"""Radial stress in a bar spinning about an axis through its root (``spinning_bar.toml``).
+
+The bar (along x from the root face x = 0 to the tip x = R) is solved in a frame turning about
+the z axis through its root (:class:`pdfem.fem.rotating.FrameStructure`). Once the speed is held
+and the ramp's vibration has died out, equilibrium along the bar, d sigma / dr = -rho omega^2 r
+with a free tip, gives the radial stress
+
+    sigma_rr(r) = rho omega^2 (R^2 - r^2) / 2.
+
+Measured: sigma_xx of the last frame's elastic displacement at the element centres, averaged
+over each cross-section of elements (the bending the ramp's Euler load leaves cancels in the
+mean), at the stations 0.2 R <= r <= 0.8 R (away from the clamped root, whose lateral
+constraint disturbs the stress over about one bar depth, and from the tip where sigma -> 0).
+The value is the station ratio sigma / sigma_rr furthest from 1; the reference is 1.
+SI units throughout.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from pdfem.case import Case
+from pdfem.fem.elasticity import ElasticMaterial
+from pdfem.fem.structure import ElasticStructure
+from pdfem.validation.case import Outcome, ValidationCase, replace_structure
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+STATIONS = (0.2, 0.8)  # r / R range of the compared stations
+
+
+def stress_profile(outcome: Outcome) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Radii r (m) of the element-centre stations, the cross-section mean sigma_xx (Pa) there in
+    the last frame, and rho omega^2 (R^2 - r^2) / 2 (Pa)."""
+    s = outcome.case.structures[0]
+    bar = ElasticStructure.from_file(outcome.directory / f"{s.name}.msh",
+                                     ElasticMaterial(s.density, s.youngs_modulus, s.poisson_ratio),
+                                     element_order=s.element_order)
+    bar.set_state(displacement=outcome.data["structure"][s.name]["u_elastic"][-1])
+    sxx = bar.stresses()[:, 0, 0]
+    centres = bar.points[bar.cells[:, :8]].mean(axis=1)[:, 0] - s.center[0]
+    r, inverse = np.unique(np.round(centres, 9), return_inverse=True)
+    mean = np.bincount(inverse, weights=sxx) / np.bincount(inverse)
+    omega = float(np.linalg.norm(s.angular_velocity))
+    tip = float(s.params["length_x"])
+    return r, mean, 0.5 * s.density * omega**2 * (tip**2 - r**2)
+
+
+def measure(outcome: Outcome) -> float:
+    """The ratio sigma / sigma_rr, among the stations 0.2 R..0.8 R, furthest from 1 (-)."""
+    r, sigma, ref = stress_profile(outcome)
+    tip = float(outcome.case.structures[0].params["length_x"])
+    keep = (r >= STATIONS[0] * tip) & (r <= STATIONS[1] * tip)
+    ratio = sigma[keep] / ref[keep]
+    return float(ratio[np.argmax(np.abs(ratio - 1.0))])
+
+
+def reference(case: Case) -> float:
+    """1: the ratio of the measured to the analytical radial stress."""
+    return 1.0
+
+
+def quick(case: Case) -> Case:
+    """10 x 1 x 1 hexahedra instead of 10 x 2 x 2."""
+    s = case.structures[0]
+    return replace_structure(case, params=dict(s.params, divisions_y=1, divisions_z=1))
+
+
+def plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
+    """Cross-section mean radial stress along the bar against rho omega^2 (R^2 - r^2) / 2."""
+    r, sigma, theory = stress_profile(outcome)
+    ax = fig.add_subplot()
+    ax.plot(r, sigma / 1e6, "o", ms=4, label="pdfem: mean sigma_xx at element centres")
+    ax.plot(r, theory / 1e6, "k--", label="rho omega^2 (R^2 - r^2) / 2")
+    tip = float(outcome.case.structures[0].params["length_x"])
+    ax.axvspan(STATIONS[0] * tip, STATIONS[1] * tip, color="0.9", label="compared stations")
+    ax.set_xlabel("radius r [m]")
+    ax.set_ylabel("radial stress [MPa]")
+    ax.legend()
+
+
+CASES = (
+    ValidationCase(
+        name="spinning_bar_stress", case_file="spinning_bar.toml",
+        quantity="radial stress / rho omega^2 (R^2 - r^2)/2, worst station", unit="-",
+        measure=measure, reference=reference, plot=plot, quick=quick, tolerance=0.03,
+        source="equilibrium of a slender bar spinning about its root, d sigma/dr = -rho omega^2 r, "
+               "sigma(R) = 0 (e.g. Timoshenko & Goodier, Theory of Elasticity, 1970, rotating "
+               "bodies)",
+        quick_note="10 x 1 x 1 hexahedra instead of 10 x 2 x 2"),
+)
