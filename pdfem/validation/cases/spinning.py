@@ -7,9 +7,10 @@ with a free tip, gives the radial stress
 
     sigma_rr(r) = rho omega^2 (R^2 - r^2) / 2.
 
-Measured: sigma_xx of the last frame's elastic displacement at the element centres, averaged
-over each cross-section of elements (the bending the ramp's Euler load leaves cancels in the
-mean), at the stations 0.2 R <= r <= 0.8 R (away from the clamped root, whose lateral
+Measured: sigma_xx of the last frame's elastic displacement averaged (Gauss quadrature) over
+each slab of elements along the bar, i.e. the slab's mean axial force over the area (the bending
+the ramp's Euler load leaves cancels in it), against the slab mean of sigma_rr, at the slabs
+centred in 0.2 R <= r <= 0.8 R (away from the clamped root, whose lateral
 constraint disturbs the stress over about one bar depth, and from the tip where sigma -> 0).
 The value is the station ratio sigma / sigma_rr furthest from 1; the reference is 1.
 SI units throughout.
@@ -33,20 +34,28 @@ STATIONS = (0.2, 0.8)  # r / R range of the compared stations
 
 
 def stress_profile(outcome: Outcome) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Radii r (m) of the element-centre stations, the cross-section mean sigma_xx (Pa) there in
-    the last frame, and rho omega^2 (R^2 - r^2) / 2 (Pa)."""
+    """Radii r (m) of the centres of the slabs of elements along the bar, the mean sigma_xx
+    (Pa) over each slab in the last frame (Gauss quadrature: the slab's mean axial force over
+    its area), and the mean of rho omega^2 (R^2 - r^2) / 2 over the same slab (Pa)."""
     s = outcome.case.structures[0]
-    bar = ElasticStructure.from_file(outcome.directory / f"{s.name}.msh",
-                                     ElasticMaterial(s.density, s.youngs_modulus, s.poisson_ratio),
+    material = ElasticMaterial(s.density, s.youngs_modulus, s.poisson_ratio)
+    bar = ElasticStructure.from_file(outcome.directory / f"{s.name}.msh", material,
                                      element_order=s.element_order)
-    bar.set_state(displacement=outcome.data["structure"][s.name]["u_elastic"][-1])
-    sxx = bar.stresses()[:, 0, 0]
-    centres = bar.points[bar.cells[:, :8]].mean(axis=1)[:, 0] - s.center[0]
-    r, inverse = np.unique(np.round(centres, 9), return_inverse=True)
-    mean = np.bincount(inverse, weights=sxx) / np.bincount(inverse)
+    u = bar.dofmap.to_dofs(outcome.data["structure"][s.name]["u_elastic"][-1])
+    grad = bar.basis.interpolate(u).grad                # (3, 3, Ne, Nq): du_i / dx_j
+    lam, mu = material.lame
+    sxx = (lam + 2.0 * mu) * grad[0, 0] + lam * (grad[1, 1] + grad[2, 2])
+    dx = bar.basis.dx                                   # (Ne, Nq) quadrature weights (m^3)
+    x = bar.points[bar.cells[:, :8], 0] - s.center[0]   # (Ne, 8) corner radii
+    lo, hi = x.min(axis=1), x.max(axis=1)
+    r, inverse = np.unique(np.round(0.5 * (lo + hi), 9), return_inverse=True)
+    mean = np.bincount(inverse, weights=(sxx * dx).sum(axis=1)) / np.bincount(
+        inverse, weights=dx.sum(axis=1))
+    a = np.bincount(inverse, weights=lo) / np.bincount(inverse)
+    b = np.bincount(inverse, weights=hi) / np.bincount(inverse)
     omega = float(np.linalg.norm(s.angular_velocity))
     tip = float(s.params["length_x"])
-    return r, mean, 0.5 * s.density * omega**2 * (tip**2 - r**2)
+    return r, mean, 0.5 * s.density * omega**2 * (tip**2 - (a * a + a * b + b * b) / 3.0)
 
 
 def measure(outcome: Outcome) -> float:
