@@ -4,7 +4,8 @@ blade or bar (docs/rotating_structures.md).
 :class:`FrameStructure` is an :class:`pdfem.fem.structure.ElasticStructure` whose displacement
 DOFs are the elastic displacement u_e relative to a :class:`pdfem.fem.moving_frame.MovingFrame`,
 in frame axes. Each step adds the frame's inertial loads (centrifugal on r = X - c0 + u_e, so
-with spin softening; Coriolis; Euler and translation during the ramp) to the applied loads,
+with spin softening; Coriolis; Euler and translation during the ramp) and the stress
+stiffening of the centrifugal prestress (-s^2 K_sigma u_e) to the applied loads,
 evaluated with the state at the start of the step (explicit, like the rest of the scheme).
 Supports hold their nodes fixed in the frame; Rayleigh damping acts on u_e' only. The contact
 code sees the true surface x = c + R (X - c0 + u_e) and its true velocity; contact forces and
@@ -21,8 +22,10 @@ SI units throughout.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from pdfem.fem.moving_frame import MovingFrame
+from pdfem.fem.stress_stiffening import centrifugal_stiffness
 from pdfem.fem.structure import ElasticStructure
 
 
@@ -35,13 +38,18 @@ class FrameStructure(ElasticStructure):
         As for :class:`pdfem.fem.structure.ElasticStructure`.
     frame
         The frame's motion (rotation about a fixed axis through its centre, translation, ramp).
+    stress_stiffening
+        Add the geometric stiffness of the centrifugal prestress, s(t)^2 K_sigma
+        (:mod:`pdfem.fem.stress_stiffening`); default True.
     """
 
-    def __init__(self, *args, frame: MovingFrame, **kwargs):
+    def __init__(self, *args, frame: MovingFrame, stress_stiffening: bool = True, **kwargs):
         super().__init__(*args, **kwargs)
         self.frame = frame
         self._r0 = self._x0 - np.asarray(frame.center, dtype=np.float64)
         self._node_mass = self.dofmap.to_nodal(self.solver.m)[:, 0].copy()
+        self.K_sigma = (centrifugal_stiffness(self, frame, self._r0, self._node_mass)
+                        if stress_stiffening and np.any(frame.angular_velocity) else None)
         self.inertial_work = 0.0     # J, work of the inertial loads on u_e
         self.drive_impulse_work = 0.0  # J, work of contact impulses on the frame's velocity
         self._f_inertial = self._inertial_dofs(0.0)
@@ -56,7 +64,28 @@ class FrameStructure(ElasticStructure):
     def _inertial_dofs(self, t: float) -> np.ndarray:
         """Inertial loads (N, DOF vector, frame axes) at time ``t`` (s) on the current state."""
         r, v = self._relative()
-        return self.dofmap.to_dofs(self.frame.inertial_force(t, r, v, self._node_mass))
+        f = self.dofmap.to_dofs(self.frame.inertial_force(t, r, v, self._node_mass))
+        if self.K_sigma is not None:
+            f -= self.frame.speed_factor(t)[0] ** 2 * (self.K_sigma @ self.solver.u)
+        return f
+
+    def rotating_stiffness(self, t: float | None = None) -> sp.csr_matrix:
+        """K + s^2 K_sigma - spin softening (N/m, DOF order) at time ``t`` (s; default now):
+        the stiffness of small motions about the spinning state, without Coriolis
+        (for the frequencies of the spinning structure, e.g. flapwise bending)."""
+        f = self.frame.state(self.solver.time if t is None else t)
+        w = f["w"]
+        soft = self._node_mass[:, None, None] * (np.dot(w, w) * np.eye(3) - np.outer(w, w))
+        n = self.n_nodes
+        rows = self.dofmap.nodal_dofs.T                  # (Nn, 3) DOF of (node, component)
+        ii = np.repeat(rows, 3, axis=1).ravel()
+        jj = np.tile(rows, (1, 3)).ravel()
+        k = sp.csr_matrix(self.K) - sp.csr_matrix((soft.reshape(n, 9).ravel(), (ii, jj)),
+                                                  shape=self.K.shape)
+        if self.K_sigma is not None:
+            k = k + self.frame.speed_factor(self.solver.time if t is None else t)[0] ** 2 \
+                * self.K_sigma
+        return sp.csr_matrix(k)
 
     def rotation(self) -> np.ndarray:
         """(3, 3) rotation R of the frame now (frame axes -> world axes)."""
