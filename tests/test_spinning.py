@@ -110,3 +110,32 @@ def test_world_impulse_changes_the_world_velocity_by_impulse_over_mass(bar_mesh)
     dv = s.surface_velocities() - v0
     np.testing.assert_allclose(dv[0], j[0] * s.surface_inverse_mass()[0], rtol=1e-12)
     np.testing.assert_allclose(dv[1:], 0.0, atol=1e-15)
+
+
+def test_flapwise_frequency_follows_southwell(tmp_path):
+    """The validation case: first flapwise frequency of a slender bar spinning at about its own
+    rest frequency within 5 % of Southwell's sqrt(omega_0^2 + 1.193 omega^2) (Euler-Bernoulli
+    omega_0), and the rise with speed at every speed of the sweep."""
+    case = load_validation_case("spinning_bar_southwell.toml")
+    data = spinning.solve_flapwise(case, tmp_path)
+    np.testing.assert_allclose(data["frequency"], spinning.southwell(case, data["speed"]),
+                               rtol=0.05)
+    assert np.all(np.diff(data["frequency"]) > 0.0)
+
+
+def test_time_stepping_uses_the_rotating_stiffness(bar_mesh):
+    """At full speed, the acceleration the integrator gives a displacement phi (less that of the
+    undeformed spinning bar) is -M^-1 (K + K_sigma - spin softening) phi on the free DOFs."""
+    s = _bar(bar_mesh, MovingFrame((0.0, 0.0, 300.0), (0.0, 0.05, 0.05)))
+    phi = np.zeros((s.n_nodes, 3))
+    phi[:, 2] = 1e-5 * (s.points[:, 0] / 0.5) ** 2       # a flapwise shape, zero at the root
+    phi[:, 1] = -3e-6 * (s.points[:, 0] / 0.5) ** 2
+    s.set_state()
+    a0 = s.solver.a.copy()
+    s.set_state(displacement=phi)
+    u = s.solver.u
+    expected = -(s.rotating_stiffness() @ u) / s.solver.m
+    free = s.solver.free
+    np.testing.assert_allclose((s.solver.a - a0)[free], expected[free],
+                               rtol=1e-9, atol=1e-9 * np.abs(expected).max())
+    assert s.K_sigma is not None and abs(s.K_sigma @ u).max() > 0.0
