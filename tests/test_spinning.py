@@ -215,5 +215,7 @@ def test_spinning_bar_strikes_ice_energy_closes_with_the_shaft_work(tmp_path):
     e = data["histories"]["energy"]
     assert e["support_work"][-1] > 1.0
     assert abs(e["residual"][-1]) < 0.01 * e["supplied"][-1]
+    h = data["histories"]["structures/bar"]
+    np.testing.assert_allclose(h["frame_angle"], 20.0 * h["time"], rtol=1e-12)
     vy = data["ice"]["ice"]["v"][-1][:, 1].mean()
     assert 20.0 * 0.33 < vy < 2 * 20.0 * 0.41

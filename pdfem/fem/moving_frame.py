@@ -65,6 +65,10 @@ class MovingFrame:
             return 0.0, 1.0 / T, 0.0
         return t / T, 1.0 / T, 0.5 * t * t / T
 
+    def angle(self, t: float) -> float:
+        """Angle (rad) the frame has turned through about its axis by time ``t`` (s)."""
+        return float(np.linalg.norm(self.angular_velocity)) * self.speed_factor(t)[2]
+
     def state(self, t: float) -> dict[str, np.ndarray]:
         """The frame at time ``t`` (s): ``R`` (3, 3) rotation, ``c`` (3,) centre (m), ``c_dot``
         (m/s), ``c_ddot`` (m/s^2), ``w`` and ``w_dot`` (3,) angular velocity (rad/s) and

@@ -156,6 +156,15 @@ class FrameStructure(ElasticStructure):
         return {"u": x - self._x0, "u_elastic": self.displacement(), "v": w,
                 "von_mises": self.von_mises()}
 
+    def frame_history(self) -> dict[str, float | np.ndarray]:
+        """As :meth:`ElasticStructure.frame_history` (energies of the elastic motion, reactions
+        in frame axes), plus ``frame_angle`` (rad) and ``drive_work`` (J, the drive's work on
+        the elastic motion, part of ``support_work``)."""
+        hist = super().frame_history()
+        hist["frame_angle"] = self.frame.angle(self.solver.time)
+        hist["drive_work"] = self.inertial_work - self.drive_impulse_work
+        return hist
+
     def energy_terms(self) -> dict[str, float]:
         """As :meth:`ElasticStructure.energy_terms`, with the drive's work on the elastic
         motion (inertial loads, less the impulses' work on the frame's velocity) in
