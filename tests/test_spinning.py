@@ -219,3 +219,38 @@ def test_spinning_bar_strikes_ice_energy_closes_with_the_shaft_work(tmp_path):
     np.testing.assert_allclose(h["frame_angle"], 20.0 * h["time"], rtol=1e-12)
     vy = data["ice"]["ice"]["v"][-1][:, 1].mean()
     assert 20.0 * 0.33 < vy < 2 * 20.0 * 0.41
+
+
+def test_time_stepping_swings_at_the_southwell_frequency(tmp_path):
+    """The slender bar of spinning_bar_southwell.toml at full speed, released from its first
+    flapwise mode shape: after half a period of the spinning frequency omega_f (Southwell:
+    sqrt(omega_0^2 + 1.193 omega^2), 1.48 omega_0 here) the tip's z displacement has reversed
+    (within 2 % of its amplitude); with the rest frequency it would be far from it (cos(pi /
+    1.48) = 0.22)."""
+    from pdfem.fem.modes import generalized_modes
+    case = load_validation_case("spinning_bar_southwell.toml")
+    cfg = case.structures[0]
+    mesh = tmp_path / "bar.msh"
+    mesh_model(str(files("pdfem.models").joinpath("validation/box.py")), dict(cfg.params), mesh)
+    s = FrameStructure.from_file(mesh, STEEL, fixed_groups=["fixed"], contact_group="contact",
+                                 frame=MovingFrame(cfg.angular_velocity, cfg.center))
+    free = s.solver.free
+    lam, phi = generalized_modes(s.rotating_stiffness()[free][:, free], s.solver.m[free], 2)
+    full = np.zeros(s.dofmap.n_dofs)
+    for k in range(2):   # the flapwise one of the two lowest
+        full[free] = phi[:, k]
+        shape = s.dofmap.to_nodal(full)
+        if np.abs(shape[:, 2]).sum() > np.abs(shape[:, 1]).sum():
+            omega_f = math.sqrt(lam[k])
+            break
+    assert omega_f / (2 * math.pi) == pytest.approx(spinning.flapwise_reference(case), rel=0.05)
+    s.set_state(displacement=1e-4 * shape / np.abs(shape[:, 2]).max())
+    # the tip face's mean: the Poisson contraction of the axial vibration that the centrifugal
+    # load starts cancels in it
+    tip = np.isclose(s.points[:, 0], s.points[:, 0].max())
+    z0 = s.displacement()[tip, 2].mean()
+    n = int(math.ceil(math.pi / omega_f / s.stable_time_step()))
+    dt = math.pi / omega_f / n
+    for _ in range(n):
+        s.step(dt)
+    assert s.displacement()[tip, 2].mean() == pytest.approx(-z0, abs=0.02 * abs(z0))
