@@ -158,6 +158,7 @@ class StructureConfig:
     path: tuple[tuple[float, float, float, float], ...] | None
     field: str = ""
     ship: ShipConfig | None = None  # kind = "ship" only
+    ramp_time: float = 0.0          # s, the elastic structure's moving frame
 
 
 @dataclass(frozen=True)
@@ -235,7 +236,7 @@ def _structure(s: StructureSection, at: str, water=None,
         element_order=s.element_order, contact_group=s.contact_group,
         damping_alpha=s.damping.alpha, damping_beta=s.damping.beta, loads=tuple(loads),
         velocity=m.velocity, angular_velocity=m.angular_velocity, center=m.center, path=m.path,
-        field=at, ship=ship_config(s, water, gravity))
+        field=at, ship=ship_config(s, water, gravity), ramp_time=m.ramp_time)
 
 
 def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:

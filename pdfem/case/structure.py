@@ -93,7 +93,8 @@ class SupportSection(Section):
 
 
 class MotionSection(Section):
-    """Prescribed rigid-body motion."""
+    """Prescribed rigid-body motion (rigid bodies), or the moving frame that carries an elastic
+    structure (rotation about a fixed shaft axis plus translation, docs/rotating_structures.md)."""
 
     velocity: Annotated[Vec3, Vector("m/s")] = Field((0.0, 0.0, 0.0), description="Velocity (m/s). "
                                                                  "Default: [0, 0, 0].")
@@ -107,6 +108,10 @@ class MotionSection(Section):
                           "point's displacement before it (the body starts there), the last "
                           "point's after it; the rotation stays angular_velocity about the "
                           "moving centre. Default: none (constant velocity).")
+    ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
+        0.0, description="Elastic structures only: time over which velocity and "
+                         "angular_velocity rise linearly from rest, from t = 0 (s). "
+                         "Default: 0 (full speed at once).")
 
     @model_validator(mode="after")
     def _velocity_or_path(self) -> "MotionSection":
@@ -219,9 +224,11 @@ class StructureSection(Section):
                         "rise, hold, fall} (s)}`. Default: none.")
     motion: MotionSection = Field(
         default_factory=MotionSection,
-        description="Rigid bodies only: `velocity` (m/s) or a translation `path` "
+        description="Rigid bodies: `velocity` (m/s) or a translation `path` "
                     "`[[t, ux, uy, uz], ...]` (s, m), `angular_velocity` (rad/s), `center` (m). "
-                    "Default: at rest.")
+                    "Elastic structures: the moving frame they are solved in, `velocity`, "
+                    "`angular_velocity` (fixed axis through `center`), `center`, `ramp_time` (s) "
+                    "(docs/rotating_structures.md). Default: at rest.")
 
     ship: ShipSection | None = Field(
         None, description="Ships only (kind = \"ship\"): `mass` (kg), `center_of_gravity` (m), "
@@ -264,8 +271,17 @@ class StructureSection(Section):
             key = "fixed_groups" if self.fixed_groups else "supports" if self.supports else "loads"
             raise fail("a rigid structure moves as prescribed by 'motion'; it takes no supports "
                        "or loads", key=key)
-        if self.kind != "rigid" and "motion" in self.model_fields_set:
-            raise fail("only a rigid structure (kind = \"rigid\") takes a motion", key="motion")
+        if self.kind == "ship" and "motion" in self.model_fields_set:
+            raise fail("a ship moves under its own dynamics; it takes no motion (use the ship "
+                       "table)", key="motion")
+        if self.kind == "elastic" and self.motion.path is not None:
+            raise fail("an elastic structure's frame moves at a constant velocity (with "
+                       "ramp_time); a translation path is for rigid bodies only",
+                       key="motion.path")
+        if self.kind == "rigid" and self.motion.ramp_time > 0.0:
+            raise fail("ramp_time is for elastic structures only; a rigid body moves at its "
+                       "velocity from t = 0 (or follows its path)", self.motion.ramp_time,
+                       key="motion.ramp_time")
         if self.kind != "ship" and self.ship is not None:
             raise fail("only a ship (kind = \"ship\") takes a ship table", key="ship")
         if self.kind == "ship" and (self.fixed_groups or self.loads or self.supports):

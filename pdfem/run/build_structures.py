@@ -15,9 +15,11 @@ from pdfem.case.schema import StructureConfig
 from pdfem.errors import InputError
 from pdfem.fem.base import Structure
 from pdfem.fem.elasticity import ElasticMaterial
+from pdfem.fem.moving_frame import MovingFrame
 from pdfem.fem.rigid import RigidBody
 from pdfem.fem.ship import Ship
 from pdfem.geometry.path import DisplacementPath
+from pdfem.fem.rotating import FrameStructure
 from pdfem.fem.structure import ElasticStructure
 from pdfem.output.files import inside
 from pdfem.run.mesh_groups import check_groups
@@ -52,12 +54,14 @@ def _rigid(cfg: StructureConfig, path: Path, file: str) -> RigidBody:
 
 def _elastic(cfg: StructureConfig, path: Path, file: str) -> ElasticStructure:
     """An elastic FE structure of the case's element order with its supports (clamped and per
-    component), damping and surface loads."""
+    component), damping and surface loads; solved in its moving frame if it has a motion."""
     material = ElasticMaterial(cfg.density, cfg.youngs_modulus, cfg.poisson_ratio)
-    s = ElasticStructure.from_file(path, material, fixed_groups=cfg.fixed_groups,
-                                   supports=dict(cfg.supports), element_order=cfg.element_order,
-                                   contact_group=cfg.contact_group, name=cfg.name,
-                                   rayleigh_alpha=cfg.damping_alpha, rayleigh_beta=cfg.damping_beta)
+    frame = MovingFrame(cfg.angular_velocity, cfg.center, cfg.velocity, cfg.ramp_time)
+    kind, extra = (ElasticStructure, {}) if frame.is_still else (FrameStructure, {"frame": frame})
+    s = kind.from_file(path, material, fixed_groups=cfg.fixed_groups,
+                       supports=dict(cfg.supports), element_order=cfg.element_order,
+                       contact_group=cfg.contact_group, name=cfg.name,
+                       rayleigh_alpha=cfg.damping_alpha, rayleigh_beta=cfg.damping_beta, **extra)
     for load in cfg.loads:
         try:
             s.add_surface_load(load.group, load.traction, load.pressure, history=load.pulse)

@@ -1,0 +1,105 @@
+"""A moving (rotating and translating) frame that carries an elastic structure: its kinematics
+and the inertial loads it puts on the elastic motion relative to it (docs/rotating_structures.md).
+
+The frame turns about a fixed axis ``n`` through its centre at the angular speed
+``s(t) |omega|`` and its centre moves at ``s(t) V``; ``s(t) = min(t / T, 1)`` ramps the speed
+linearly from rest over ``ramp_time`` T (s), starting at t = 0 (T = 0: full speed at once).
+A material point with reference position X and elastic displacement u_e (in frame axes) is at
+
+    x = c(t) + R(t) (X - c0 + u_e),     c(t) = c0 + V S(t),  R(t) = rotation by theta(t) about n,
+
+with ``S(t) = int_0^t s`` and ``theta(t) = |omega| S(t)``. Because the axis is fixed the frame's
+angular velocity has the same components in the frame and in the world. The equation of the
+elastic motion in frame axes gets the inertial (d'Alembert) loads, per lumped mass m,
+
+    f = -m [ R^T a_c + w' x r + w x (w x r) + 2 w x u_e' ],     r = X - c0 + u_e,
+
+(translation, Euler, centrifugal, Coriolis; ``a_c = s'(t) V``). SI units: m, s, rad, N.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """(3, 3) rotation by ``angle`` (rad) about the unit ``axis`` (Rodrigues)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+
+
+@dataclass(frozen=True)
+class MovingFrame:
+    """A frame turning about a fixed axis and translating, its speed ramped from rest.
+
+    Parameters
+    ----------
+    angular_velocity
+        (3,) final angular velocity (rad/s); its direction is the fixed shaft axis.
+    center
+        (3,) centre of rotation at t = 0 (m), a point of the shaft axis.
+    velocity
+        (3,) final velocity of the centre (m/s).
+    ramp_time
+        Time (s) over which the speeds rise linearly from 0, from t = 0 (0: at once).
+    """
+
+    angular_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    ramp_time: float = 0.0
+
+    @property
+    def is_still(self) -> bool:
+        """Whether the frame never moves (no rotation, no translation)."""
+        return not (np.any(self.angular_velocity) or np.any(self.velocity))
+
+    def speed_factor(self, t: float) -> tuple[float, float, float]:
+        """``s(t)`` (-), ``s'(t)`` (1/s) and ``S(t) = int_0^t s`` (s) of the linear ramp."""
+        T = self.ramp_time
+        if T <= 0.0 or t >= T:
+            return 1.0, 0.0, (t - 0.5 * T if T > 0.0 else t)
+        if t <= 0.0:
+            return 0.0, 1.0 / T, 0.0
+        return t / T, 1.0 / T, 0.5 * t * t / T
+
+    def angle(self, t: float) -> float:
+        """Angle (rad) the frame has turned through about its axis by time ``t`` (s)."""
+        return float(np.linalg.norm(self.angular_velocity)) * self.speed_factor(t)[2]
+
+    def state(self, t: float) -> dict[str, np.ndarray]:
+        """The frame at time ``t`` (s): ``R`` (3, 3) rotation, ``c`` (3,) centre (m), ``c_dot``
+        (m/s), ``c_ddot`` (m/s^2), ``w`` and ``w_dot`` (3,) angular velocity (rad/s) and
+        acceleration (rad/s^2), in world axes (``w``, ``w_dot`` are the same in frame axes)."""
+        s, ds, S = self.speed_factor(t)
+        w = np.asarray(self.angular_velocity, dtype=np.float64)
+        V = np.asarray(self.velocity, dtype=np.float64)
+        speed = float(np.linalg.norm(w))
+        R = _rotation(w / speed, speed * S) if speed > 0.0 else np.eye(3)
+        return {"R": R, "c": np.asarray(self.center, dtype=np.float64) + V * S,
+                "c_dot": s * V, "c_ddot": ds * V, "w": s * w, "w_dot": ds * w}
+
+    def inertial_force(self, t: float, r: np.ndarray, v: np.ndarray,
+                       mass: np.ndarray) -> np.ndarray:
+        """(N, 3) inertial loads (N, frame axes) on nodes at ``r`` = X - c0 + u_e (m, (N, 3))
+        with relative velocities ``v`` = u_e' (m/s) and lumped masses ``mass`` (kg, (N,))."""
+        f = self.state(t)
+        w, w_dot = f["w"], f["w_dot"]
+        acc = (f["R"].T @ f["c_ddot"])[None, :] + np.cross(w_dot, r) \
+            + np.cross(w, np.cross(w, r)) + 2.0 * np.cross(w, v)
+        return -mass[:, None] * acc
+
+    def to_world(self, t: float, r: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World positions (m) and velocities (m/s), (N, 3), of nodes at ``r`` = X - c0 + u_e
+        with relative velocities ``v`` = u_e' (frame axes)."""
+        f = self.state(t)
+        rr = r @ f["R"].T
+        return f["c"] + rr, f["c_dot"] + np.cross(f["w"], rr) + v @ f["R"].T
+
+    def frame_velocity(self, t: float, r: np.ndarray) -> np.ndarray:
+        """(N, 3) world velocity (m/s) of the frame's points that coincide with the nodes at
+        ``r`` = X - c0 + u_e (the drive's velocity there, without the elastic motion)."""
+        f = self.state(t)
+        return f["c_dot"] + np.cross(f["w"], r @ f["R"].T)

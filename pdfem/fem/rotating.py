@@ -1,0 +1,196 @@
+"""An elastic structure carried by a moving (rotating, translating) frame: a spinning propeller
+blade or bar (docs/rotating_structures.md).
+
+:class:`FrameStructure` is an :class:`pdfem.fem.structure.ElasticStructure` whose displacement
+DOFs are the elastic displacement u_e relative to a :class:`pdfem.fem.moving_frame.MovingFrame`,
+in frame axes. Each step adds the frame's inertial loads (centrifugal on r = X - c0 + u_e, so
+with spin softening; Coriolis; Euler and translation during the ramp) and the stress
+stiffening of the centrifugal prestress (-s^2 K_sigma u_e) to the applied loads,
+evaluated with the state at the start of the step (explicit, like the rest of the scheme).
+Supports hold their nodes fixed in the frame; Rayleigh damping acts on u_e' only. The contact
+code sees the true surface x = c + R (X - c0 + u_e) and its true velocity; contact forces and
+impulses (world axes) are turned into frame axes (R^T F).
+
+Energy (frame axes): the kinetic energy reported is that of the elastic motion, 1/2 u_e'.M u_e'.
+The drive holds the frame's motion whatever the loads, so the work it does on the elastic
+motion is part of ``support_work``: the work of the inertial loads (trapezoid rule, as the
+integrator counts every force) minus the work of the contact impulses on the frame's own
+velocity (the drive absorbs it). With it the structure's balance closes to round-off.
+SI units throughout.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from pdfem.fem.moving_frame import MovingFrame
+from pdfem.fem.stress_stiffening import centrifugal_stiffness
+from pdfem.fem.structure import ElasticStructure
+
+
+class FrameStructure(ElasticStructure):
+    """An elastic structure solved relative to a moving frame.
+
+    Parameters
+    ----------
+    *args, **kwargs
+        As for :class:`pdfem.fem.structure.ElasticStructure`.
+    frame
+        The frame's motion (rotation about a fixed axis through its centre, translation, ramp).
+    stress_stiffening
+        Add the geometric stiffness of the centrifugal prestress, s(t)^2 K_sigma
+        (:mod:`pdfem.fem.stress_stiffening`); default True.
+    """
+
+    def __init__(self, *args, frame: MovingFrame, stress_stiffening: bool = True, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.frame = frame
+        self._r0 = self._x0 - np.asarray(frame.center, dtype=np.float64)
+        self._node_mass = self.dofmap.to_nodal(self.solver.m)[:, 0].copy()
+        self.K_sigma = (centrifugal_stiffness(self, frame, self._r0, self._node_mass)
+                        if stress_stiffening and np.any(frame.angular_velocity) else None)
+        self.inertial_work = 0.0     # J, work of the inertial loads on u_e
+        self.drive_impulse_work = 0.0  # J, work of contact impulses on the frame's velocity
+        self._f_inertial = self._inertial_dofs(0.0)
+        self.solver.initialize(f_ext=self.external_force_dofs(0.0) + self._f_inertial)
+
+    # ------------------------------------------------------------------ frame kinematics
+    def _relative(self) -> tuple[np.ndarray, np.ndarray]:
+        """(Nn, 3) r = X - c0 + u_e (m) and u_e' (m/s), frame axes."""
+        return (self._r0 + self.dofmap.to_nodal(self.solver.u),
+                self.dofmap.to_nodal(self.solver.v))
+
+    def _inertial_dofs(self, t: float) -> np.ndarray:
+        """Inertial loads (N, DOF vector, frame axes) at time ``t`` (s) on the current state."""
+        r, v = self._relative()
+        f = self.dofmap.to_dofs(self.frame.inertial_force(t, r, v, self._node_mass))
+        if self.K_sigma is not None:
+            f -= self.frame.speed_factor(t)[0] ** 2 * (self.K_sigma @ self.solver.u)
+        return f
+
+    def rotating_stiffness(self, t: float | None = None) -> sp.csr_matrix:
+        """K + s^2 K_sigma - spin softening (N/m, DOF order) at time ``t`` (s; default now):
+        the stiffness of small motions about the spinning state, without Coriolis
+        (for the frequencies of the spinning structure, e.g. flapwise bending)."""
+        f = self.frame.state(self.solver.time if t is None else t)
+        w = f["w"]
+        soft = self._node_mass[:, None, None] * (np.dot(w, w) * np.eye(3) - np.outer(w, w))
+        n = self.n_nodes
+        rows = self.dofmap.nodal_dofs.T                  # (Nn, 3) DOF of (node, component)
+        ii = np.repeat(rows, 3, axis=1).ravel()
+        jj = np.tile(rows, (1, 3)).ravel()
+        k = sp.csr_matrix(self.K) - sp.csr_matrix((soft.reshape(n, 9).ravel(), (ii, jj)),
+                                                  shape=self.K.shape)
+        if self.K_sigma is not None:
+            k = k + self.frame.speed_factor(self.solver.time if t is None else t)[0] ** 2 \
+                * self.K_sigma
+        return sp.csr_matrix(k)
+
+    def rotation(self) -> np.ndarray:
+        """(3, 3) rotation R of the frame now (frame axes -> world axes)."""
+        return self.frame.state(self.solver.time)["R"]
+
+    def step(self, dt: float) -> None:
+        """Advance by ``dt`` (s) with the applied, contact and inertial loads (the inertial
+        ones at ``t + dt`` on the state at ``t``)."""
+        t_new = self.solver.time + dt
+        f_in = self._inertial_dofs(t_new)
+        u_old = self.solver.u
+        self.solver.step(dt, self.external_force_dofs(t_new) + f_in)
+        self.inertial_work += 0.5 * float((self._f_inertial + f_in) @ (self.solver.u - u_old))
+        self._f_inertial = f_in
+
+    def set_state(self, displacement: np.ndarray | None = None,
+                  velocity: np.ndarray | None = None) -> None:
+        """Set the elastic displacement (m) and velocity (m/s) relative to the frame (frame
+        axes, (Nn, 3)) and recompute the acceleration with the inertial loads."""
+        super().set_state(displacement, velocity)
+        self._f_inertial = self._inertial_dofs(self.solver.time)
+        self.solver.initialize(self.solver.u, self.solver.v,
+                               self.external_force_dofs() + self._f_inertial, self.solver.time)
+
+    # ------------------------------------------------------------------ contact interface
+    def surface_points(self) -> np.ndarray:
+        """(Ns, 3) true positions (m, world) of the contact-surface nodes."""
+        r, v = self._relative()
+        x, _ = self.frame.to_world(self.solver.time, r[self.surface_nodes], v[self.surface_nodes])
+        return x
+
+    def surface_velocities(self) -> np.ndarray:
+        """(Ns, 3) true velocities (m/s, world) of the contact-surface nodes."""
+        r, v = self._relative()
+        _, w = self.frame.to_world(self.solver.time, r[self.surface_nodes], v[self.surface_nodes])
+        return w
+
+    def set_surface_forces(self, forces: np.ndarray) -> None:
+        """Contact forces (N, (Ns, 3), world axes), turned into frame axes (R^T F)."""
+        super().set_surface_forces(np.asarray(forces, dtype=np.float64) @ self.rotation())
+
+    def apply_surface_impulse(self, impulse: np.ndarray) -> float:
+        """Impulses (N s, (Ns, 3), world axes) as a jump of u_e' (R^T J); returns their work
+        (J) in the world, ``v . J + J^2 / (2 m)`` with the true velocity ``v`` (zero on
+        supports); the part ``v_frame . J`` goes to the drive (``support_work``)."""
+        j = np.asarray(impulse, dtype=np.float64).reshape(-1, 3)
+        r, _ = self._relative()
+        vf = self.frame.frame_velocity(self.solver.time, r[self.surface_nodes])
+        free = self.solver.free[self._surface_dofs].reshape(-1, 3)
+        drive = float(np.sum((vf * j)[free]))
+        work = super().apply_surface_impulse(j @ self.rotation())
+        self.drive_impulse_work += drive
+        return work + drive
+
+    # ------------------------------------------------------------------ results
+    def total_displacement(self) -> np.ndarray:
+        """(Nn, 3) displacement (m, world) from the reference configuration, x - X: the
+        frame's motion plus the elastic part."""
+        r, v = self._relative()
+        x, _ = self.frame.to_world(self.solver.time, r, v)
+        return x - self._x0
+
+    def output_fields(self) -> dict[str, np.ndarray]:
+        """``u`` (Nn, 3) total displacement x - X (m, world), ``u_elastic`` (m, frame axes),
+        ``v`` true velocity (m/s, world), ``von_mises`` (Ne,) Pa from u_elastic."""
+        r, v = self._relative()
+        x, w = self.frame.to_world(self.solver.time, r, v)
+        return {"u": x - self._x0, "u_elastic": self.displacement(), "v": w,
+                "von_mises": self.von_mises()}
+
+    def frame_history(self) -> dict[str, float | np.ndarray]:
+        """As :meth:`ElasticStructure.frame_history` (energies of the elastic motion, reactions
+        in frame axes), plus ``frame_angle`` (rad) and ``drive_work`` (J, the drive's work on
+        the elastic motion, part of ``support_work``)."""
+        hist = super().frame_history()
+        hist["frame_angle"] = self.frame.angle(self.solver.time)
+        hist["drive_work"] = self.inertial_work - self.drive_impulse_work
+        return hist
+
+    def energy_terms(self) -> dict[str, float]:
+        """As :meth:`ElasticStructure.energy_terms`, with the drive's work on the elastic
+        motion (inertial loads, less the impulses' work on the frame's velocity) in
+        ``support_work`` and out of ``load_work`` (J)."""
+        terms = super().energy_terms()
+        terms["load_work"] -= self.inertial_work
+        terms["support_work"] += self.inertial_work - self.drive_impulse_work
+        return terms
+
+    def checkpoint_state(self) -> dict[str, np.ndarray | float]:
+        """The elastic structure's state plus the frame's inertial loads and works."""
+        out = super().checkpoint_state()
+        out.update(f_inertial=self._f_inertial.copy(), inertial_work=self.inertial_work,
+                   drive_impulse_work=self.drive_impulse_work)
+        return out
+
+    def restore_state(self, state: dict) -> None:
+        """Restore a state from :meth:`checkpoint_state` exactly."""
+        super().restore_state(state)
+        self._f_inertial = np.array(state["f_inertial"], dtype=np.float64)
+        self.inertial_work = float(state["inertial_work"])
+        self.drive_impulse_work = float(state["drive_impulse_work"])
+
+    def describe(self) -> str:
+        """As :meth:`ElasticStructure.describe`, with the frame's motion."""
+        f = self.frame
+        return (f"{super().describe()}; moving frame: angular velocity {list(f.angular_velocity)} "
+                f"rad/s about {list(f.center)} m, velocity {list(f.velocity)} m/s, ramp "
+                f"{f.ramp_time:g} s")
