@@ -25,6 +25,10 @@ Geometry (SI, metres)::
 * The panel ends where it joins the surrounding structure: the four edge faces of the
   plating and the end faces of the stiffeners (x = 0, length) and frames (y = 0, breadth)
   form the group ``fixed``.
+* With hexahedra the contact surface is also split at the frames (at the frame webs' centre
+  planes) into frame bays, groups ``bay1``, ``bay2``, ... from x = 0: each is a load patch
+  whose force history the run writes (``loads/<structure>.bay1``), the load per frame
+  spacing that ice-class rules size frames for.
 * Every part is an axis-aligned box, so by default (``element_type = "hex"``) the whole panel is
   one structured, conforming mesh of first-order hexahedra (gmsh type 5) on the tensor grid of
   all the parts' break points in x, y and z (:mod:`pdfem.meshing.structured`): in-plane cells
@@ -189,7 +193,9 @@ def build(path: str | Path, **params) -> MeshReport:
     -------
     MeshReport
         With physical groups ``hull`` (3-D), ``contact`` (2-D, the ice-facing plating surface
-        z = 0, normals +z) and ``fixed`` (2-D, the panel's edge faces).
+        z = 0, normals +z), ``fixed`` (2-D, the panel's edge faces) and, for hexahedra, the
+        contact surface split at the frames into frame bays ``bay1``, ``bay2``, ... (x
+        upwards): the panel's load patches.
 
     Raises
     ------
@@ -256,9 +262,19 @@ def _build_hex(path: str | Path, p: dict, xs: list[float], ys: list[float]) -> M
     at_end = np.where(axis == 0, np.where(sign > 0, np.abs(coord - L), np.abs(coord)),
                       np.where(sign > 0, np.abs(coord - B), np.abs(coord)))
     fixed = quads[(axis < 2) & (at_end < tol)]
+    bays = frame_bays(nodes[contact].mean(axis=1)[:, 0], xs, contact)
+    groups = {"contact": list(bays.values()), "fixed": [fixed]}
+    groups.update({name: [quads_] for name, quads_ in bays.items()})
     with gmsh_session("hull_panel") as gmsh:
-        add_discrete_mesh(gmsh, nodes, hexes, "hull", {"contact": [contact], "fixed": [fixed]})
+        add_discrete_mesh(gmsh, nodes, hexes, "hull", groups)
         return finish_mesh(path, "hull_panel", p, dim=3)
+
+
+def frame_bays(x: np.ndarray, xs: list[float], quads: np.ndarray) -> dict[str, np.ndarray]:
+    """The contact quadrilaterals split at the frames: ``{"bay1": ..., "bay2": ...}`` from
+    x = 0 upwards, by each quadrilateral's centre ``x`` (m); one bay ``bay1`` without frames."""
+    bay = np.searchsorted(np.asarray(xs, dtype=np.float64), x)
+    return {f"bay{k + 1}": quads[bay == k] for k in range(len(xs) + 1) if np.any(bay == k)}
 
 
 def _build_tet(path: str | Path, p: dict, xs: list[float], ys: list[float]) -> MeshReport:

@@ -81,7 +81,7 @@ def test_hex_panel_groups(panel):
             assert np.all(on_x | on_y)
             out = np.where(on_x, np.sign(xyz[:, 0] - L / 2) * n[:, 0], np.sign(xyz[:, 1] - B / 2) * n[:, 1])
             assert np.all(out > 0)
-    assert report.groups == {"hull": 3, "contact": 2, "fixed": 2}
+    assert report.groups == {"hull": 3, "contact": 2, "fixed": 2, "bay1": 2, "bay2": 2}
 
 
 def test_hex_panel_counts_from_the_grid(tmp_path):

@@ -83,7 +83,7 @@ BLADE_PARAMS = dict(radius=1.0, hub_radius=0.3, max_chord=0.5, max_chord_radius=
 
 #: every model in models/: parameters for a coarse mesh, and the physical groups (name -> dim) it must have
 MODEL_CASES = {
-    "hull_panel": (HULL_PARAMS, {"hull": 3, "contact": 2, "fixed": 2}),
+    "hull_panel": (HULL_PARAMS, {"hull": 3, "contact": 2, "fixed": 2, "bay1": 2, "bay2": 2}),
     "propeller_blade": (BLADE_PARAMS, {"blade": 3, "contact": 2, "root": 2}),
     "indenters": (dict(shape="sphere", element_size=0.25), {"contact": 2}),
     "icebreaker": (dict(element_size=0.1), {"bow": 2, "shoulder": 2, "midship": 2, "stern": 2,
@@ -147,8 +147,11 @@ def test_hull_panel_volume_areas_and_groups(built, tmp_path, element_type):
         report = hull_panel.build(tmp_path / "tet.msh", **HULL_PARAMS, element_type="tet")
         mesh = meshio.read(report.path)
     vtype, ftype = ("hexahedron", "quad") if element_type == "hex" else ("tetra", "triangle")
-    assert _groups(mesh) == {"hull": 3, "contact": 2, "fixed": 2}
-    assert report.groups == {"hull": 3, "contact": 2, "fixed": 2}
+    groups = {"hull": 3, "contact": 2, "fixed": 2}
+    if element_type == "hex":  # the contact surface split at the frame (x = 0.5) into bays
+        groups.update(bay1=2, bay2=2)
+    assert _groups(mesh) == groups
+    assert report.groups == groups
 
     pts = mesh.points
     tets = _cells(mesh, "hull", vtype)
@@ -170,6 +173,15 @@ def test_hull_panel_volume_areas_and_groups(built, tmp_path, element_type):
     assert 0.5 * np.linalg.norm(contact, axis=1).sum() == pytest.approx(L * B, rel=1e-9)
     assert np.all(contact[:, 2] > 0)                  # the ice side z = 0, normals out of the steel
     assert np.all(np.abs(pts[_cells(mesh, "contact", ftype)][..., 2]) < 1e-12)
+
+    if element_type == "hex":  # frame bays either side of the frame at x = 0.5, tiling the plate
+        areas = 0.0
+        for bay, side in (("bay1", -1), ("bay2", 1)):
+            quads = _cells(mesh, bay, ftype)
+            areas += 0.5 * np.linalg.norm(_tri_normals(pts, quads), axis=1).sum()
+            centre = pts[quads][..., 0].mean(axis=1) - 0.5
+            assert np.all(centre <= 0) if side < 0 else np.all(centre > 0)
+        assert areas == pytest.approx(L * B, rel=1e-9)
 
     fixed = _tri_normals(pts, _cells(mesh, "fixed", ftype))
     fixed_area = (2 * (L + B) * p["plate_thickness"] + 2 * n_s * p["stiffener_thickness"] * p["stiffener_height"]
