@@ -27,6 +27,7 @@ MODULES: tuple[str, ...] = (
     "bending",             # ice_beam_bending_*.toml: flexural strength, 3- and 4-point, dx, dx/2
     "floating",            # floating_draught.toml, floating_heave.toml: draught, heave period
     "ship",                # ship_rest.toml, ship_heave.toml, ship_pitch.toml: drift, periods
+    "icebreaking",         # icebreaker_tiny.toml: mean ice resistance vs Lindqvist (1989)
 )
 """The case modules, in the order of the report."""
 
