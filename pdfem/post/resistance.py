@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from pdfem.post.ice_loads import SURFACE_SUFFIX
+
 STEADY_FRACTION = 0.6
 """Fraction of the loaded span (from the first contact to the end) before the steady phase."""
 
@@ -91,15 +93,48 @@ def steady_figures(time: np.ndarray, resistance: np.ndarray,
 
 
 def resistance_summary(results: dict) -> dict[str, dict]:
-    """``{hull: steady figures}`` (:func:`steady_figures`, N and s) of every ship hull of the
-    case stored in the results (:func:`hull_names`) that has a load history."""
+    """``{hull: steady figures}`` (:func:`steady_figures`, N and s, and ``groups``: the
+    :func:`group_resistance` of the steady phase) of every ship hull of the case stored in the
+    results (:func:`hull_names`) that has a load history."""
     hist = results["histories"]
     out = {}
     for name in hull_names(results.get("meta", {}).get("case", "")):
         h = hist.get(f"loads/{name}")
         if h is not None and h["time"].size:
             out[name] = steady_figures(h["time"], resistance_history(h["force"]))
+            out[name]["groups"] = group_resistance(results, name, out[name]["start"])
     return out
+
+
+def hull_parameters(case_text: str, name: str) -> dict[str, Any]:
+    """The ``params`` table of structure ``name`` in the stored case text (empty if none)."""
+    case = tomllib.loads(case_text or "")
+    return next((dict(s.get("params", {})) for s in case.get("structure", [])
+                 if s.get("name") == name), {})
+
+
+def group_resistance(results: dict, name: str, start: float) -> dict[str, dict]:
+    """Per hull group (bow, shoulder, midship, stern, bow_panel of ``models/icebreaker.py``,
+    assigned by the facets' centroids as the model does), the mean normal ice force (N, the
+    facets' contact pressure, ``-p A n`` with n the outward normal) and its resistance part
+    ``-F_x`` (N) over the frames after ``start`` (s). Friction is not in the facet pressures,
+    so the groups' resistances add up to the normal part of the hull's resistance only.
+    Empty without the hull's contact surface or frames after ``start``."""
+    from pdfem.models.icebreaker import PARAMETERS, groups
+    s = results["structure"].get(name + SURFACE_SUFFIX)
+    t = results["time"]
+    if s is None or "contact_pressure" not in s or t.size < 2:
+        return {}
+    frames = np.flatnonzero(t[:-1] >= start) + 1       # frame k: the mean over (t[k-1], t[k]]
+    if not frames.size:
+        return {}
+    pts, tri = s["points"], s["cells"]
+    area_n = 0.5 * np.cross(pts[tri[:, 1]] - pts[tri[:, 0]], pts[tri[:, 2]] - pts[tri[:, 0]])
+    force = -s["contact_pressure"][frames].mean(axis=0)[:, None] * area_n     # (facets, 3), N
+    p = {k: v[0] for k, v in PARAMETERS.items()}
+    p |= hull_parameters(results.get("meta", {}).get("case", ""), name)
+    return {g: {"force": force[m].sum(axis=0).tolist(), "resistance": float(-force[m, 0].sum())}
+            for g, m in groups(p, pts, tri).items()}
 
 
 def plot_resistance(results: dict, path: Path, written: list[Path]) -> None:

@@ -216,7 +216,7 @@ def summarize(results: dict, lowpass: float | None = None) -> dict:
     out["monitors"] = {n: _monitor_figures(h)
                        for n, h in histories_of(hist, "monitors", "u").items()}
     out["resistance"] = {n: {k: _num(v) if isinstance(v, float) else v for k, v in f.items()}
-                         for n, f in resistance_summary(results).items()}
+                         for n, f in resistance_summary(results).items()}  # groups: floats
     out["ice"] = {name: _ice_figures(results, b) for name, b in sorted(results["ice"].items())}
     e = hist.get("energy")
     out["energy"] = ({k: _num(v[-1]) for k, v in sorted(e.items()) if k != "time"}
