@@ -69,3 +69,22 @@ def test_tiny_case_loads_and_is_validated():
     assert hull_names(case.text) == ["hull"]
     names = [c.name for c in all_cases()]
     assert "icebreaking_resistance" in names
+
+
+def test_group_loads_of_a_uniform_pressure_cancel():
+    """A uniform pressure p on the closed hull surface pushes with no net force (Gauss:
+    the integral of n dA over a closed surface is 0): the groups' forces sum to zero; the
+    pressure pushes the bow aft (a resistance) and the stern forward."""
+    from pdfem.models.icebreaker import _checked, _triangulate
+    from pdfem.post.resistance import group_resistance
+    p = _checked({})
+    pts, tri = _triangulate(p)
+    pressure = 1000.0
+    surface = {"points": pts, "cells": tri,
+               "contact_pressure": np.full((3, len(tri)), pressure)}
+    results = {"time": np.array([0.0, 0.5, 1.0]), "structure": {"hull.contact": surface},
+               "meta": {"case": '[[structure]]\nname = "hull"\nmesh = "icebreaker"\n'}}
+    g = group_resistance(results, "hull", start=0.0)
+    total = sum(np.array(g[k]["force"]) for k in ("stern", "midship", "shoulder", "bow"))
+    assert np.abs(total).max() < 1e-9 * pressure
+    assert g["bow"]["resistance"] > 0.0 and g["stern"]["resistance"] < 0.0
