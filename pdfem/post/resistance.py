@@ -8,7 +8,8 @@ Its *steady phase* starts when the bow is fully in the ice. Without a given star
 takes it at ``t_0 + STEADY_FRACTION (t_end - t_0)``, ``t_0`` the first sample with a load:
 the bow's waterline entrance is the first third to half of the run of the icebreaking cases,
 so the last 40 % are past it. Mean and standard deviation are time-weighted (trapezoid rule)
-over the steady phase.
+over the steady phase. Loads per hull group come from the facets' contact pressure of the
+frames (:func:`group_resistance`): a rigid hull has no load patches.
 """
 
 from __future__ import annotations
