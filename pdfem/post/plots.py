@@ -16,6 +16,7 @@ import numpy as np
 from pdfem.post.groups import AXES, histories_of, patch_loads, split_loads
 from pdfem.post.lowpass import lowpass as lowpassed
 from pdfem.post.pressure_area import pressure_area
+from pdfem.post.resistance import plot_resistance
 from pdfem.post.spectrum import amplitude_spectrum
 
 
@@ -199,6 +200,7 @@ def write_plots(results: dict, out_dir: str | os.PathLike,
     if regions:
         _plot_loads(regions, out / "region_reactions.png", written,
                     "Reaction of ice region '{}' (force on the ice)")
+    plot_resistance(results, out / "resistance.png", written)
     spectra = {n: h for n, h in loads.items() if h["time"].size >= 4}
     if spectra:
         _plot_spectrum(spectra, out / "load_spectrum.png", written)

@@ -1,0 +1,87 @@
+"""The icebreaking case's pieces: Lindqvist's (1989) resistance against a hand computation, the
+steady-phase figures of a resistance history, the tiny case and its validation entry. SI units.
+(The simulation itself takes minutes: ``pdfem run models/validation/icebreaker_tiny.toml``.)"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pdfem.post.lindqvist import lindqvist_resistance
+from pdfem.post.resistance import (hull_names, resistance_history, steady_figures,
+                                   steady_start)
+from pdfem.validation.case import load_validation_case
+
+
+def test_lindqvist_against_hand_computation():
+    """Lindqvist (1989) by hand for the tiny case: L = 1.5, B = 0.3, T = 0.1 m, phi = 25 deg,
+    alpha = 30 deg, h = 0.03 m, sigma_b = 40 kPa, E = 50 MPa, nu = 0.3, mu = 0.1,
+    rho_w = 1000, rho_i = 900 kg/m^3, v = 0.5 m/s, g = 9.81 m/s^2.
+
+    tan phi = 0.466308, sin alpha = 0.5 -> tan psi = 0.932615, cos psi = 0.731317;
+    R_c = 0.5 * 4e4 * 0.03^2 (= 18) * (0.466308 + 0.1 * 0.906308 / 0.731317 = 0.590236)
+          / (1 - 0.1 * 0.422618 / 0.731317 = 0.942211) = 11.2759 N;
+    sqrt(E / (12 (1 - nu^2) g rho_w)) = sqrt(5e7 / 107123.4) = 21.6042 m^0.5;
+    R_b = 27/64 * 4e4 * 0.3 * 0.03^1.5 / 21.6042 * (0.932615 + 0.1 * 0.906308 / (0.5 *
+          0.731317) = 1.180467) * (1 + 1 / 0.731317 = 2.367396) = 3.40278 N;
+    R_s = 100 * 9.81 * 0.03 * 0.3 * (0.1 * 0.4 / 0.5 = 0.08 + 0.1 * (1.05 - 0.214451
+          - 0.129904 + 0.1 * 0.906308 * 0.731317 * sqrt(5.598978 + 3) = 0.194358)) = 1.50093 N;
+    R = (R_c + R_b) * (1 + 1.4 * 0.5 / sqrt(0.2943) = 2.290336)
+        + R_s * (1 + 9.4 * 0.5 / sqrt(14.715) = 2.225230) = 33.6190 + 3.3399 = 36.9590 N.
+    """
+    r = lindqvist_resistance(length=1.5, beam=0.3, draught=0.1, stem_angle=math.radians(25.0),
+                             entrance_angle=math.radians(30.0), thickness=0.03,
+                             bending_strength=4.0e4, youngs_modulus=5.0e7, speed=0.5,
+                             friction=0.1, poisson_ratio=0.3, water_density=1000.0,
+                             ice_density=900.0)
+    assert math.tan(r["psi"]) == pytest.approx(0.932615, rel=1e-5)
+    assert r["crushing"] == pytest.approx(11.2759, rel=1e-4)
+    assert r["bending"] == pytest.approx(3.40278, rel=1e-4)
+    assert r["submersion"] == pytest.approx(1.50093, rel=1e-4)
+    assert r["breaking"] == pytest.approx(33.6190, rel=1e-4)
+    assert r["total"] == pytest.approx(36.9590, rel=1e-4)
+
+
+def test_steady_phase_of_a_harmonic_resistance():
+    """R = 10 + 2 sin(2 pi 5 t) N after a contact at t = 0.2 s: over whole periods its mean
+    is 10 N and its standard deviation 2 / sqrt(2) N (a sine's rms)."""
+    t = np.linspace(0.0, 1.2, 120001)
+    r = np.where(t >= 0.2, 10.0 + 2.0 * np.sin(2 * np.pi * 5.0 * t), 0.0)
+    force = np.stack([-r, np.zeros_like(r), 0.5 * r], axis=1)   # the ice pushes the hull aft
+    assert np.allclose(resistance_history(force), r)
+    assert steady_start(t, r) == pytest.approx(0.2 + 0.6 * 1.0, abs=1e-4)
+    f = steady_figures(t, r, start=0.4)                          # 0.4 .. 1.2 s: 4 periods
+    assert f["mean"] == pytest.approx(10.0, rel=1e-6)
+    assert f["std"] == pytest.approx(2.0 / math.sqrt(2.0), rel=1e-5)
+    assert f["peak"] == pytest.approx(12.0, rel=1e-6)
+
+
+def test_tiny_case_floats_at_its_draught():
+    """The tiny case floats its sheet at the hydrostatic draught (bottom at -0.9 h,
+    Archimedes with rho_i / rho_w = 0.9) and names its hull."""
+    case = load_validation_case("icebreaker_tiny.toml")
+    box = case.ice[0].shape
+    h = box.max[2] - box.min[2]
+    assert -box.min[2] == pytest.approx(case.ice[0].material.density / case.water.density * h)
+    assert hull_names(case.text) == ["hull"]
+
+
+def test_group_loads_of_a_uniform_pressure_cancel():
+    """A uniform pressure p on the closed hull surface pushes with no net force (Gauss:
+    the integral of n dA over a closed surface is 0): the groups' forces sum to zero; the
+    pressure pushes the bow aft (a resistance) and the stern forward."""
+    from pdfem.models.icebreaker import _checked, _triangulate
+    from pdfem.post.resistance import group_resistance
+    p = _checked({})
+    pts, tri = _triangulate(p)
+    pressure = 1000.0
+    surface = {"points": pts, "cells": tri,
+               "contact_pressure": np.full((3, len(tri)), pressure)}
+    results = {"time": np.array([0.0, 0.5, 1.0]), "structure": {"hull.contact": surface},
+               "meta": {"case": '[[structure]]\nname = "hull"\nmesh = "icebreaker"\n'}}
+    g = group_resistance(results, "hull", start=0.0)
+    total = sum(np.array(g[k]["force"]) for k in ("stern", "midship", "shoulder", "bow"))
+    assert np.abs(total).max() < 1e-9 * pressure
+    assert g["bow"]["resistance"] > 0.0 and g["stern"]["resistance"] < 0.0
