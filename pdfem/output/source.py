@@ -39,7 +39,10 @@ UNITS: dict[str, str] = {
     "fracture_dissipated": "J", "damping_dissipated": "J", "structure_kinetic_correction": "J",
     "load_work": "J", "support_work": "J", "supplied": "J", "stored": "J", "residual": "J",
     "reaction_<group>": "N", "area": "m^2", "contact_pressure": "Pa",
-    "contact_pressure_max": "Pa",
+    "contact_pressure_max": "Pa", "water_potential": "J", "water_drag_dissipated": "J",
+    "structure_potential": "J", "u_elastic": "m", "frame_angle": "rad", "drive_work": "J",
+    "position": "m", "rotation": "rad", "velocity": "m/s", "angular_velocity": "rad/s",
+    "hydrostatic_force": "N", "hydrostatic_moment": "N m",
 }
 """Unit of each field or history key that pdfem writes."""
 
