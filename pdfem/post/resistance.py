@@ -8,8 +8,8 @@ Its *steady phase* starts when the bow is fully in the ice. Without a given star
 takes it at ``t_0 + STEADY_FRACTION (t_end - t_0)``, ``t_0`` the first sample with a load:
 the bow's waterline entrance is the first third to half of the run of the icebreaking cases,
 so the last 40 % are past it. Mean and standard deviation are time-weighted (trapezoid rule)
-over the steady phase. Loads per hull group come from the facets' contact pressure of the
-frames (:func:`group_resistance`): a rigid hull has no load patches.
+over the steady phase. Loads per hull group are the hull's load patches
+(:func:`group_resistance`, ``loads/<hull>.<group>``, written every coupling step).
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ from typing import Any
 
 import numpy as np
 
-from pdfem.post.ice_loads import SURFACE_SUFFIX
 
 STEADY_FRACTION = 0.6
 """Fraction of the loaded span (from the first contact to the end) before the steady phase."""
@@ -107,35 +106,25 @@ def resistance_summary(results: dict) -> dict[str, dict]:
     return out
 
 
-def hull_parameters(case_text: str, name: str) -> dict[str, Any]:
-    """The ``params`` table of structure ``name`` in the stored case text (empty if none)."""
-    case = tomllib.loads(case_text or "")
-    return next((dict(s.get("params", {})) for s in case.get("structure", [])
-                 if s.get("name") == name), {})
-
-
 def group_resistance(results: dict, name: str, start: float) -> dict[str, dict]:
-    """Per hull group (bow, shoulder, midship, stern, bow_panel of ``models/icebreaker.py``,
-    assigned by the facets' centroids as the model does), the mean normal ice force (N, the
-    facets' contact pressure, ``-p A n`` with n the outward normal) and its resistance part
-    ``-F_x`` (N) over the frames after ``start`` (s). Friction is not in the facet pressures,
-    so the groups' resistances add up to the normal part of the hull's resistance only.
-    Empty without the hull's contact surface or frames after ``start``."""
-    from pdfem.models.icebreaker import PARAMETERS, groups
-    s = results["structure"].get(name + SURFACE_SUFFIX)
-    t = results["time"]
-    if s is None or "contact_pressure" not in s or t.size < 2:
-        return {}
-    frames = np.flatnonzero(t[:-1] >= start) + 1       # frame k: the mean over (t[k-1], t[k]]
-    if not frames.size:
-        return {}
-    pts, tri = s["points"], s["cells"]
-    area_n = 0.5 * np.cross(pts[tri[:, 1]] - pts[tri[:, 0]], pts[tri[:, 2]] - pts[tri[:, 0]])
-    force = -s["contact_pressure"][frames].mean(axis=0)[:, None] * area_n     # (facets, 3), N
-    p = {k: v[0] for k, v in PARAMETERS.items()}
-    p |= hull_parameters(results.get("meta", {}).get("case", ""), name)
-    return {g: {"force": force[m].sum(axis=0).tolist(), "resistance": float(-force[m, 0].sum())}
-            for g, m in groups(p, pts, tri).items()}
+    """Per load patch of hull ``name`` (its mesh's surface groups on the contact surface: bow,
+    shoulder, midship, stern, bow_panel of ``models/icebreaker.py``; history
+    ``loads/<name>.<group>``), the time-weighted mean ice force (N, normal and friction) and
+    its resistance part ``-F_x`` (N) over the samples from ``start`` (s). Empty without
+    patches or samples after ``start``."""
+    out = {}
+    prefix = f"loads/{name}."
+    for key, h in sorted(results["histories"].items()):
+        if not key.startswith(prefix):
+            continue
+        t, f = h["time"], h["force"]
+        keep = t >= start
+        if np.count_nonzero(keep) < 2:
+            continue
+        ts, fs = t[keep], f[keep]
+        mean = np.trapezoid(fs, ts, axis=0) / (ts[-1] - ts[0])
+        out[key[len(prefix):]] = {"force": mean.tolist(), "resistance": float(-mean[0])}
+    return out
 
 
 def plot_resistance(results: dict, path: Path, written: list[Path]) -> None:
