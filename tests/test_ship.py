@@ -204,6 +204,13 @@ def test_run_writes_motions_and_closes_the_energy_balance(tmp_path):
     swing = np.ptp(e["structure_kinetic"])
     assert swing > 0
     assert np.abs(e["residual"]).max() < 2e-4 * swing  # 4.6e-5 measured at this step
+    # pdfem post: the largest pitch is the release angle (the free swing returns to it, no
+    # damping) and the motion plot is written
+    from pdfem.post import load_results, summarize, write_plots
+    post = load_results(res.results)
+    pitch = summarize(post)["motions"]["hull"]["rotation"][1]
+    assert pitch == pytest.approx(math.degrees(0.005), rel=1e-3)
+    assert tmp_path / "plots" / "ship_motions.png" in write_plots(post, tmp_path / "plots")
 
 
 def test_ship_needs_water(tmp_path):

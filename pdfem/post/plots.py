@@ -16,6 +16,7 @@ import numpy as np
 from pdfem.post.groups import AXES, histories_of, patch_loads, split_loads
 from pdfem.post.lowpass import lowpass as lowpassed
 from pdfem.post.pressure_area import pressure_area
+from pdfem.post.motions import plot_motions
 from pdfem.post.resistance import plot_resistance
 from pdfem.post.spectrum import amplitude_spectrum
 
@@ -180,7 +181,8 @@ def write_plots(results: dict, out_dir: str | os.PathLike,
         last frame coloured by damage, projected on the plane of the two largest extents;
         needs ice and a frame), ``energy.png`` (the energy history; needs 1 or more rows),
         ``patch_loads.png`` (the force on each load patch), ``pressure_area.png`` (the
-        pressure-area curves of the frames and their envelope; needs contact pressure).
+        pressure-area curves of the frames and their envelope; needs contact pressure),
+        ``ship_motions.png`` (the 6 DOF of each free hull, :mod:`pdfem.post.motions`).
     cutoff
         With a cut-off (Hz), the load plots also show the zero-phase low-passed |F|.
     """
@@ -201,6 +203,7 @@ def write_plots(results: dict, out_dir: str | os.PathLike,
         _plot_loads(regions, out / "region_reactions.png", written,
                     "Reaction of ice region '{}' (force on the ice)")
     plot_resistance(results, out / "resistance.png", written)
+    plot_motions(results, out / "ship_motions.png", written)
     spectra = {n: h for n, h in loads.items() if h["time"].size >= 4}
     if spectra:
         _plot_spectrum(spectra, out / "load_spectrum.png", written)

@@ -33,6 +33,7 @@ import numpy as np
 from pdfem.post.groups import AXES, histories_of, patch_loads, split_loads
 from pdfem.post.ice_loads import (SURFACE_SUFFIX, filtered_figures, is_contact_surface,
                                   load_split, pressure_figures)
+from pdfem.post.motions import motion_figures, ship_motions
 from pdfem.post.resistance import resistance_summary
 from pdfem.post.windowed import peak_windowed_force
 
@@ -186,6 +187,8 @@ def summarize(results: dict, lowpass: float | None = None) -> dict:
         the same figures of the reaction of an ice body's fixed or prescribed region (N, the
         force on the ice)}; ``resistance`` {ship hull: ice resistance -F_x over its steady phase: ``start``, ``end``
         (s), ``samples``, ``mean``, ``std``, ``peak`` (N); :mod:`pdfem.post.resistance`};
+        ``motions`` {free hull: largest ``translation`` of G (m) and ``rotation`` (deg) per
+        axis; :mod:`pdfem.post.motions`};
         ``structures`` {name:
         ``max_von_mises`` / ``max_displacement`` {value, time, element or node, location},
         ``reactions`` {group: {peak, time, force_at_peak}}}; ``monitors`` {probe: ``peak_u``,
@@ -217,6 +220,7 @@ def summarize(results: dict, lowpass: float | None = None) -> dict:
                        for n, h in histories_of(hist, "monitors", "u").items()}
     out["resistance"] = {n: {k: _num(v) if isinstance(v, float) else v for k, v in f.items()}
                          for n, f in resistance_summary(results).items()}  # groups: floats
+    out["motions"] = {n: motion_figures(h) for n, h in ship_motions(results).items()}
     out["ice"] = {name: _ice_figures(results, b) for name, b in sorted(results["ice"].items())}
     e = hist.get("energy")
     out["energy"] = ({k: _num(v[-1]) for k, v in sorted(e.items()) if k != "time"}
