@@ -79,6 +79,7 @@ class Water(ParticleForce):
         self.current = np.asarray(current, dtype=np.float64).reshape(3)
         self.linear_drag, self.drag_coefficient = float(linear_drag), float(drag_coefficient)
         self.added_mass = float(added_mass)
+        self._drags = self.linear_drag > 0.0 or self.drag_coefficient > 0.0
         self._state = [_BodyWater(b) for b in self.bodies]
 
     def add_forces(self) -> None:
@@ -92,11 +93,15 @@ class Water(ParticleForce):
                 added_mass_forces(b.y, b.vol, s.owned, self.level, self.density,
                                   float(b.material.density), self.added_mass,
                                   np.asarray(b.gravity, dtype=np.float64), b.f, s.am)
+            if not (self._drags or self.added_mass):  # buoyancy only: no work to count
+                continue
             if s.y_prev is None:
                 s.y_prev = b.y.copy()
             else:
-                drag_work(b.y, s.y_prev, b.vol, s.drag, s.drag_prev, s.dissipated)
-                drag_work(b.y, s.y_prev, b.vol, s.am, s.am_prev, s.water_kinetic)
+                if self._drags:
+                    drag_work(b.y, s.y_prev, b.vol, s.drag, s.drag_prev, s.dissipated)
+                if self.added_mass:
+                    drag_work(b.y, s.y_prev, b.vol, s.am, s.am_prev, s.water_kinetic)
                 s.y_prev[:] = b.y
             s.drag_prev[:] = s.drag
             s.am_prev[:] = s.am
