@@ -45,11 +45,17 @@ def make_probe(structure, point) -> Probe:
     return Probe(node, element, s.dofmap.nodal_dofs[:, node].copy(), dofs.copy(), grad)
 
 
-def probe_values(structure, probe: Probe) -> tuple[np.ndarray, float]:
-    """Displacement (m, (3,)) of the probe's node and von Mises stress (Pa) of its element."""
+VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+"""Index pairs of the six stress components as written: xx, yy, zz, yz, xz, xy."""
+
+
+def probe_values(structure, probe: Probe) -> tuple[np.ndarray, float, np.ndarray]:
+    """Displacement (m, (3,)) of the probe's node, von Mises stress (Pa) of its element and
+    its six stress components (Pa, (6,), order of ``VOIGT``: signed, for fatigue counting)."""
     u = structure.solver.u
     g = (probe.gradient @ u[probe.element_dofs]).reshape(3, 3)
     eps = 0.5 * (g + g.T)
     lam, mu = structure.material.lame
     sigma = 2.0 * mu * eps + lam * np.trace(eps) * np.eye(3)
-    return u[probe.node_dofs].copy(), float(von_mises(sigma))
+    return (u[probe.node_dofs].copy(), float(von_mises(sigma)),
+            np.array([sigma[i, j] for i, j in VOIGT]))

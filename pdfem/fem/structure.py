@@ -301,8 +301,9 @@ class ElasticStructure(AppliedLoads, Structure):
         """A probe at ``point`` (m) (:func:`pdfem.fem.probe.make_probe`)."""
         return make_probe(self, point)
 
-    def probe_values(self, probe: Probe) -> tuple[np.ndarray, float]:
-        """Displacement (m, (3,)) of the probe's node and von Mises stress (Pa) of its element."""
+    def probe_values(self, probe: Probe) -> tuple[np.ndarray, float, np.ndarray]:
+        """Displacement (m), von Mises stress and stress components (Pa) of a probe
+        (:func:`pdfem.fem.probe.probe_values`)."""
         return probe_values(self, probe)
 
     def reaction(self, group: str) -> np.ndarray:

@@ -16,7 +16,7 @@ LOAD_PREFIXES = ("loads/", "contacts/", "monitors/")
 """History groups written at every coupling step (the CSV columns)."""
 
 UNITS = {"force": "N", "moment": "N m", "contacts": "-", "applied": "N", "u": "m", "von_mises": "Pa",
-         "area": "m^2"}
+         "area": "m^2", "stress": "Pa"}
 """Unit of each per-step history key (``-``: a count)."""
 
 
@@ -26,7 +26,8 @@ def _columns_of(group: str, key: str, a: np.ndarray) -> list[tuple[str, np.ndarr
     if a.ndim == 1:
         return [(f"{group}/{key}{suffix}", a)]
     flat = a.reshape(a.shape[0], -1)
-    names = AXES if flat.shape[1] == 3 else tuple(str(i) for i in range(flat.shape[1]))
+    names = {3: AXES, 6: ("xx", "yy", "zz", "yz", "xz", "xy")}.get(
+        flat.shape[1], tuple(str(i) for i in range(flat.shape[1])))
     return [(f"{group}/{key}_{c}{suffix}", flat[:, i]) for i, c in enumerate(names)]
 
 

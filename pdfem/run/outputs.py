@@ -165,7 +165,8 @@ class PairSource(Source):
 
 
 class MonitorSource(Source):
-    """A monitor probe every coupling step (``monitors/<name>``: ``u`` m, ``von_mises`` Pa)."""
+    """A monitor probe every coupling step (``monitors/<name>``: ``u`` m, ``von_mises`` Pa,
+    ``stress`` Pa: xx, yy, zz, yz, xz, xy of the element, signed, for fatigue counting)."""
 
     def __init__(self, name: str, structure, probe) -> None:
         self.name, self.structure, self.probe = name, structure, probe
@@ -175,8 +176,8 @@ class MonitorSource(Source):
         return [cls(name, st, probe) for name, st, probe in setup.probes]
 
     def step_rows(self) -> Rows:
-        u, vm = self.structure.probe_values(self.probe)
-        return {f"monitors/{self.name}": {"u": u, "von_mises": vm}}
+        u, vm, stress = self.structure.probe_values(self.probe)
+        return {f"monitors/{self.name}": {"u": u, "von_mises": vm, "stress": stress}}
 
 
 SOURCE_KINDS = (IceSource, FacetLoadSource, StructureSource, LoadSource, RegionSource, PairSource,
