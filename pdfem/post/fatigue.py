@@ -134,12 +134,13 @@ def rainflow_cycles(time: np.ndarray, series: np.ndarray) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        (n, 5): range (Pa), mean (Pa), count (1 or 0.5), start and end time (s).
+        (n, 5): range (Pa), mean (Pa), count (1 or 0.5), start and end time (s); cycles of
+        range 0 (a constant history) are left out.
     """
     y = np.asarray(series, dtype=np.float64)
     ok = np.isfinite(y)
     t, y = np.asarray(time, dtype=np.float64)[ok], y[ok]
-    rows = [(r, m, c, t[i], t[j]) for r, m, c, i, j in rainflow.extract_cycles(y)] \
+    rows = [(r, m, c, t[i], t[j]) for r, m, c, i, j in rainflow.extract_cycles(y) if r > 0] \
         if y.size > 1 else []
     return np.array(rows, dtype=np.float64).reshape(-1, 5)
 

@@ -60,6 +60,7 @@ def write_fatigue_plots(cycles: dict[str, np.ndarray], curve: SNCurve, stress: s
         top.set_title(f"Rainflow ranges of the {stress} stress at monitor '{name}'")
         top.set_xlabel("stress range [Pa]")
         top.set_ylabel("cycles (half cycles 0.5)")
+        top.set_yscale("log")
         ranges, n = exceedance(c)
         bottom.step(n, ranges, where="post", label="cycles with a range at least this")
         ds = np.geomspace(max(ranges[-1], ranges[0] * 1e-3, 1.0), max(ranges[0], curve.stress),
