@@ -7,8 +7,12 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pdfem.errors import EXIT_OK, InputError
+
+if TYPE_CHECKING:
+    from pdfem.post.fatigue import SNCurve
 
 NAME = "post"
 HELP = "summarise a results file: table, plots, CSV"
@@ -40,7 +44,7 @@ def add_arguments(q: argparse.ArgumentParser) -> None:
                    help="range bins of the rainflow histogram (default 10)")
 
 
-def _fatigue(args: argparse.Namespace, results: dict) -> tuple[dict, dict, object] | None:
+def _fatigue(args: argparse.Namespace, results: dict) -> tuple[dict, dict, SNCurve] | None:
     """The fatigue block, the cycles and the curve of ``--sn``; None without ``--sn``."""
     from pdfem.post.fatigue import fatigue_summary, monitor_cycles, parse_sn
     f = args.results
