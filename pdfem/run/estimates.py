@@ -25,7 +25,9 @@ is ``sum over such e of prod_k c_k(e_k) - owned`` with ``c_k(0) = len_k`` and ``
 number of sides of ``O`` along k (0, 1 or 2) that have body points e planes away. Its bonds are
 those with an owned end (how :mod:`pdfem.pd.distributed` keeps them): ``sum over i in O of
 deg(i) - pairs(O)``, the degrees summed per offset of the whole family as a product of 1-D
-interval overlaps. All exact for a box; other shapes are scaled by their fill fraction of the
+interval overlaps. All exact for a box whose counts the grid divides (the run's partition cuts at
+particle quantiles, so with an uneven division it may cut inside a lattice plane: a difference
+of less than one plane per subdomain); other shapes are scaled by their fill fraction of the
 lattice box.
 """
 

@@ -36,9 +36,9 @@ DISTRIBUTED_SETUP = False
 (False) every rank of an MPI run builds the whole ice body first: flip this one line when the
 distributed set-up is merged."""
 
-SETUP_TEXT = {True: "distributed set-up (each rank builds only its subdomain and halo)",
-              False: "global set-up (every rank builds the whole ice body, then keeps its part: "
-                     "peak per rank = the whole body + its part)"}
+SETUP_TEXT = {True: "distributed set-up: each rank builds only its subdomain and halo",
+              False: "global set-up: every rank builds the whole ice body, then keeps its part, "
+                     "so a rank's peak is the whole body plus its part"}
 """How each set-up is named in reports."""
 
 
@@ -137,8 +137,8 @@ def check_nodes(case: Case, ranks: list[RankEstimate], nodes: list[int],
     text = (f"the run needs about {format_bytes(need[k])} of memory on node {k} (its "
             f"{len(mine)} rank{'s' if len(mine) > 1 else ''}) but "
             f"{format_bytes(available[k])} is available there; the ice has about "
-            f"{total[0]:,} particles and {total[1]:,} bonds, and with the "
-            f"{SETUP_TEXT[distributed_setup]} the largest rank (rank {big.rank}: "
+            f"{total[0]:,} particles and {total[1]:,} bonds ({SETUP_TEXT[distributed_setup]}); "
+            f"the largest rank (rank {big.rank}: "
             f"{big.owned:,} owned + {big.halo:,} halo particles, {big.bonds:,} bonds) needs "
             f"about {format_bytes(big.bytes)}. ")
     if fit is not None:
@@ -212,7 +212,7 @@ def preflight(case: Case, comm) -> list[str]:
     if not case.ice:
         return lines
     if comm.size > 1:
-        lines.append(f"  memory per rank ({SETUP_TEXT[DISTRIBUTED_SETUP]}):")
+        lines.append(f"  memory per rank, {SETUP_TEXT[DISTRIBUTED_SETUP]}:")
         lines += rank_table(ranks, nodes) + node_lines(ranks, nodes, available)
     else:
         lines.append(f"  estimated memory {format_bytes(ranks[0].bytes)} of "

@@ -141,7 +141,8 @@ def estimate_report(case: Case, comm, ranks: int | None = None, nodes: int | Non
         avail = [node_memory] * len(avail)
     est = estimate_rank_memory(case, n, distributed)
     lines = [f"pdfem run --estimate: {case.file}: {n} rank{'s' if n > 1 else ''} on "
-             f"{max(layout) + 1} node{'s' if max(layout) else ''}, {SETUP_TEXT[distributed]}"]
+             f"{max(layout) + 1} node{'s' if max(layout) else ''}",
+             f"  {SETUP_TEXT[distributed]}"]
     lines += body_lines(case) + rank_table(est, layout) + node_lines(est, layout, avail)
     if case.ice:
         cal = calibrate(case)
