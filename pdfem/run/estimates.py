@@ -39,6 +39,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pdfem.parallel.partition import grid_shapes
+
 
 BYTES_PER_PARTICLE = 240
 """Estimated resident bytes per ice particle (state, set-up and output arrays)."""
@@ -117,6 +119,22 @@ def split_lattice(counts, grid, horizon_factor: float) -> tuple[np.ndarray, np.n
     inner = np.einsum("io,jo,ko->ijk", *(np.maximum(0.0, s[:, :1] - np.abs(half[:, k])[None, :])
                                          for k, s in enumerate((sx, sy, sz))))
     return (owned.reshape(-1), (reach - owned).reshape(-1), (degrees - inner).reshape(-1))
+
+
+def best_split(counts, horizon_factor: float, n_ranks: int):
+    """``(grid, owned, halo, bonds)`` of the px x py x pz grid of ``n_ranks`` ranks over a
+    lattice box of ``counts`` points whose largest rank needs least memory (bytes per particle
+    and per bond as above; ties to the first grid of
+    :func:`pdfem.parallel.partition.grid_shapes`), or ``None`` if no grid fits the counts."""
+    best = None
+    for grid in grid_shapes(n_ranks):
+        if any(g > c for g, c in zip(grid, counts)):
+            continue
+        o, h, p = split_lattice(counts, grid, horizon_factor)
+        worst = float(((o + h) * BYTES_PER_PARTICLE + p * BYTES_PER_PAIR).max())
+        if best is None or worst < best[0]:
+            best = (worst, grid, o, h, p)
+    return None if best is None else best[1:]
 
 
 def _particles(shape, dx: float) -> tuple[float, bool]:

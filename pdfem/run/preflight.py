@@ -26,10 +26,9 @@ import numpy as np
 from pdfem.case.schema import Case
 from pdfem.errors import InputError
 from pdfem.parallel.nodes import block_layout, node_layout, per_node
-from pdfem.parallel.partition import grid_shapes
 from pdfem.run.estimates import (BYTES_PER_PAIR, BYTES_PER_PARTICLE, FIXED_BYTES, BodyEstimate,
-                                 available_memory, estimate_body, format_bytes, lattice_counts,
-                                 split_lattice)
+                                 available_memory, best_split, estimate_body, format_bytes,
+                                 lattice_counts)
 
 DISTRIBUTED_SETUP = False
 """True once every rank builds only its own subdomain and halo (issue 17, item 1). Today
@@ -61,22 +60,16 @@ def estimate_case(case: Case) -> list[BodyEstimate]:
 
 def split_body(cfg, est: BodyEstimate, n_ranks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Owned, halo and bond counts per rank of one ice body (``cfg`` its case entry) on
-    ``n_ranks`` ranks: the grid of its lattice box whose largest rank needs least memory,
-    scaled by the body's fill fraction of the box when it is not a box."""
+    ``n_ranks`` ranks: the grid of its lattice box whose largest rank needs least memory
+    (:func:`pdfem.run.estimates.best_split`), scaled by the body's fill fraction of the box
+    when it is not a box."""
     counts = lattice_counts(cfg.shape, cfg.dx)
-    fill = est.particles / float(np.prod(counts))
-    best = None
-    for grid in grid_shapes(n_ranks):
-        if any(g > c for g, c in zip(grid, counts)):
-            continue
-        o, h, p = split_lattice(counts, grid, cfg.horizon / cfg.dx)
-        worst = float(((o + h) * BYTES_PER_PARTICLE + p * BYTES_PER_PAIR).max())
-        if best is None or worst < best[0]:
-            best = (worst, o, h, p)
-    if best is None:
+    split = best_split(counts, cfg.horizon / cfg.dx, n_ranks)
+    if split is None:
         raise InputError(None, f"{cfg.field}.dx", f"ice body '{cfg.name}' has fewer lattice "
                          f"planes ({counts}) than {n_ranks} ranks can share; use fewer ranks")
-    return tuple(np.rint(a * fill).astype(np.int64) for a in best[1:])
+    fill = est.particles / float(np.prod(counts))
+    return tuple(np.rint(a * fill).astype(np.int64) for a in split[1:])
 
 
 def estimate_rank_memory(case: Case, n_ranks: int, distributed_setup: bool

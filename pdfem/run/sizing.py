@@ -32,7 +32,7 @@ from pdfem.pd.failure import failure_law
 from pdfem.run.build_ice import ice_material
 from pdfem.run.estimates import available_memory, format_bytes
 from pdfem.run.preflight import (SETUP_TEXT, body_lines, check_nodes, estimate_rank_memory,
-                                 node_lines, rank_table)
+                                 node_lines, node_needs, rank_table)
 
 CALIBRATION_SIDE = 32
 """Particles per side of the calibration cube (32^3 = 32,768 particles, about 1.6 M bonds)."""
@@ -159,6 +159,6 @@ def estimate_report(case: Case, comm, ranks: int | None = None, nodes: int | Non
         check_nodes(case, est, layout, avail, distributed)
     except InputError as exc:
         return lines + ["  refused: does not fit (see below)"], exc
-    lines.append("  fits: every node holds its ranks (largest need "
-                 f"{format_bytes(max(sum(r.bytes for r in est if layout[r.rank] == k) for k in set(layout)))})")
+    need = max(node_needs(est, layout))
+    lines.append(f"  fits: every node holds its ranks (largest need {format_bytes(need)})")
     return lines, None
