@@ -4,10 +4,10 @@ Memory per rank and per node comes from :mod:`pdfem.run.preflight` (lattice coun
 is generated). Time: a short calibration measures this machine's ice step rate in bond-steps
 per second: a cube of ``CALIBRATION_SIDE``^3 particles with the case's first ice material, dx,
 horizon, failure law and PD loop is built and stepped for ``CALIBRATION_SECONDS`` (a lattice of
-about 1.6 M bonds: larger than the processor caches, so the rate is the large-body rate; about
-0.5 s of stepping plus a second of set-up). The same cube gives the stable ice step (its
-interior particles are those of any body with that dx and horizon; a cube of
-``STABLE_STEP_SIDE``^3 for the other bodies), so the ice steps to ``end_time`` are
+about 1.8 M bonds: larger than the processor caches, so the rate is the large-body rate; about
+0.5 s of stepping plus a second of set-up). The stable ice step comes from a piece of each body:
+a box of its lattice, ``STABLE_STEP_SIDE`` particles per axis at most (a thin sheet stays as
+thin, so its surface-corrected particles are there), so the ice steps to ``end_time`` are
 ``ceil(end_time / dt)`` with ``dt`` the case's ``time_step`` or ``safety_factor`` x the stable
 step. The time per step is the largest rank's bonds over the rate (each rank with this
 process's numba threads); the halo exchange (4 % of the step on 2 ranks here, BENCHMARKS.md),
@@ -30,15 +30,17 @@ from pdfem.parallel.nodes import block_layout, node_layout, per_node
 from pdfem.pd.body import IceBody
 from pdfem.pd.failure import failure_law
 from pdfem.run.build_ice import ice_material
-from pdfem.run.estimates import available_memory, format_bytes
+from pdfem.run.estimates import available_memory, format_bytes, lattice_counts
 from pdfem.run.preflight import (SETUP_TEXT, body_lines, check_nodes, estimate_rank_memory,
                                  node_lines, node_needs, rank_table)
 
 CALIBRATION_SIDE = 32
 """Particles per side of the calibration cube (32^3 = 32,768 particles, about 1.6 M bonds)."""
 
-STABLE_STEP_SIDE = 10
-"""Particles per side of the cube giving the stable step of the second and later bodies."""
+STABLE_STEP_SIDE = 12
+"""Particles per axis (at most the body's own count) of the piece of each body giving its
+stable step: two horizons, so it holds every kind of particle a box body has (interior, faces,
+edges, corners, with their surface correction)."""
 
 CALIBRATION_SECONDS = 0.5
 """How long the calibration cube is stepped (s of wall time, after one untimed step)."""
@@ -65,12 +67,15 @@ def parse_bytes(text: str) -> int:
     return int(float(m.group(1)) * _UNITS[unit])
 
 
-def _cube(cfg, run, side: int) -> IceBody:
-    """A cube of ``side``^3 particles with the material, dx, horizon and failure law of ``cfg``."""
+def _cube(cfg, run, side: int, clip: bool = False) -> IceBody:
+    """A box of ``side`` particles per axis (with ``clip``, at most the body's own lattice
+    count per axis, so a thin sheet gives a piece as thin) with the material, dx, horizon and
+    failure law of ``cfg``."""
     lo, hi = cfg.shape.bounds()
     material = ice_material(cfg.material, cfg.dx, float(hi[2] - lo[2]))
     law = failure_law(cfg.material.failure, material, cfg.horizon)
-    box = Box((0.0, 0.0, 0.0), (side * cfg.dx,) * 3)
+    counts = lattice_counts(cfg.shape, cfg.dx) if clip else (side,) * 3
+    box = Box((0.0, 0.0, 0.0), tuple(min(side, c) * cfg.dx for c in counts))
     return IceBody.from_shape("calibration", box, material, cfg.dx, cfg.horizon,
                               loop=run.pd_loop, failure=law)
 
@@ -90,8 +95,7 @@ def calibrate(case: Case, seconds: float = CALIBRATION_SECONDS) -> Calibration:
     docstring); no case body is built."""
     run = case.run
     body = _cube(case.ice[0], run, CALIBRATION_SIDE)
-    stable = min([body.stable_time_step()] + [_cube(c, run, STABLE_STEP_SIDE).stable_time_step()
-                                              for c in case.ice[1:]])
+    stable = min(_cube(c, run, STABLE_STEP_SIDE, clip=True).stable_time_step() for c in case.ice)
     dt = run.time_step if run.time_step is not None else run.safety_factor * stable
     body.start()
     body.step(dt)  # untimed: touches the scratch memory
