@@ -146,11 +146,35 @@ def test_estimate_cli_accepts_and_refuses(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_calibration_step_is_the_run_step(tmp_path):
+    """The ice step of --estimate is the run's: for a body no larger than the stable-step piece
+    (12 x 6 x 4 particles) the piece is the body, so safety_factor x its stable step
+    (pdfem.run.build_ice) is reproduced exactly; the rate is positive."""
+    from pdfem.run.build_ice import build_ice_body
+    from pdfem.run.sizing import calibrate
+    case = load_case(_case(tmp_path, SMALL))
+    body = build_ice_body(case.ice[0], case.run)
+    cal = calibrate(case, seconds=0.05)
+    assert cal.ice_step == pytest.approx(case.run.safety_factor * body.stable_time_step(),
+                                         rel=1e-12)
+    assert cal.bond_steps_per_s > 0
+
+
 def test_bad_node_memory():
     """--node-memory takes a number with a unit; GB is 10^9, GiB and G 2^30."""
     assert parse_bytes("24GB") == 24 * 10**9 and parse_bytes("2G") == 2 * 2**30
     assert parse_bytes("2.5e10") == 25 * 10**9
     assert main(["run", "x.toml", "--estimate", "--node-memory", "lots"]) == 2
+
+
+def test_more_ranks_than_planes(tmp_path):
+    """12 x 6 x 4 particles cannot be cut into 1,000 non-empty grid cells: a clear refusal
+    naming the file and the body's dx."""
+    from pdfem.errors import InputError
+    path = _case(tmp_path, SMALL)
+    with pytest.raises(InputError) as err:
+        estimate_rank_memory(load_case(path), 1000, True)
+    assert str(path) in err.value.text() and "ice[0].dx" in err.value.text()
 
 
 def _tool(name: str) -> str | None:

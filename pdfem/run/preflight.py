@@ -58,7 +58,8 @@ def estimate_case(case: Case) -> list[BodyEstimate]:
     return [estimate_body(c.name, c.shape, c.dx, c.horizon) for c in case.ice]
 
 
-def split_body(cfg, est: BodyEstimate, n_ranks: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def split_body(cfg, est: BodyEstimate, n_ranks: int, file: str | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Owned, halo and bond counts per rank of one ice body (``cfg`` its case entry) on
     ``n_ranks`` ranks: the grid of its lattice box whose largest rank needs least memory
     (:func:`pdfem.run.estimates.best_split`), scaled by the body's fill fraction of the box
@@ -66,8 +67,9 @@ def split_body(cfg, est: BodyEstimate, n_ranks: int) -> tuple[np.ndarray, np.nda
     counts = lattice_counts(cfg.shape, cfg.dx)
     split = best_split(counts, cfg.horizon / cfg.dx, n_ranks)
     if split is None:
-        raise InputError(None, f"{cfg.field}.dx", f"ice body '{cfg.name}' has fewer lattice "
-                         f"planes ({counts}) than {n_ranks} ranks can share; use fewer ranks")
+        raise InputError(file, f"{cfg.field}.dx", f"ice body '{cfg.name}' has too few lattice "
+                         f"points per axis {counts} to be shared by {n_ranks} ranks (each needs "
+                         "at least one plane); use fewer ranks or a smaller dx", cfg.dx)
     fill = est.particles / float(np.prod(counts))
     return tuple(np.rint(a * fill).astype(np.int64) for a in split[1:])
 
@@ -80,7 +82,7 @@ def estimate_rank_memory(case: Case, n_ranks: int, distributed_setup: bool
     owned = np.zeros(n_ranks, np.int64)
     halo, bonds, local = owned.copy(), owned.copy(), owned.copy()
     for cfg, est in zip(case.ice, bodies):
-        o, h, p = split_body(cfg, est, n_ranks) if n_ranks > 1 else (
+        o, h, p = split_body(cfg, est, n_ranks, case.file) if n_ranks > 1 else (
             np.array([est.particles]), np.zeros(1, np.int64), np.array([est.pairs]))
         owned += o
         halo += h
