@@ -108,7 +108,7 @@ def calibrate(case: Case, seconds: float = CALIBRATION_SECONDS) -> Calibration:
 
 
 def _hours(s: float) -> str:
-    return f"{s:.1f} s" if s < 120 else (f"{s / 60:.1f} min" if s < 7200 else f"{s / 3600:.1f} h")
+    return f"{s:.3g} s" if s < 120 else (f"{s / 60:.1f} min" if s < 7200 else f"{s / 3600:.1f} h")
 
 
 def estimate_report(case: Case, comm, ranks: int | None = None, nodes: int | None = None,
