@@ -71,7 +71,8 @@ def model_row(counts, ranks: int) -> dict:
     received = int(halo[r]) * BYTES_PER_HALO_PARTICLE
     compute = float(bonds[r]) / RATE
     exchange = 2 * neighbours * LATENCY + received / BANDWIDTH
-    return {"particles": n, "bonds": int(all_bonds), "ranks": ranks, "grid": "x".join(map(str, grid)),
+    return {"particles": n, "bonds": int(all_bonds), "ranks": ranks,
+            "grid": "x".join(map(str, grid)),
             "owned": int(owned[r]), "halo": int(halo[r]),
             "halo_fraction": float(halo[r] / owned[r]), "neighbours": neighbours,
             "bytes_per_step": received, "total_bytes_per_step": int(halo.sum())

@@ -138,7 +138,8 @@ def check_nodes(case: Case, ranks: list[RankEstimate], nodes: list[int],
             f"about {format_bytes(big.bytes)}. ")
     if fit is not None:
         text += (f"At {len(ranks)} ranks it needs {fit[0]} node{'s' if fit[0] > 1 else ''} of "
-                 f"this size ({fit[1]} rank{'s' if fit[1] > 1 else ''} per node); size the job with pdfem run CASE "
+                 f"this size ({fit[1]} rank{'s' if fit[1] > 1 else ''} per node); size the "
+                 "job with pdfem run CASE "
                  "--estimate --ranks N --nodes K, choose a larger dx, or a smaller body")
     elif distributed_setup:
         text += ("Even one rank per node does not fit: use more ranks (each holds about "
