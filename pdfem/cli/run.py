@@ -1,5 +1,10 @@
 """``pdfem run [CASE.toml] [--out DIR] [--restart CHECKPOINT] [--quiet] [--json]``: run a case.
 
+``pdfem run CASE --estimate [--ranks N] [--nodes K] [--node-memory 24GB] [--setup S]`` sizes the
+run without building it (:mod:`pdfem.run.sizing`): memory per rank and per node, time per step
+and projected wall time; exit 0 if every node holds its ranks, 2 (saying how many nodes it
+needs) if not. It writes nothing (``--out`` is not created).
+
 ``pdfem run CASE --restart DIR/checkpoint.h5`` continues a run of CASE from its last checkpoint,
 appending to the results file in DIR (``--out`` defaults to the checkpoint's directory).
 Without a case it runs the built-in demo (``demo_ice_sheet_panel.toml`` of the package
@@ -15,7 +20,7 @@ import io
 import json
 from pathlib import Path
 
-from pdfem.errors import EXIT_OK, InputError
+from pdfem.errors import EXIT_BAD_INPUT, EXIT_OK, InputError
 
 NAME = "run"
 HELP = "run a case file (no case: the built-in demo)"
@@ -34,6 +39,21 @@ def add_arguments(r: argparse.ArgumentParser) -> None:
                         "run's output directory), appending to its results")
     r.add_argument("--quiet", action="store_true", help="no progress or messages")
     r.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
+    e = r.add_argument_group("sizing a run (docs/cluster.md)")
+    e.add_argument("--estimate", action="store_true",
+                   help="build nothing: print memory per rank and per node, time per step and "
+                        "projected wall time, then exit (0 fits, 2 does not)")
+    e.add_argument("--ranks", type=int, default=None,
+                   help="with --estimate: ranks of the planned job (default: this MPI world)")
+    e.add_argument("--nodes", type=int, default=None,
+                   help="with --estimate: nodes of the planned job, ranks spread ceil(N/K) per "
+                        "node (default 1 with --ranks; else this MPI world's nodes)")
+    e.add_argument("--node-memory", default=None, metavar="BYTES",
+                   help="with --estimate: memory of one node, e.g. 24GB, 24GiB, 2.5e10 "
+                        "(default: MemAvailable of the node)")
+    e.add_argument("--setup", choices=("distributed", "global"), default=None,
+                   help="with --estimate: the set-up to size for (default: this build's; today "
+                        "global: every rank builds the whole ice body)")
 
 
 def demo_case_file() -> contextlib.AbstractContextManager[Path]:
@@ -51,9 +71,41 @@ def _budget(row: dict | None) -> list[dict] | None:
             for label, value, pct in budget(row)]
 
 
+def _estimate(args: argparse.Namespace, case) -> int:
+    """``--estimate``: print the sizing of the run on rank 0; exit status 0 or 2."""
+    from pdfem.parallel.comm import run_guarded, world
+    from pdfem.run.preflight import DISTRIBUTED_SETUP
+    from pdfem.run.sizing import estimate_report, parse_bytes
+    for name, value in (("--ranks", args.ranks), ("--nodes", args.nodes)):
+        if value is not None and value < 1:
+            raise InputError(None, name, "give a positive whole number", value)
+    memory = None if args.node_memory is None else parse_bytes(args.node_memory)
+    setup = DISTRIBUTED_SETUP if args.setup is None else args.setup == "distributed"
+    comm = world()
+    if comm.size > 1:
+        from pdfem.run.parallel import warm_before_ranks
+        run_guarded(warm_before_ranks, comm, comm=comm)
+    lines, refusal = run_guarded(estimate_report, case, comm, args.ranks, args.nodes, memory,
+                                 setup, comm=comm)
+    if comm.rank == 0:
+        print("\n".join(lines), flush=True)
+        if refusal is not None:
+            raise refusal
+    return EXIT_OK if refusal is None else EXIT_BAD_INPUT
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the case (or the demo); exit status."""
     from pdfem.case.schema import load_case
+    if args.estimate and args.case is None:
+        raise InputError(None, "--estimate", "give the case file to size: "
+                         "pdfem run CASE.toml --estimate [--ranks N] [--nodes K]")
+    if not args.estimate and (args.ranks, args.nodes, args.node_memory, args.setup) != (
+            None, None, None, None):
+        raise InputError(None, "--ranks/--nodes/--node-memory/--setup", "these size a planned "
+                         "job and go with --estimate: pdfem run CASE.toml --estimate --ranks N")
+    if args.estimate:
+        return _estimate(args, load_case(args.case))
     from pdfem.run.driver import run_case
     if args.case is None:  # the demo: run it, then summarise its results
         with demo_case_file() as path:

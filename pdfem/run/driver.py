@@ -144,7 +144,7 @@ def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart
     quiet = quiet or comm.rank != 0  # one rank speaks for all
     say = (lambda s: None) if quiet else (log or (lambda s: print(s, flush=True)))
     ckpt = read_checkpoint(restart, case.text, case.file) if restart is not None else None
-    report = preflight(case)
+    report = preflight(case, comm)
     say(f"pdfem {__version__}: {case.file}{(' - ' + case.run.title) if case.run.title else ''}")
     for line in report:
         say(line)
