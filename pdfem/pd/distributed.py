@@ -25,7 +25,6 @@ some sums can differ, so 1 and N ranks agree to round-off. Units: SI.
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import numpy as np
 
@@ -33,6 +32,7 @@ from pdfem.pd import kernels
 from pdfem.pd.body import IceBody
 from pdfem.pd.constraints import reaction_forces
 from pdfem.pd.distributed_state import DistributedCheckpoint
+from pdfem.pd.distributed_surface import halo_exchange
 
 
 @dataclasses.dataclass
@@ -129,10 +129,32 @@ class DistributedIce(DistributedCheckpoint):
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
             local.constraints.append(dataclasses.replace(c, index=g2l[mine]))
+        self.global_bonds = len(body.nbr)
+        self._attach(local)
+
+    @classmethod
+    def from_local(cls, local: IceBody, plan: HaloPlan, comm, n_global: int) -> "DistributedIce":
+        """A rank's part built without the global body (:mod:`pdfem.pd.distributed_setup`):
+        ``local`` holds the owned and halo particles in global order (``local.gid`` their
+        global numbers, constraints over owned particles only), ``plan`` its halo plan
+        (``pairs`` None), ``n_global`` the body's particle count. Collective."""
+        self = cls.__new__(cls)
+        self.comm = comm
+        self.global_n = int(n_global)
+        self.global_body = None  # never built: short-range contact needs the global set-up
+        self.plan = plan
+        counted = plan.owned[np.repeat(np.arange(local.n), np.diff(local.row_ptr))]
+        self.global_bonds = int(comm.allreduce_sum(np.int64(counted.sum())))
+        self._attach(local)
+        return self
+
+    def _attach(self, local: IceBody) -> None:
+        """Take ``local`` as this rank's body and set up the counters (collective)."""
+        plan = self.plan
         self.body = local
         self.exchange_seconds = 0.0  # wall time spent in halo exchanges, s
         # bonds whose lower end is owned here: counted once over all ranks
-        self._counted = plan.owned[np.repeat(np.arange(len(loc)), np.diff(row_ptr))]
+        self._counted = plan.owned[np.repeat(np.arange(local.n), np.diff(local.row_ptr))]
         self._counted_broken = self._broken_count()
         self._owned_rows = plan.owned.astype(np.uint8)  # whose crushing energy this rank counts
         self.update_intact_volume()  # pre-cracks: the halo's from their owners
@@ -140,13 +162,7 @@ class DistributedIce(DistributedCheckpoint):
     # -- exchanges ---------------------------------------------------------------------------
     def _exchange(self, values: np.ndarray) -> None:
         """Overwrite the halo entries of ``values`` with their owners' values."""
-        t0 = time.perf_counter()
-        p = self.plan
-        sends = {q: values[idx] for q, idx in p.send.items()}
-        recvs = {q: ((len(idx),) + values.shape[1:], values.dtype) for q, idx in p.recv.items()}
-        for q, got in self.comm.exchange(sends, recvs).items():
-            values[p.recv[q]] = got
-        self.exchange_seconds += time.perf_counter() - t0
+        self.exchange_seconds += halo_exchange(self.comm, self.plan, values)
 
     def _broken_count(self) -> int:
         """Broken bonds whose lower end this rank owns (each bond counted on one rank)."""
