@@ -33,6 +33,7 @@ from pdfem.pd.body import IceBody
 from pdfem.pd.constraints import reaction_forces
 from pdfem.pd.distributed_state import DistributedCheckpoint
 from pdfem.pd.distributed_surface import halo_exchange
+from pdfem.pd.distributed_timestep import split_stable_time_step
 
 
 @dataclasses.dataclass
@@ -309,6 +310,21 @@ class DistributedIce(DistributedCheckpoint):
             b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b._broken_arg(), b.rest, b.vol, b.m,
             mat.mu, owned=self.plan.owned)
         return float(self._sum(W * b.vol)) + float(self.comm.allreduce_sum(crushed))
+
+    @property
+    def n_bonds(self) -> int:
+        """Number of bonds of the whole body (all ranks)."""
+        return self.global_bonds
+
+    def counts(self) -> tuple[int, int, int]:
+        """Particles, bonds and broken bonds of the whole body (collective)."""
+        broken = int(self.comm.allreduce_sum(np.int64(self._broken_count())))
+        return self.global_n, self.global_bonds, broken
+
+    def stable_time_step(self) -> float:
+        """The whole body's stable step (s), as the serial body's (collective;
+        :mod:`pdfem.pd.distributed_timestep`)."""
+        return split_stable_time_step(self.body, self.plan.owned, self._exchange, self.comm)
 
     def momentum(self) -> np.ndarray:
         b = self.body

@@ -201,10 +201,13 @@ def distributed_body(name: str, shape, material, dx: float, delta: float, comm, 
     return body, plan, census, part
 
 
-def distributed_ice(local: IceBody, plan: HaloPlan, comm, n_global: int) -> DistributedIce:
+def distributed_ice(local: IceBody, plan: HaloPlan, comm, n_global: int,
+                    partition: str = "") -> DistributedIce:
     """Wrap a local body from :func:`distributed_body` (constraints, cracks and regions added)
     as a :class:`~pdfem.pd.distributed.DistributedIce`; its constraints keep only owned
     particles, as the global set-up's do."""
     local.constraints = [dataclasses.replace(c, index=c.index[plan.owned[c.index]])
                          for c in local.constraints]
-    return DistributedIce.from_local(local, plan, comm, n_global)
+    ice = DistributedIce.from_local(local, plan, comm, n_global)
+    ice.partition_name = partition  # for the start-up report
+    return ice
