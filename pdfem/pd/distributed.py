@@ -144,8 +144,9 @@ class DistributedIce(DistributedCheckpoint):
         self.global_n = int(n_global)
         self.global_body = None  # never built: short-range contact needs the global set-up
         self.plan = plan
-        counted = plan.owned[np.repeat(np.arange(local.n), np.diff(local.row_ptr))]
+        counted = np.repeat(plan.owned, np.diff(local.row_ptr))  # 1 B per bond
         self.global_bonds = int(comm.allreduce_sum(np.int64(counted.sum())))
+        del counted
         self._attach(local)
         return self
 
@@ -155,7 +156,7 @@ class DistributedIce(DistributedCheckpoint):
         self.body = local
         self.exchange_seconds = 0.0  # wall time spent in halo exchanges, s
         # bonds whose lower end is owned here: counted once over all ranks
-        self._counted = plan.owned[np.repeat(np.arange(local.n), np.diff(local.row_ptr))]
+        self._counted = np.repeat(plan.owned, np.diff(local.row_ptr))
         self._counted_broken = self._broken_count()
         self._owned_rows = plan.owned.astype(np.uint8)  # whose crushing energy this rank counts
         self.update_intact_volume()  # pre-cracks: the halo's from their owners

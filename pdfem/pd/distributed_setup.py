@@ -125,24 +125,34 @@ def local_pairs(x: np.ndarray, owned: np.ndarray, delta: float):
     keep = owned.copy()
     keep[out] = True
     keep |= np.diff(ptr) > 0
-    new = np.cumsum(keep) - 1
+    new = (np.cumsum(keep) - 1).astype(np.int32)
     row = np.concatenate([[0], np.cumsum(np.diff(ptr)[keep])]).astype(np.int64)
-    return keep, row, new[out].astype(np.int32)
+    return keep, row, new[out]  # int32 (4 B per bond, no int64 temporary)
 
 
 def local_plan(gid, owned, owner, row_ptr, nbr, rank: int) -> HaloPlan:
     """The :class:`~pdfem.pd.distributed.HaloPlan` of the local particles (``pairs`` None: the
     global bond numbers are found when a checkpoint needs them)."""
-    i_of = np.repeat(np.arange(len(gid)), np.diff(row_ptr))
     recv, send = {}, {}
     for q in np.unique(owner[~owned]):
         q = int(q)
         recv[q] = np.flatnonzero(~owned & (owner == q))
-        mark = np.zeros(len(gid), dtype=bool)
-        mark[i_of[owned[i_of] & (owner[nbr] == q)]] = True
-        mark[nbr[owned[nbr] & (owner[i_of] == q)]] = True
-        send[q] = np.flatnonzero(mark)
+        send[q] = np.flatnonzero(_bonded_to(row_ptr, nbr, owned, owner, q))
     return HaloPlan(gid, owned, None, send, recv)
+
+
+@numba.njit(cache=True)
+def _bonded_to(row_ptr, nbr, owned, owner, q):
+    """Which owned particles have a bond partner owned by rank ``q`` (what ``q`` needs)."""
+    mark = np.zeros(row_ptr.shape[0] - 1, dtype=np.bool_)
+    for i in range(row_ptr.shape[0] - 1):
+        for k in range(row_ptr[i], row_ptr[i + 1]):
+            j = nbr[k]
+            if owned[i] and owner[j] == q:
+                mark[i] = True
+            if owned[j] and owner[i] == q:
+                mark[j] = True
+    return mark
 
 
 def setup_partition(shape, dx: float, delta: float, n_parts: int):
