@@ -71,8 +71,11 @@ def setup_comm(case, comm):
     for cfg in case.ice:
         if not isinstance(cfg.shape, SPLIT_SHAPES):
             return None
-        law = failure_law(cfg.material.failure, ice_material(cfg.material, cfg.dx, 1.0),
-                          cfg.horizon)
+        try:  # only the law's kind matters here (depth 1 m for a flexural strength)
+            law = failure_law(cfg.material.failure, ice_material(cfg.material, cfg.dx, 1.0),
+                              cfg.horizon)
+        except ValueError:
+            return None  # bad input: the builder reports it, naming the field
         if law.broken_bonds_push:
             return None
     return comm
