@@ -199,3 +199,39 @@ def test_no_rank_holds_the_global_body(tmp_path):
     assert split["grown_max"] < 0.6 * whole["grown_max"], figures
     assert split["largest_array_max"] < 0.5 * 8 * split["bonds"], figures
     assert split["local_max"] < 0.6 * split["n"], figures
+
+
+def test_lattice_planes_are_the_lattice_bit_for_bit():
+    """Any plane block generated from the axes equals the rows of the whole lattice."""
+    import numpy as np
+
+    from pdfem.geometry.lattice import lattice_axes, lattice_plane, lattice_points
+
+    lo, hi, dx = np.array([0.013, -0.2, 0.1]), np.array([0.113, 0.05, 0.23]), 0.0101
+    whole = lattice_points(lo, hi, dx)
+    axes = lattice_axes(lo, hi, dx)
+    nx, ny, nz = (len(a) for a in axes)
+    grid = whole.reshape(nx, ny, nz, 3)
+    for i in (0, nx // 2, nx - 1):
+        assert np.array_equal(lattice_plane(axes, i), grid[i].reshape(-1, 3))
+        assert np.array_equal(lattice_plane(axes, i, (2, 7), (1, 4)),
+                              grid[i, 2:7, 1:4].reshape(-1, 3))
+
+
+def test_box_partition_balances_a_box_exactly():
+    """For a box every plane holds as many particles: 4 ranks on a 12 x 12 x 20 lattice get
+    720 particles each, and each lattice point's owner is the box that holds its indices."""
+    import numpy as np
+
+    from pdfem.parallel.box_partition import choose_box_partition
+
+    counts = [np.full(12, 240), np.full(12, 240), np.full(20, 144)]
+    part = choose_box_partition(counts, 4, 3)
+    ijk = np.stack(np.meshgrid(np.arange(12), np.arange(12), np.arange(20), indexing="ij"),
+                   -1).reshape(-1, 3)
+    owner = part.owner(ijk)
+    assert np.array_equal(np.bincount(owner, minlength=4), [720] * 4)
+    for r in range(4):
+        lo, hi = part.box(r)
+        inside = np.all((ijk >= lo) & (ijk < hi), axis=1)
+        assert np.array_equal(inside, owner == r)
