@@ -3,9 +3,10 @@
 A rank's part comes either from the global set-up (every rank builds the same global body:
 lattice, bonds, weights, deterministic; :class:`DistributedIce` keeps its part) or from the
 distributed set-up (:mod:`pdfem.pd.distributed_setup`, :meth:`DistributedIce.from_local`: each
-rank builds only its part; the same arrays). Either way a rank holds only its *local* part: the particles it owns (:mod:`pdfem.parallel.partition`) and their bond
-partners owned elsewhere (the halo), in global order, and every bond with at least one owned
-end, in the global bond order. Bonds only break, so this pattern is fixed at set-up. One
+rank builds only its part; the same arrays). Either way a rank holds only its *local* part:
+the particles it owns (:mod:`pdfem.parallel.partition`) and their bond partners owned
+elsewhere (the halo), in global order, and every bond with at least one owned end, in the
+global bond order. Bonds only break, so this pattern is fixed at set-up. One
 velocity-Verlet step on a rank:
 
 1. half kick and position update of its particles (halo values are overwritten next);
