@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-__all__ = ["fill", "lattice_points", "particle_volume"]
+__all__ = ["fill", "lattice_axes", "lattice_plane", "lattice_points", "particle_volume"]
 
 
 def lattice_points(lo: np.ndarray, hi: np.ndarray, dx: float) -> np.ndarray:
@@ -85,3 +85,30 @@ def _check_dx(dx: float) -> float:
     if not (math.isfinite(dx) and dx > 0.0):
         raise ValueError(f"the lattice spacing dx must be a positive length in m, got {dx!r}")
     return dx
+
+
+def lattice_axes(lo: np.ndarray, hi: np.ndarray, dx: float) -> list[np.ndarray]:
+    """The coordinates (m) of the lattice planes of :func:`lattice_points` along x, y and z.
+
+    ``lattice_points(lo, hi, dx)[(i * n_y + j) * n_z + k]`` is ``(ax[0][i], ax[1][j], ax[2][k])``
+    bit for bit (the same expression per axis), so any block of the lattice can be generated
+    from index ranges without the whole array (:func:`lattice_plane`).
+    """
+    dx = _check_dx(dx)
+    lo = np.asarray(lo, dtype=np.float64)
+    hi = np.asarray(hi, dtype=np.float64)
+    counts = [max(1, int(round((hi[k] - lo[k]) / dx))) for k in range(3)]
+    return [lo[k] + (np.arange(counts[k], dtype=np.float64) + 0.5) * dx for k in range(3)]
+
+
+def lattice_plane(axes: list[np.ndarray], i: int, j: tuple[int, int] | None = None,
+                  k: tuple[int, int] | None = None) -> np.ndarray:
+    """The points (m) of the lattice plane ``i`` (x index), rows ``j0:j1``, columns ``k0:k1``
+    (default: all), in y-major / z order as :func:`lattice_points` lists them."""
+    j0, j1 = (0, len(axes[1])) if j is None else j
+    k0, k1 = (0, len(axes[2])) if k is None else k
+    out = np.empty((j1 - j0, k1 - k0, 3), dtype=np.float64)
+    out[..., 0] = axes[0][i]
+    out[..., 1] = axes[1][j0:j1, None]
+    out[..., 2] = axes[2][None, k0:k1]
+    return out.reshape(-1, 3)

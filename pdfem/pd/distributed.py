@@ -1,9 +1,12 @@
 """An ice body split over MPI ranks: owned particles, a halo of ghosts, two exchanges per step.
 
-Every rank builds the same global body (lattice, bonds, weights: deterministic), then keeps
-only its *local* part: the particles it owns (:mod:`pdfem.parallel.partition`) and their bond
-partners owned elsewhere (the halo), in global order, and every bond with at least one owned
-end, in the global bond order. Bonds only break, so this pattern is fixed at set-up. One
+A rank's part comes either from the global set-up (every rank builds the same global body:
+lattice, bonds, weights, deterministic; :class:`DistributedIce` keeps its part) or from the
+distributed set-up (:mod:`pdfem.pd.distributed_setup`, :meth:`DistributedIce.from_local`: each
+rank builds only its part; the same arrays). Either way a rank holds only its *local* part:
+the particles it owns (:mod:`pdfem.parallel.partition`) and their bond partners owned
+elsewhere (the halo), in global order, and every bond with at least one owned end, in the
+global bond order. Bonds only break, so this pattern is fixed at set-up. One
 velocity-Verlet step on a rank:
 
 1. half kick and position update of its particles (halo values are overwritten next);
@@ -25,7 +28,6 @@ some sums can differ, so 1 and N ranks agree to round-off. Units: SI.
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import numpy as np
 
@@ -33,6 +35,8 @@ from pdfem.pd import kernels
 from pdfem.pd.body import IceBody
 from pdfem.pd.constraints import reaction_forces
 from pdfem.pd.distributed_state import DistributedCheckpoint
+from pdfem.pd.distributed_surface import halo_exchange
+from pdfem.pd.distributed_timestep import split_stable_time_step
 
 
 @dataclasses.dataclass
@@ -129,10 +133,33 @@ class DistributedIce(DistributedCheckpoint):
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
             local.constraints.append(dataclasses.replace(c, index=g2l[mine]))
+        self.global_bonds = len(body.nbr)
+        self._attach(local)
+
+    @classmethod
+    def from_local(cls, local: IceBody, plan: HaloPlan, comm, n_global: int) -> "DistributedIce":
+        """A rank's part built without the global body (:mod:`pdfem.pd.distributed_setup`):
+        ``local`` holds the owned and halo particles in global order (``local.gid`` their
+        global numbers, constraints over owned particles only), ``plan`` its halo plan
+        (``pairs`` None), ``n_global`` the body's particle count. Collective."""
+        self = cls.__new__(cls)
+        self.comm = comm
+        self.global_n = int(n_global)
+        self.global_body = None  # never built: short-range contact needs the global set-up
+        self.plan = plan
+        counted = np.repeat(plan.owned, np.diff(local.row_ptr))  # 1 B per bond
+        self.global_bonds = int(comm.allreduce_sum(np.int64(counted.sum())))
+        del counted
+        self._attach(local)
+        return self
+
+    def _attach(self, local: IceBody) -> None:
+        """Take ``local`` as this rank's body and set up the counters (collective)."""
+        plan = self.plan
         self.body = local
         self.exchange_seconds = 0.0  # wall time spent in halo exchanges, s
         # bonds whose lower end is owned here: counted once over all ranks
-        self._counted = plan.owned[np.repeat(np.arange(len(loc)), np.diff(row_ptr))]
+        self._counted = np.repeat(plan.owned, np.diff(local.row_ptr))
         self._counted_broken = self._broken_count()
         self._owned_rows = plan.owned.astype(np.uint8)  # whose crushing energy this rank counts
         self.update_intact_volume()  # pre-cracks: the halo's from their owners
@@ -140,13 +167,7 @@ class DistributedIce(DistributedCheckpoint):
     # -- exchanges ---------------------------------------------------------------------------
     def _exchange(self, values: np.ndarray) -> None:
         """Overwrite the halo entries of ``values`` with their owners' values."""
-        t0 = time.perf_counter()
-        p = self.plan
-        sends = {q: values[idx] for q, idx in p.send.items()}
-        recvs = {q: ((len(idx),) + values.shape[1:], values.dtype) for q, idx in p.recv.items()}
-        for q, got in self.comm.exchange(sends, recvs).items():
-            values[p.recv[q]] = got
-        self.exchange_seconds += time.perf_counter() - t0
+        self.exchange_seconds += halo_exchange(self.comm, self.plan, values)
 
     def _broken_count(self) -> int:
         """Broken bonds whose lower end this rank owns (each bond counted on one rank)."""
@@ -293,6 +314,21 @@ class DistributedIce(DistributedCheckpoint):
             b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b._broken_arg(), b.rest, b.vol, b.m,
             mat.mu, owned=self.plan.owned)
         return float(self._sum(W * b.vol)) + float(self.comm.allreduce_sum(crushed))
+
+    @property
+    def n_bonds(self) -> int:
+        """Number of bonds of the whole body (all ranks)."""
+        return self.global_bonds
+
+    def counts(self) -> tuple[int, int, int]:
+        """Particles, bonds and broken bonds of the whole body (collective)."""
+        broken = int(self.comm.allreduce_sum(np.int64(self._broken_count())))
+        return self.global_n, self.global_bonds, broken
+
+    def stable_time_step(self) -> float:
+        """The whole body's stable step (s), as the serial body's (collective;
+        :mod:`pdfem.pd.distributed_timestep`)."""
+        return split_stable_time_step(self.body, self.plan.owned, self._exchange, self.comm)
 
     def momentum(self) -> np.ndarray:
         b = self.body

@@ -3,6 +3,9 @@
 Each region in the case (fixed, prescribed velocity, no-fail, cracks) must select something;
 fixed and prescribed regions carry their names (for their reaction histories) into the body;
 one that selects no particle (or cuts no bond) is a user error, reported with its field name.
+Under MPI (a communicator of several ranks given) a body is built split over the ranks, each
+building only its part (:mod:`pdfem.pd.distributed_setup`); the regions then apply to each
+rank's part, and the checks count over all ranks.
 The case's material section becomes the kernels' :class:`~pdfem.pd.materials.lps.IceMaterial`
 here (:func:`ice_material`), so that the case schema does not depend on the physics.
 """
@@ -16,6 +19,7 @@ from pdfem.case.ice import IceMaterialSection
 from pdfem.errors import InputError
 from pdfem.geometry.path import DisplacementPath
 from pdfem.pd.body import IceBody
+from pdfem.pd.distributed_setup import distributed_body, distributed_ice
 from pdfem.pd.failure import failure_law
 from pdfem.pd.influence import isotropy_gain
 from pdfem.pd.materials.lps import IceMaterial, tensile_from_flexural
@@ -46,7 +50,7 @@ def ice_material(m: IceMaterialSection, dx: float | None = None,
                        rate_exponent=m.rate_exponent)
 
 
-def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceBody:
+def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>", comm=None):
     """Build the ice body that ``cfg`` describes.
 
     Parameters
@@ -57,10 +61,15 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
         The run settings (PD loop, gravity).
     file
         Case-file name for error messages.
+    comm
+        With a communicator of several ranks, the body is built split over them by the
+        distributed set-up (:mod:`pdfem.pd.distributed_setup`): every rank builds only its part,
+        and the result is a :class:`~pdfem.pd.distributed.DistributedIce` (collective). None:
+        the whole body.
 
     Returns
     -------
-    IceBody
+    IceBody or DistributedIce
         The body at rest in its reference state (initial velocity applied), forces not yet computed.
     """
     try:
@@ -73,21 +82,38 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
         material = ice_material(cfg.material, cfg.dx, float(hi[2] - lo[2]))
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.material.flexural_strength", str(exc)) from None
+    split = comm is not None and comm.size > 1
     try:
         law = failure_law(cfg.material.failure, material, cfg.horizon)
-        body = IceBody.from_shape(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon,
-                                  loop=run.pd_loop, failure=law)
+        if split:
+            body, plan, census, part = distributed_body(cfg.name, cfg.shape, material, cfg.dx,
+                                                     cfg.horizon, comm, loop=run.pd_loop,
+                                                     failure=law)
+            n = census.n
+        else:
+            body = IceBody.from_shape(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon,
+                                      loop=run.pd_loop, failure=law)
+            n = body.n
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.shape", str(exc)) from None
-    if body.n < 2:
-        raise InputError(file, f"{cfg.field}.dx", f"the shape holds {body.n} particle(s) at this spacing; "
+    if n < 2:
+        raise InputError(file, f"{cfg.field}.dx", f"the shape holds {n} particle(s) at this spacing; "
                          "choose a smaller dx", cfg.dx)
     body.gravity = np.asarray(run.gravity, dtype=np.float64)
     body.v[:] = np.asarray(cfg.initial_velocity)
+    total = (lambda k: int(comm.allreduce_sum(np.int64(k)))) if split else int
+    apply_regions(body, cfg, file, total)
+    return distributed_ice(body, plan, comm, n, part.name) if split else body
+
+
+def apply_regions(body: IceBody, cfg: IceConfig, file: str, total=int) -> None:
+    """No-fail regions, pre-cracks, fixed and prescribed regions of ``cfg`` on ``body`` (a whole
+    body, or a rank's part with ``total`` summing a count over the ranks: a region must select
+    a particle, a crack cut a bond, somewhere in the body)."""
 
     def select(region, field: str) -> np.ndarray:
         mask = region.contains(body.x0)
-        if not mask.any():
+        if total(mask.sum()) == 0:
             lo, hi = region.bounds()
             raise InputError(file, field, "this region contains no particle of the body "
                              f"(region bounds {np.round(lo, 6).tolist()} to {np.round(hi, 6).tolist()} m); "
@@ -97,7 +123,7 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
     for region, field in cfg.no_fail:
         body.nofail[select(region, field)] = 1
     for crack in cfg.cracks:
-        if body.cut_crack(crack.point, crack.normal, crack.box.min, crack.box.max) == 0:
+        if total(body.cut_crack(crack.point, crack.normal, crack.box.min, crack.box.max)) == 0:
             raise InputError(file, crack.field, "this crack cuts no bond; the plane through 'point' "
                              "with 'normal' must pass through the ice inside 'box'")
     for fixed in cfg.fixed:
@@ -106,4 +132,3 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>") -> IceB
         path = None if bc.path is None else DisplacementPath(bc.path)
         body.add_velocity_constraint(select(bc.region, f"{bc.field}.region"), bc.velocity,
                                      bc.ramp_time, path=path, name=bc.name)
-    return body

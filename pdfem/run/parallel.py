@@ -2,8 +2,11 @@
 
 * :func:`build_structures`: rank 0 meshes the structure models into the output directory, then
   every rank reads the same meshes (the structures are small and replicated on every rank).
-* :func:`distribute`: split each ice body over the ranks (the partition is reported), or leave
-  it whole on a single rank.
+* :func:`setup_comm`: whether the ice bodies are built split over the ranks from the start (the
+  distributed set-up, :mod:`pdfem.pd.distributed_setup`; the default under MPI where it
+  applies) or whole on every rank and split afterwards;
+* :func:`distribute`: split each whole ice body over the ranks (the partition is reported), or
+  leave it whole on a single rank.
 * :func:`warm_before_ranks`: rank 0 fills numba's kernel cache before the other ranks start.
 
 Gathering a frame to rank 0 (or keeping each rank's particles) is the ice bodies' own business
@@ -24,9 +27,12 @@ from pdfem.run.build_structures import build_structure
 from pdfem.fem.rigid import RigidBody
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
-from pdfem.geometry.shapes import Box
+from pdfem.geometry.shapes import Box, Cylinder, Sphere
 from pdfem.pd.distributed import DistributedIce
-from pdfem.parallel.partition import choose_partition
+from pdfem.pd.distributed_setup import distributed_body, distributed_ice
+from pdfem.parallel.partition import BYTES_PER_HALO_PARTICLE, choose_partition
+from pdfem.pd.failure import failure_law
+from pdfem.run.build_ice import ice_material
 
 
 MAX_RANKS_LISTED = 16
@@ -45,13 +51,77 @@ def build_structures(configs, out: Path, file: str, comm) -> list:
     return [build_structure(cfg, out, file, remesh=False) for cfg in configs]
 
 
+SPLIT_SHAPES = (Box, Cylinder, Sphere)
+"""Shapes the distributed set-up builds per rank (analytic point tests); bodies of other shapes
+(closed-surface meshes) are built whole on every rank and then split, as before."""
+
+
+def setup_comm(case, comm):
+    """``comm`` if the case's ice bodies are built split over its ranks by the distributed
+    set-up (:mod:`pdfem.pd.distributed_setup`: no rank holds a whole body), else None.
+
+    The global set-up (every rank builds each whole body, then keeps its part) stays for what
+    the distributed one does not support yet: one rank; short-range contact (on, or implied by
+    a crushing failure law), whose tables are global (issue 17, item 4); water, whose restart
+    check reads the whole body; the full-family PD loop; shapes not in :data:`SPLIT_SHAPES`."""
+    if comm.size == 1 or case.run.short_range_contact or case.water is not None:
+        return None
+    if case.run.pd_loop != "pairs":
+        return None
+    for cfg in case.ice:
+        if not isinstance(cfg.shape, SPLIT_SHAPES):
+            return None
+        try:  # only the law's kind matters here (depth 1 m for a flexural strength)
+            law = failure_law(cfg.material.failure, ice_material(cfg.material, cfg.dx, 1.0),
+                              cfg.horizon)
+        except ValueError:
+            return None  # bad input: the builder reports it, naming the field
+        if law.broken_bonds_push:
+            return None
+    return comm
+
+
+def body_counts(b) -> tuple[int, int, int]:
+    """Particles, bonds and broken bonds of a whole body or of a split one (collective)."""
+    if b.distributed:
+        return b.counts()
+    return b.n, b.n_bonds, int(b.broken.sum())
+
+
+def reference(b) -> tuple:
+    """``(x0 m, vol m^3)`` of the whole body in global order (on rank 0 only for a body from
+    the distributed set-up, ``(None, None)`` elsewhere; collective)."""
+    if not b.distributed:
+        return b.x0, b.vol
+    return b.gather(b.x0), b.gather(b.vol)
+
+
+def _report_split(b, comm, say) -> None:
+    """The partition of a body from the distributed set-up, as :func:`distribute` reports."""
+    p = b.plan
+    figures = comm.allgather((int(p.owned.sum()), int((~p.owned).sum()), len(p.recv)))
+    owned, halo, nbrs = (np.array(v) for v in zip(*figures))
+    say(f"  partition of '{b.name}' over {comm.size} ranks: {b.partition_name} (distributed "
+        f"set-up); particles per rank {owned.min():,}-{owned.max():,} (imbalance "
+        f"{owned.max() / owned.mean() - 1:.1e}), halo up to {halo.max():,}, up to {nbrs.max()} "
+        f"neighbours, {halo.sum() * BYTES_PER_HALO_PARTICLE / 1e6:.3g} MB exchanged per step")
+    if comm.size <= MAX_RANKS_LISTED:
+        for r in range(comm.size):
+            say(f"    rank {r}: {owned[r]:,} particles, {halo[r]:,} halo, {nbrs[r]} neighbours")
+
+
 def distribute(bodies: list, comm, say=lambda s: None) -> list:
     """Each body split over the ranks by :func:`~pdfem.parallel.partition.choose_partition`
-    (the bodies themselves when there is one rank); the partition is reported with ``say``."""
+    (the bodies themselves when there is one rank); the partition is reported with ``say``.
+    Bodies already split by the distributed set-up are reported and kept."""
     if comm.size == 1:
         return bodies
     out = []
     for b in bodies:
+        if b.distributed:
+            _report_split(b, comm, say)
+            out.append(b)
+            continue
         owner, st = choose_partition(b.x0, b.row_ptr, b.nbr, comm.size)
         say(f"  partition of '{b.name}' over {comm.size} ranks: {st.name}; particles per rank "
             f"{int(st.owned.min()):,}-{int(st.owned.max()):,} (imbalance {st.imbalance:.1e}), "
@@ -89,6 +159,9 @@ def warm_up() -> None:
     ice.kinetic_energy()
     ice.strain_energy()
     ice.gather(ice.damage())
+    local, plan, census, _ = distributed_body("warm", Box((0, 0, 0), (0.05, 0.05, 0.05)), mat,
+                                              0.01, 0.03015, SerialComm())
+    distributed_ice(local, plan, SerialComm(), census.n).stable_time_step()
 
 
 def warm_before_ranks(comm) -> None:
