@@ -74,13 +74,13 @@ def _budget(row: dict | None) -> list[dict] | None:
 def _estimate(args: argparse.Namespace, case) -> int:
     """``--estimate``: print the sizing of the run on rank 0; exit status 0 or 2."""
     from pdfem.parallel.comm import run_guarded, world
-    from pdfem.run.preflight import DISTRIBUTED_SETUP
+    from pdfem.run.parallel import splits_bodies
     from pdfem.run.sizing import estimate_report, parse_bytes
     for name, value in (("--ranks", args.ranks), ("--nodes", args.nodes)):
         if value is not None and value < 1:
             raise InputError(None, name, "give a positive whole number", value)
     memory = None if args.node_memory is None else parse_bytes(args.node_memory)
-    setup = DISTRIBUTED_SETUP if args.setup is None else args.setup == "distributed"
+    setup = splits_bodies(case) if args.setup is None else args.setup == "distributed"
     comm = world()
     if comm.size > 1:
         from pdfem.run.parallel import warm_before_ranks

@@ -56,29 +56,33 @@ SPLIT_SHAPES = (Box, Cylinder, Sphere)
 (closed-surface meshes) are built whole on every rank and then split, as before."""
 
 
-def setup_comm(case, comm):
-    """``comm`` if the case's ice bodies are built split over its ranks by the distributed
-    set-up (:mod:`pdfem.pd.distributed_setup`: no rank holds a whole body), else None.
+def splits_bodies(case) -> bool:
+    """Whether an MPI run of ``case`` builds its ice bodies split over the ranks by the
+    distributed set-up (:mod:`pdfem.pd.distributed_setup`: no rank holds a whole body).
 
     The global set-up (every rank builds each whole body, then keeps its part) stays for what
-    the distributed one does not support yet: one rank; short-range contact (on, or implied by
-    a crushing failure law), whose tables are global (issue 17, item 4); water, whose restart
-    check reads the whole body; the full-family PD loop; shapes not in :data:`SPLIT_SHAPES`."""
-    if comm.size == 1 or case.run.short_range_contact or case.water is not None:
-        return None
-    if case.run.pd_loop != "pairs":
-        return None
+    the distributed one does not support yet: short-range contact (on, or implied by a crushing
+    failure law), whose tables are global (issue 17, item 4); water, whose restart check reads
+    the whole body; the full-family PD loop; shapes not in :data:`SPLIT_SHAPES`."""
+    if case.run.short_range_contact or case.water is not None or case.run.pd_loop != "pairs":
+        return False
     for cfg in case.ice:
         if not isinstance(cfg.shape, SPLIT_SHAPES):
-            return None
+            return False
         try:  # only the law's kind matters here (depth 1 m for a flexural strength)
             law = failure_law(cfg.material.failure, ice_material(cfg.material, cfg.dx, 1.0),
                               cfg.horizon)
         except ValueError:
-            return None  # bad input: the builder reports it, naming the field
+            return False  # bad input: the builder reports it, naming the field
         if law.broken_bonds_push:
-            return None
-    return comm
+            return False
+    return True
+
+
+def setup_comm(case, comm):
+    """``comm`` if the case's ice bodies are built split over its ranks (:func:`splits_bodies`,
+    more than one rank), else None."""
+    return comm if comm.size > 1 and splits_bodies(case) else None
 
 
 def body_counts(b) -> tuple[int, int, int]:

@@ -6,13 +6,14 @@ rank needs least; :func:`pdfem.run.estimates.split_lattice`: owned and halo part
 an owned end). A rank's memory is ``FIXED_BYTES`` plus, per body, its local particles x
 ``BYTES_PER_PARTICLE`` + its bonds x ``BYTES_PER_PAIR`` (bytes). Two set-ups:
 
-* distributed (the target of issue 17: each rank builds only its subdomain and halo): that is
-  the rank's peak;
-* global (today's code on several ranks): every rank first builds the whole body, then keeps its
-  part, so the peak per rank is the whole body plus its part.
+* distributed (:mod:`pdfem.pd.distributed_setup`: each rank builds only its subdomain and
+  halo): that is the rank's peak;
+* global (cases the distributed set-up does not cover yet, e.g. crushing ice or water): every
+  rank first builds the whole body, then keeps its part, so the peak per rank is the whole body
+  plus its part.
 
-:data:`DISTRIBUTED_SETUP` says which one this build of pdfem has. A node's need is the sum over
-its ranks (ranks sharing memory: :func:`pdfem.parallel.nodes.node_layout`), compared with its
+:func:`pdfem.run.parallel.splits_bodies` says which one a case gets. A node's need is the sum
+over its ranks (ranks sharing memory: :func:`pdfem.parallel.nodes.node_layout`), compared with its
 ``MemAvailable``.
 """
 
@@ -26,14 +27,10 @@ import numpy as np
 from pdfem.case.schema import Case
 from pdfem.errors import InputError
 from pdfem.parallel.nodes import block_layout, node_layout, per_node
+from pdfem.run.parallel import splits_bodies
 from pdfem.run.estimates import (BYTES_PER_PAIR, BYTES_PER_PARTICLE, FIXED_BYTES, BodyEstimate,
                                  available_memory, best_split, estimate_body, format_bytes,
                                  lattice_counts)
-
-DISTRIBUTED_SETUP = False
-"""True once every rank builds only its own subdomain and halo (issue 17, item 1). Today
-(False) every rank of an MPI run builds the whole ice body first: flip this one line when the
-distributed set-up is merged."""
 
 SETUP_TEXT = {True: "distributed set-up: each rank builds only its subdomain and halo",
               False: "global set-up: every rank builds the whole ice body, then keeps its part, "
@@ -200,15 +197,16 @@ def preflight(case: Case, comm) -> list[str]:
     InputError
         From :func:`check_nodes`.
     """
-    ranks = estimate_rank_memory(case, comm.size, DISTRIBUTED_SETUP)
+    setup = splits_bodies(case)
+    ranks = estimate_rank_memory(case, comm.size, setup)
     nodes = node_layout(comm)
     available = per_node(comm, nodes, available_memory)
-    check_nodes(case, ranks, nodes, available, DISTRIBUTED_SETUP)
+    check_nodes(case, ranks, nodes, available, setup)
     lines = body_lines(case)
     if not case.ice:
         return lines
     if comm.size > 1:
-        lines.append(f"  memory per rank, {SETUP_TEXT[DISTRIBUTED_SETUP]}:")
+        lines.append(f"  memory per rank, {SETUP_TEXT[setup]}:")
         lines += rank_table(ranks, nodes) + node_lines(ranks, nodes, available)
     else:
         lines.append(f"  estimated memory {format_bytes(ranks[0].bytes)} of "
