@@ -1,0 +1,251 @@
+"""Shaft and blade loads of a rotating elastic structure (a propeller): ice torque and thrust,
+the shaft's torque, work and angular impulse, per-blade forces, spindle torque and root bending
+moments, and the largest von Mises stress (docs/rotating_structures.md, "Shaft and blade loads").
+
+A :class:`ShaftLoads` belongs to a :class:`pdfem.fem.rotating.FrameStructure` whose frame turns
+(shaft axis ``n`` = the unit ``angular_velocity`` through ``center``). It is fed by two hooks:
+
+* every contact impulse ``J`` (world axes, on the contact-surface nodes) at the instant it is
+  applied (:meth:`ShaftLoads.add_impulse`): kept per node in world axes and in frame axes with
+  its moment ``r x J`` (frame axes, ``r = X - c0 + u_e`` the node's position from the shaft
+  centre), so moments about any point fixed in the frame (a blade's root) are exact;
+* every structure step (:meth:`ShaftLoads.after_step`): the force the supports exert on the
+  structure node by node (``K u + C v + M a - f_ext`` on the held DOFs, frame axes; it includes
+  the inertial loads on the held nodes, so it is the true force of the hub on the blade roots),
+  whose moment about the axis is the **shaft torque** and whose power on the nodes' true
+  velocity is the **shaft power**; both are integrated by the trapezoid rule, which is how the
+  central-difference scheme integrates a force into momentum.
+
+Sign conventions (SI units: N, N m, N m s, W, J, Pa, m, rad):
+
+* ``ice_torque`` = ``-n . M_ice``: the moment of the ice's force about the shaft axis, positive
+  when it opposes the rotation; ``thrust`` = ``n . F_ice``: the ice's force along the axis,
+  positive along ``angular_velocity``;
+* ``shaft_torque`` = ``n . M_support``: the moment the shaft (through the supports) puts on the
+  structure, positive in the direction of rotation (at constant speed in a steady state it
+  balances ``ice_torque``);
+* blade axes (frame, fixed to blade k): ``e_r`` radial along the spindle (from the axis through
+  the root section's centroid, the centroid of the group ``blade{k}_root``), ``e_t = n x e_r``
+  tangential (the direction the blade moves in), ``e_a = n`` axial. ``force_blade`` = the ice's
+  force on the blade in (e_r, e_t, e_a); the moment of the ice's force about the root centroid
+  ``M`` gives ``spindle_torque = e_r . M``, ``bending_out_of_plane = e_t . M`` (bending out of
+  the plane of rotation, from axial loads) and ``bending_in_plane = e_a . M`` (in the plane of
+  rotation, from tangential loads). These are the ice-load moments at the root section (the
+  quasi-static part, without the blade's own inertia).
+
+Blades are found by the mesh's surface groups ``blade{k}_surface`` (k = 1, 2, ...); without
+them the whole contact surface is one blade whose root is the union of the clamped groups.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+BLADE_SURFACE = re.compile(r"blade(\d+)_surface\Z")
+"""Name of blade k's surface group (its faces but the root)."""
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
+
+
+def blade_groups(structure) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """``[(label, surface-node mask (Ns,) bool, root nodes)]`` of the blades of ``structure``:
+    ``blade{k}`` from the groups ``blade{k}_surface`` and ``blade{k}_root`` of its mesh (the
+    root falls back on the clamped groups), in k order; else one ``blade1``, the whole contact
+    surface with the clamped groups as its root."""
+    found = sorted((int(m.group(1)), g) for g in structure.mesh.facet_sets
+                   if (m := BLADE_SURFACE.match(g)))
+    held = np.unique(np.concatenate([structure.group_nodes(g) for g in structure.fixed_groups]
+                                    or [np.zeros(0, np.int32)]))
+    if not found:
+        return [("blade1", np.ones(len(structure.surface_nodes), bool), held)]
+    out = []
+    for k, g in found:
+        mask = np.isin(structure.surface_nodes, structure.group_nodes(g))
+        root = f"blade{k}_root"
+        nodes = structure.group_nodes(root) if root in structure.mesh.facet_sets else held
+        out.append((f"blade{k}", mask, nodes))
+    return out
+
+
+class ShaftLoads:
+    """Shaft and blade loads of one rotating frame structure (module docstring).
+
+    Parameters
+    ----------
+    structure
+        A :class:`pdfem.fem.rotating.FrameStructure` whose frame turns (non-zero
+        ``angular_velocity``).
+    """
+
+    def __init__(self, structure) -> None:
+        self.structure = structure
+        frame = structure.frame
+        self.axis = _unit(np.asarray(frame.angular_velocity, dtype=np.float64))
+        self.center = np.asarray(frame.center, dtype=np.float64)
+        r0 = structure.points - self.center
+        self.blades = []
+        for label, mask, root in blade_groups(structure):
+            p = r0[root].mean(axis=0) if len(root) else r0[structure.surface_nodes[mask]].mean(0)
+            radial = p - (p @ self.axis) * self.axis
+            if np.linalg.norm(radial) < 1e-9 * max(1.0, np.linalg.norm(p)):
+                q = r0[structure.surface_nodes[mask]].mean(axis=0)
+                radial = q - (q @ self.axis) * self.axis
+            e_r = _unit(radial)
+            axes = np.array([e_r, np.cross(self.axis, e_r), self.axis])  # rows: e_r, e_t, e_a
+            self.blades.append((label, mask, p, axes))
+        fixed = structure.solver.fixed
+        self._held = fixed                                       # held DOFs
+        self._held_node = self._node_of(structure, fixed)
+        self._held_comp = self._comp_of(structure, fixed)
+        self._k_held = structure.K.tocsr()[fixed]
+        n = len(structure.surface_nodes)
+        self.impulse_world = np.zeros((n, 3))    # N s, since the last row
+        self.impulse_frame = np.zeros((n, 3))    # N s, frame axes
+        self.moment_frame = np.zeros((n, 3))     # N m s, r x J, frame axes
+        self.last_time = structure.solver.time   # s, time of the last row
+        self.ice_work = 0.0                      # J, the ice's work on the structure (world)
+        self.ice_angular_impulse = 0.0           # N m s, about the axis, opposing positive
+        q, p = self.support_torque_power()
+        self.shaft_torque, self.shaft_power = q, p
+        self.shaft_work = 0.0                    # J
+        self.shaft_angular_impulse = 0.0         # N m s
+        self.energy0 = self.kinetic_energy() + structure.strain_energy()   # J, at the start
+        self.angular_momentum0 = self.angular_momentum()                   # kg m^2/s
+
+    @staticmethod
+    def _node_of(structure, dofs: np.ndarray) -> np.ndarray:
+        table = structure.dofmap.nodal_dofs                      # (3, Nn)
+        node = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
+        node[table.ravel()] = np.tile(np.arange(table.shape[1]), 3)
+        return node[dofs]
+
+    @staticmethod
+    def _comp_of(structure, dofs: np.ndarray) -> np.ndarray:
+        table = structure.dofmap.nodal_dofs
+        comp = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
+        comp[table.ravel()] = np.repeat(np.arange(3), table.shape[1])
+        return comp[dofs]
+
+    # ------------------------------------------------------------------ hooks
+    def add_impulse(self, impulse: np.ndarray, rotation: np.ndarray, r: np.ndarray,
+                    work: float) -> None:
+        """Contact impulses (N s, (Ns, 3), world axes) applied now to the surface nodes at
+        ``r`` (m, (Ns, 3), frame axes from the shaft centre), with the frame's ``rotation`` and
+        their ``work`` (J, world)."""
+        jf = impulse @ rotation
+        m = np.cross(r, jf)
+        self.impulse_world += impulse
+        self.impulse_frame += jf
+        self.moment_frame += m
+        self.ice_work += work
+        self.ice_angular_impulse -= float(m.sum(axis=0) @ self.axis)
+
+    def support_torque_power(self) -> tuple[float, float]:
+        """The supports' moment about the shaft axis (N m, positive in the rotation's sense)
+        and their power (W) on the held nodes' true velocity, now."""
+        s = self.structure
+        sol = s.solver
+        d = self._held
+        f = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
+        reaction = np.zeros((s.n_nodes, 3))
+        np.add.at(reaction, (self._held_node, self._held_comp), f)
+        nodes = np.unique(self._held_node)
+        r = s.points[nodes] - self.center + s.dofmap.to_nodal(sol.u)[nodes]
+        torque = float(np.cross(r, reaction[nodes]).sum(axis=0) @ self.axis)
+        state = s.frame.state(sol.time)
+        v = s.frame.frame_velocity(sol.time, r) @ state["R"]     # frame axes (u_e' = 0)
+        return torque, float(np.sum(reaction[nodes] * v))
+
+    def after_step(self, dt: float) -> None:
+        """After a structure step of ``dt`` (s): integrate the shaft's torque and power."""
+        q, p = self.support_torque_power()
+        self.shaft_angular_impulse += 0.5 * (self.shaft_torque + q) * dt
+        self.shaft_work += 0.5 * (self.shaft_power + p) * dt
+        self.shaft_torque, self.shaft_power = q, p
+
+    # ------------------------------------------------------------------ state
+    def angular_momentum(self) -> float:
+        """The structure's angular momentum about the shaft axis (kg m^2/s), true motion."""
+        s = self.structure
+        r, v = s._relative()
+        x, w = s.frame.to_world(s.solver.time, r, v)
+        return float((np.cross(x - s.frame.state(s.solver.time)["c"], w)
+                      * s._node_mass[:, None]).sum(axis=0) @ self.axis)
+
+    def kinetic_energy(self) -> float:
+        """The structure's kinetic energy in the world (J), true velocity, lumped mass."""
+        s = self.structure
+        r, v = s._relative()
+        _, w = s.frame.to_world(s.solver.time, r, v)
+        return 0.5 * float(np.sum(s._node_mass[:, None] * w * w))
+
+    def _stress_peak(self, vm: np.ndarray, nodes: np.ndarray | None) -> tuple[float, np.ndarray]:
+        sel = np.arange(len(vm)) if nodes is None else nodes
+        i = sel[int(np.argmax(vm[sel]))]
+        return float(vm[i]), self.structure.points[i].copy()
+
+    def rows(self) -> dict[str, dict[str, float | np.ndarray]]:
+        """The rows of the coupling step ending now (forces are the step's impulses over its
+        length) and restart the step's sums: ``""`` (the shaft) and one per blade label."""
+        s = self.structure
+        step = s.solver.time - self.last_time
+        scale = 1.0 / step if step > 0.0 else 0.0
+        force = self.impulse_world.sum(axis=0) * scale
+        moment = self.moment_frame.sum(axis=0) * scale
+        vm = s.nodal_von_mises()
+        peak, where = self._stress_peak(vm, None)
+        out = {"": {"frame_angle": s.frame.angle(s.solver.time),
+                    "ice_torque": -float(moment @ self.axis), "thrust": float(force @ self.axis),
+                    "ice_force": force, "shaft_torque": self.shaft_torque,
+                    "shaft_power": self.shaft_power, "shaft_work": self.shaft_work,
+                    "shaft_angular_impulse": self.shaft_angular_impulse,
+                    "ice_work": self.ice_work, "ice_angular_impulse": self.ice_angular_impulse,
+                    "angular_momentum_change": self.angular_momentum() - self.angular_momentum0,
+                    "energy_change": self.kinetic_energy() + s.strain_energy() - self.energy0,
+                    "damping_dissipated": s.solver.damping_dissipated,
+                    "max_von_mises": peak, "max_von_mises_location": where}}
+        for label, mask, p, axes in self.blades:
+            jf = self.impulse_frame[mask].sum(axis=0) * scale
+            m = (self.moment_frame[mask].sum(axis=0) - np.cross(p, self.impulse_frame[mask].sum(
+                axis=0))) * scale
+            blade_vm = f"{label}" in s.mesh.element_sets
+            bpeak, bwhere = self._stress_peak(vm, s.group_nodes(label) if blade_vm else
+                                              s.surface_nodes[mask])
+            out[label] = {"force": self.impulse_world[mask].sum(axis=0) * scale,
+                          "force_blade": axes @ jf,
+                          "ice_torque": -float(self.moment_frame[mask].sum(axis=0) @ self.axis)
+                          * scale, "thrust": float(jf @ self.axis),
+                          "spindle_torque": float(axes[0] @ m),
+                          "bending_out_of_plane": float(axes[1] @ m),
+                          "bending_in_plane": float(axes[2] @ m),
+                          "max_von_mises": bpeak, "max_von_mises_location": bwhere}
+        self.impulse_world[:] = 0.0
+        self.impulse_frame[:] = 0.0
+        self.moment_frame[:] = 0.0
+        self.last_time = s.solver.time
+        return out
+
+    def checkpoint_state(self) -> dict[str, np.ndarray | float]:
+        """The step's sums and the running integrals, for a checkpoint."""
+        return {"shaft_impulse_world": self.impulse_world.copy(),
+                "shaft_impulse_frame": self.impulse_frame.copy(),
+                "shaft_moment_frame": self.moment_frame.copy(),
+                "shaft_scalars": np.array([self.last_time, self.ice_work,
+                                           self.ice_angular_impulse, self.shaft_torque,
+                                           self.shaft_power, self.shaft_work,
+                                           self.shaft_angular_impulse, self.energy0,
+                                           self.angular_momentum0])}
+
+    def restore_state(self, state: dict) -> None:
+        """Restore :meth:`checkpoint_state` exactly."""
+        self.impulse_world = np.array(state["shaft_impulse_world"], dtype=np.float64)
+        self.impulse_frame = np.array(state["shaft_impulse_frame"], dtype=np.float64)
+        self.moment_frame = np.array(state["shaft_moment_frame"], dtype=np.float64)
+        (self.last_time, self.ice_work, self.ice_angular_impulse, self.shaft_torque,
+         self.shaft_power, self.shaft_work, self.shaft_angular_impulse, self.energy0,
+         self.angular_momentum0) = map(
+            float, state["shaft_scalars"])
