@@ -97,11 +97,8 @@ class ShaftLoads:
             e_r = _unit(radial)
             axes = np.array([e_r, np.cross(self.axis, e_r), self.axis])  # rows: e_r, e_t, e_a
             self.blades.append((label, mask, p, axes))
-        fixed = structure.solver.fixed
-        self._held = fixed                                       # held DOFs
-        self._held_node = self._node_of(structure, fixed)
-        self._held_comp = self._comp_of(structure, fixed)
-        self._k_held = structure.K.tocsr()[fixed]
+        self._held = structure.solver.fixed                       # held DOFs
+        self._k_held = structure.K.tocsr()[self._held]
         n = len(structure.surface_nodes)
         self.impulse_world = np.zeros((n, 3))    # N s, since the last row
         self.impulse_frame = np.zeros((n, 3))    # N s, frame axes
@@ -115,20 +112,6 @@ class ShaftLoads:
         self.shaft_angular_impulse = 0.0         # N m s
         self.energy0 = self.kinetic_energy() + structure.strain_energy()   # J, at the start
         self.angular_momentum0 = self.angular_momentum()                   # kg m^2/s
-
-    @staticmethod
-    def _node_of(structure, dofs: np.ndarray) -> np.ndarray:
-        table = structure.dofmap.nodal_dofs                      # (3, Nn)
-        node = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
-        node[table.ravel()] = np.tile(np.arange(table.shape[1]), 3)
-        return node[dofs]
-
-    @staticmethod
-    def _comp_of(structure, dofs: np.ndarray) -> np.ndarray:
-        table = structure.dofmap.nodal_dofs
-        comp = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
-        comp[table.ravel()] = np.repeat(np.arange(3), table.shape[1])
-        return comp[dofs]
 
     # ------------------------------------------------------------------ hooks
     def add_impulse(self, impulse: np.ndarray, rotation: np.ndarray, r: np.ndarray,
@@ -145,20 +128,21 @@ class ShaftLoads:
         self.ice_angular_impulse -= float(m.sum(axis=0) @ self.axis)
 
     def support_torque_power(self) -> tuple[float, float]:
-        """The supports' moment about the shaft axis (N m, positive in the rotation's sense)
-        and their power (W) on the held nodes' true velocity, now."""
+        """The shaft's moment about the shaft axis (N m, positive in the rotation's sense) and
+        its power (W) now: the supports' forces on the held nodes, plus the Rayleigh damping
+        forces on the free nodes (damping acts on the motion relative to the frame: its force
+        is one between the structure and the frame, which the shaft drives), on the frame's
+        velocity at the nodes."""
         s = self.structure
         sol = s.solver
         d = self._held
-        f = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
-        reaction = np.zeros((s.n_nodes, 3))
-        np.add.at(reaction, (self._held_node, self._held_comp), f)
-        nodes = np.unique(self._held_node)
-        r = s.points[nodes] - self.center + s.dofmap.to_nodal(sol.u)[nodes]
-        torque = float(np.cross(r, reaction[nodes]).sum(axis=0) @ self.axis)
-        state = s.frame.state(sol.time)
-        v = s.frame.frame_velocity(sol.time, r) @ state["R"]     # frame axes (u_e' = 0)
-        return torque, float(np.sum(reaction[nodes] * v))
+        g = -np.array(sol.f_damp, dtype=np.float64)               # free nodes: damping
+        g[d] = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
+        force = s.dofmap.to_nodal(g)                              # (Nn, 3) frame axes
+        r = s.points - self.center + s.dofmap.to_nodal(sol.u)
+        torque = float(np.cross(r, force).sum(axis=0) @ self.axis)
+        v = s.frame.frame_velocity(sol.time, r) @ s.frame.state(sol.time)["R"]  # frame axes
+        return torque, float(np.sum(force * v))
 
     def after_step(self, dt: float) -> None:
         """After a structure step of ``dt`` (s): integrate the shaft's torque and power."""
