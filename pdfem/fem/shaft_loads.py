@@ -21,17 +21,35 @@ Sign conventions (SI units: N, N m, N m s, W, J, Pa, m, rad):
 * ``ice_torque`` = ``-n . M_ice``: the moment of the ice's force about the shaft axis, positive
   when it opposes the rotation; ``thrust`` = ``n . F_ice``: the ice's force along the axis,
   positive along ``angular_velocity``;
-* ``shaft_torque`` = ``n . M_support``: the moment the shaft (through the supports) puts on the
-  structure, positive in the direction of rotation (at constant speed in a steady state it
-  balances ``ice_torque``);
-* blade axes (frame, fixed to blade k): ``e_r`` radial along the spindle (from the axis through
-  the root section's centroid, the centroid of the group ``blade{k}_root``), ``e_t = n x e_r``
-  tangential (the direction the blade moves in), ``e_a = n`` axial. ``force_blade`` = the ice's
-  force on the blade in (e_r, e_t, e_a); the moment of the ice's force about the root centroid
-  ``M`` gives ``spindle_torque = e_r . M``, ``bending_out_of_plane = e_t . M`` (bending out of
-  the plane of rotation, from axial loads) and ``bending_in_plane = e_a . M`` (in the plane of
-  rotation, from tangential loads). These are the ice-load moments at the root section (the
-  quasi-static part, without the blade's own inertia).
+* ``shaft_torque`` = ``n . M_shaft``: the moment the shaft puts on the structure, positive in
+  the direction of rotation (at constant speed in a steady state it balances ``ice_torque``):
+  the supports' forces, plus the Rayleigh mass-damping forces on the free nodes (damping acts
+  on the motion relative to the frame, so its force is one between the structure and the
+  frame, which the shaft drives; zero without damping or at rest); ``shaft_power`` (W) is
+  their power on the frame's velocity at the nodes;
+* blade axes (frame, fixed to blade k of Z): ``e_r`` radial along the spindle, the radial line
+  at ``psi_k = 2 pi (k - 1) / Z`` about the axis from +z (the propeller model's reference
+  line, :func:`spindle`; the radial direction of the root centroid when that line is not near
+  it, e.g. for an axis along z), ``e_t = n x e_r`` tangential (the direction the blade moves
+  in), ``e_a = n`` axial. ``force_blade`` = the ice's force on the blade in (e_r, e_t, e_a);
+  the moment ``M`` of the ice's force about the root section's centroid (the centroid of the
+  nodes of ``blade{k}_root``) gives ``spindle_torque = e_r . M``, ``bending_out_of_plane =
+  e_t . M`` (bending out of the plane of rotation, from axial loads) and ``bending_in_plane =
+  e_a . M`` (in the plane of rotation, from tangential loads). These are the ice-load moments
+  at the root section (the quasi-static part, without the blade's own inertia and centrifugal
+  load); the support reactions ``reaction_<group>`` hold the total force at a clamped root.
+
+Rows (every coupling step; forces are the step's impulses over its length): ``shaft/<name>``:
+``frame_angle`` (rad), ``ice_torque``, ``thrust``, ``ice_force`` (3, world), ``shaft_torque``,
+``shaft_power``, the running integrals ``shaft_work``, ``shaft_angular_impulse``, ``ice_work``
+(world, on the true velocity), ``ice_angular_impulse`` (opposing positive), the changes since
+t = 0 of the angular momentum about the axis (``angular_momentum_change``, true motion) and of
+the energy (``energy_change``: true kinetic energy with the lumped mass plus strain energy),
+``damping_dissipated``, and ``max_von_mises`` (Pa, nodal average) with its node's reference
+position ``max_von_mises_location`` (m, frame axes at t = 0); ``shaft/<name>.blade<k>``:
+``force`` (world), ``force_blade``, ``ice_torque``, ``thrust``, ``spindle_torque``,
+``bending_out_of_plane``, ``bending_in_plane``, ``max_von_mises`` (over the volume group
+``blade<k>``, else the blade's surface nodes) and its location.
 
 Blades are found by the mesh's surface groups ``blade{k}_surface`` (k = 1, 2, ...); without
 them the whole contact surface is one blade whose root is the union of the clamped groups.
@@ -71,6 +89,22 @@ def blade_groups(structure) -> list[tuple[str, np.ndarray, np.ndarray]]:
     return out
 
 
+def spindle(axis: np.ndarray, psi: float, point: np.ndarray) -> np.ndarray:
+    """Unit spindle direction (frame axes) of a blade: the radial line at ``psi`` (rad) about
+    the shaft ``axis`` from +z (the propeller model's reference line, either sense of ``psi``:
+    the one nearer the blade), when it lies within 30 deg of the radial direction of ``point``
+    (m from the shaft centre: the root centroid); else (an axis along z, or another layout)
+    that radial direction."""
+    radial = _unit(point - (point @ axis) * axis)
+    z = np.array([0.0, 0.0, 1.0]) - axis[2] * axis
+    if np.linalg.norm(z) < 1e-6:
+        return radial
+    z = _unit(z)
+    best = max((np.cos(a) * z + np.sin(a) * np.cross(axis, z) for a in (psi, -psi)),
+               key=lambda e: float(e @ radial))
+    return best if best @ radial > np.cos(np.radians(30.0)) else radial
+
+
 class ShaftLoads:
     """Shaft and blade loads of one rotating frame structure (module docstring).
 
@@ -88,13 +122,12 @@ class ShaftLoads:
         self.center = np.asarray(frame.center, dtype=np.float64)
         r0 = structure.points - self.center
         self.blades = []
-        for label, mask, root in blade_groups(structure):
+        groups = blade_groups(structure)
+        for k, (label, mask, root) in enumerate(groups):
             p = r0[root].mean(axis=0) if len(root) else r0[structure.surface_nodes[mask]].mean(0)
-            radial = p - (p @ self.axis) * self.axis
-            if np.linalg.norm(radial) < 1e-9 * max(1.0, np.linalg.norm(p)):
-                q = r0[structure.surface_nodes[mask]].mean(axis=0)
-                radial = q - (q @ self.axis) * self.axis
-            e_r = _unit(radial)
+            e_r = spindle(self.axis, 2.0 * np.pi * k / len(groups),
+                          r0[structure.surface_nodes[mask]].mean(axis=0) if len(root) == 0
+                          or np.linalg.norm(p - (p @ self.axis) * self.axis) < 1e-9 else p)
             axes = np.array([e_r, np.cross(self.axis, e_r), self.axis])  # rows: e_r, e_t, e_a
             self.blades.append((label, mask, p, axes))
         self._held = structure.solver.fixed                       # held DOFs
