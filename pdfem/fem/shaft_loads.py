@@ -132,6 +132,15 @@ class ShaftLoads:
             self.blades.append((label, mask, p, axes))
         self._held = structure.solver.fixed                       # held DOFs
         self._k_held = structure.K.tocsr()[self._held]
+        table = structure.dofmap.nodal_dofs                       # (3, Nn) DOF of each node
+        node = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
+        node[table.ravel()] = np.tile(np.arange(table.shape[1]), 3)
+        comp = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
+        comp[table.ravel()] = np.repeat(np.arange(3), table.shape[1])
+        self._held_nodes, self._held_row = np.unique(node[self._held], return_inverse=True)
+        self._held_comp = comp[self._held]
+        self._all_nodes = np.arange(structure.n_nodes)
+        self._r0 = r0                                             # m, X - c0
         n = len(structure.surface_nodes)
         self.impulse_world = np.zeros((n, 3))    # N s, since the last row
         self.impulse_frame = np.zeros((n, 3))    # N s, frame axes
@@ -162,20 +171,25 @@ class ShaftLoads:
 
     def support_torque_power(self) -> tuple[float, float]:
         """The shaft's moment about the shaft axis (N m, positive in the rotation's sense) and
-        its power (W) now: the supports' forces on the held nodes, plus the Rayleigh damping
-        forces on the free nodes (damping acts on the motion relative to the frame: its force
-        is one between the structure and the frame, which the shaft drives), on the frame's
-        velocity at the nodes."""
+        its power (W) now: the supports' forces on the held nodes (``K u + C v + M a - f_ext``
+        on the held DOFs), plus the Rayleigh mass-damping forces ``-alpha m u_e'`` on the free
+        nodes (a force between the structure and the frame, which the shaft drives; the
+        stiffness-proportional part is internal), on the frame's velocity at the nodes."""
         s = self.structure
         sol = s.solver
         d = self._held
-        g = -np.array(sol.f_damp, dtype=np.float64)               # free nodes: damping
-        g[d] = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
-        force = s.dofmap.to_nodal(g)                              # (Nn, 3) frame axes
-        r = s.points - self.center + s.dofmap.to_nodal(sol.u)
-        torque = float(np.cross(r, force).sum(axis=0) @ self.axis)
-        v = s.frame.frame_velocity(sol.time, r) @ s.frame.state(sol.time)["R"]  # frame axes
-        return torque, float(np.sum(force * v))
+        reaction = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
+        if sol.alpha:
+            g = -sol.alpha * sol.m * sol.v_half
+            g[d] = reaction
+            nodes, force = self._all_nodes, s.dofmap.to_nodal(g)
+        else:
+            nodes, force = self._held_nodes, np.zeros((len(self._held_nodes), 3))
+            np.add.at(force, (self._held_row, self._held_comp), reaction)
+        r = self._r0[nodes] + sol.u[s.dofmap.nodal_dofs[:, nodes].T]
+        f = s.frame.state(sol.time)
+        v = f["R"].T @ f["c_dot"] + np.cross(f["w"], r)       # frame velocity, frame axes
+        return float(np.cross(r, force).sum(axis=0) @ self.axis), float(np.sum(force * v))
 
     def after_step(self, dt: float) -> None:
         """After a structure step of ``dt`` (s): integrate the shaft's torque and power."""
