@@ -107,7 +107,7 @@ def shaft_lines(summary: dict) -> list[str]:
     for name, f in summary.get("shaft", {}).items():
         sp = f["spectral_peak_frequency"]
         vm = f["max_von_mises"]
-        lines += ["", f"Shaft loads of '{name}' ({f['blades']} blades, {f['rpm']:.4g} rpm, "
+        lines += ["", f"Shaft loads of '{name}' ({f['blades']} blade{'s' * (f['blades'] != 1)}, {f['rpm']:.4g} rpm, "
                       f"blade passing frequency {f['blade_passing_frequency']:.4g} Hz)",
                   f"  peak ice torque {f['peak_ice_torque']['value']:.4g} N m at t = "
                   f"{f['peak_ice_torque']['time']:.4g} s; mean ice torque "
@@ -150,10 +150,14 @@ def plot_shaft(results: dict, out: Path, written: list[Path]) -> None:
             for key in keys:
                 y = np.asarray(h[key])
                 ax_t.plot(t, y, lw=0.8, label=key.replace("_", " "))
-                for r in np.unique(rev):
+                revs = np.unique(rev)
+                for r in revs:
                     on = rev == r
-                    ax_a.plot(deg[on] - 360.0 * r, y[on], lw=0.8,
-                              label=f"{key.replace('_', ' ')}, rev. {int(r) + 1}")
+                    line = ax_a.plot(deg[on] - 360.0 * r, y[on], lw=0.8,
+                                     color=ax_t.lines[-1].get_color(), alpha=0.9 if
+                                     r == revs[-1] else 0.4)
+                    if r == revs[0]:
+                        line[0].set_label(f"{key.replace('_', ' ')} ({revs.size} rev.)")
             ax_t.set_xlabel("time [s]")
             ax_a.set_xlabel("shaft angle [deg] (per revolution)")
             ax_a.set_xlim(0.0, 360.0)
