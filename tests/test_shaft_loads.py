@@ -130,6 +130,33 @@ def test_point_impulse_gives_torque_F_r_and_blade_moments(two_blades):
     assert row["blade1"]["bending_out_of_plane"] == pytest.approx(-0.45 * F, rel=1e-6)
 
 
+def test_propeller_blade_tip_force_gives_F_r(tmp_path):
+    """models/propeller_blade.py (coarse; shaft axis x, blade along +z, groups blade, root,
+    contact) turning at 20 rad/s about +x: a force F against the rotation at the tip node of
+    radius r gives the ice torque F r (to the node's small elastic displacement, 1e-6); the
+    blade's spindle is +z and it moves toward -y at the top (e_t = -e_y)."""
+    path = tmp_path / "blade.msh"
+    mesh_model("propeller_blade", {"element_size": "0.08", "sections": "5"}, path)
+    frame = MovingFrame(angular_velocity=(20.0, 0.0, 0.0))
+    s = FrameStructure.from_file(path, ElasticMaterial(7600.0, 1.2e11, 0.3), frame=frame,
+                                 fixed_groups=["root"], contact_group="contact")
+    np.testing.assert_allclose(s.shaft.blades[0][3][:2], [[0, 0, 1], [0, -1, 0]], atol=1e-12)
+    dt = 1e-7
+    s.step(dt)
+    x = s.surface_points()
+    k = int(np.argmax(np.hypot(x[:, 1], x[:, 2])))
+    r = float(np.hypot(x[k, 1], x[k, 2]))
+    e_t = np.cross([1.0, 0.0, 0.0], [0.0, x[k, 1], x[k, 2]]) / r   # the way the node moves
+    F = 5.0e3
+    j = np.zeros((len(s.surface_nodes), 3))
+    j[k] = -F * dt * e_t
+    s.apply_surface_impulse(j)
+    row = s.shaft.rows()[""]
+    assert r == pytest.approx(1.0, abs=0.01)          # the tip radius R = 1 m
+    assert row["ice_torque"] == pytest.approx(F * r, rel=1e-6)
+    assert abs(row["thrust"]) < 1e-9 * F
+
+
 def test_blade_split_sums_to_the_total(two_blades):
     """Random impulses on every contact node: the blades' forces, torques and thrusts add up
     to the shaft's to round-off (the blades cover the contact surface)."""
