@@ -160,7 +160,8 @@ def plot_shaft(results: dict, out: Path, written: list[Path]) -> None:
                         line[0].set_label(f"{key.replace('_', ' ')} ({revs.size} rev.)")
             ax_t.set_xlabel("time [s]")
             ax_a.set_xlabel("shaft angle [deg] (per revolution)")
-            ax_a.set_xlim(0.0, 360.0)
+            if deg[-1] - deg[0] >= 360.0:   # a revolution or more: the whole circle
+                ax_a.set_xlim(0.0, 360.0)
             for ax in (ax_t, ax_a):
                 ax.set_ylabel(f"[{unit}]")
                 ax.grid(alpha=0.3)
