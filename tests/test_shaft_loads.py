@@ -195,18 +195,8 @@ def test_checkpoint_restores_the_shaft_sums_exactly(two_blades):
             np.testing.assert_array_equal(v, b[key][k], err_msg=f"{key}/{k}")
 
 
-def test_shaft_torque_balances_a_static_point_force(tmp_path):
-    """A bar clamped at its root x = 0 (models/validation/box.py), turning very slowly about the
-    z axis through the root centre, loaded by F = -F e_y at its tip (r = 0.5 m) and at static
-    equilibrium: the shaft (root reactions) carries the torque F r."""
-    path = tmp_path / "bar.msh"
-    mesh_model(str(files("pdfem.models").joinpath("validation/box.py")), {
-        "length_x": 0.5, "divisions_x": 5, "divisions_y": 1, "divisions_z": 1,
-        "fixed_faces": "x0", "loaded_faces": "", "contact_faces": "x1"}, path)
-    s = _propeller(path, omega=1e-6, root="fixed")
-    F = 2.0e3
-    forces = np.zeros((s.n_nodes, 3))
-    forces[_node(s, (0.5, 0.05, 0.05)), 1] = -F
+def _static(s, forces) -> None:
+    """Put the structure at the static equilibrium under nodal ``forces`` (N) and step a bit."""
     s.set_nodal_forces(forces)
     free = s.solver.free
     f = s.dofmap.to_dofs(forces)
@@ -215,9 +205,46 @@ def test_shaft_torque_balances_a_static_point_force(tmp_path):
     s.set_state(s.dofmap.to_nodal(u))
     for _ in range(3):   # static: stays at rest, the reactions hold the load
         s.step(1e-7)
-    row = s.shaft.rows()[""]
+
+
+def test_root_moments_split_by_blade_root(two_blades):
+    """Two blades clamped by one group ``root``: a static axial force F e_z at blade 1's tip
+    centre (0.5, 0.05, 0.05) is carried by blade 1's root alone, with the out-of-plane moment
+    (0.45, 0, 0) x (0, 0, F) = -0.45 F e_y (e_t = e_y for blade 1); the shaft carries no torque."""
+    s = _propeller(two_blades, omega=1e-6)
+    F = 1.0e3
+    forces = np.zeros((s.n_nodes, 3))
+    forces[_node(s, (0.5, 0.05, 0.05)), 2] = F
+    _static(s, forces)
+    rows = s.shaft.rows()
+    np.testing.assert_allclose(rows["blade1"]["root_moment"], [0.0, -0.45 * F, 0.0],
+                               atol=1e-6 * F)
+    np.testing.assert_allclose(rows["blade2"]["root_moment"], 0.0, atol=1e-6 * F)
+    assert abs(rows[""]["shaft_torque"]) < 1e-6 * F
+
+
+def test_shaft_torque_balances_a_static_point_force(tmp_path):
+    """A bar clamped at its root x = 0 (models/validation/box.py), turning very slowly about the
+    z axis through the root centre, loaded by F = -F e_y at its tip (r = 0.5 m) and at static
+    equilibrium: the shaft (root reactions) carries the torque F r, and the root section the
+    bending moment F r."""
+    path = tmp_path / "bar.msh"
+    mesh_model(str(files("pdfem.models").joinpath("validation/box.py")), {
+        "length_x": 0.5, "divisions_x": 5, "divisions_y": 1, "divisions_z": 1,
+        "fixed_faces": "x0", "loaded_faces": "", "contact_faces": "x1"}, path)
+    s = _propeller(path, omega=1e-6, root="fixed")
+    F = 2.0e3
+    forces = np.zeros((s.n_nodes, 3))
+    forces[_node(s, (0.5, 0.05, 0.05)), 1] = -F
+    _static(s, forces)
+    rows = s.shaft.rows()
+    row = rows[""]
     assert row["shaft_torque"] == pytest.approx(F * 0.5, rel=1e-6)
     assert row["ice_torque"] == 0.0
+    # the root section carries the load's moment about its centroid (0, 0.05, 0.05): (0.5, 0,
+    # 0) x (0, -F, 0) = -0.5 F e_z, in-plane bending in the blade axes (e_x, e_y, e_z)
+    np.testing.assert_allclose(rows["blade1"]["root_moment"], [0.0, 0.0, -0.5 * F],
+                               atol=1e-6 * F)
 
 
 @pytest.fixture(scope="module")
@@ -249,7 +276,7 @@ def test_post_plots_and_spectrum_peak_at_the_blade_passing_frequency(tmp_path):
          "thrust": 0.5 * q, "max_von_mises": 1e6 + zeros, "max_von_mises_location":
          np.zeros((t.size, 3))}
     blade = {"time": t, "spindle_torque": q / 3, "bending_out_of_plane": q, "bending_in_plane": q,
-             "max_von_mises": 1e6 + zeros}
+             "root_moment": np.stack([q, -q, zeros], axis=1), "max_von_mises": 1e6 + zeros}
     results = {"histories": {"shaft/prop": h, **{f"shaft/prop.blade{k}": blade
                                                  for k in (1, 2, 3)}}}
     f = shaft_figures(h, {f"blade{k}": blade for k in (1, 2, 3)})
@@ -257,6 +284,7 @@ def test_post_plots_and_spectrum_peak_at_the_blade_passing_frequency(tmp_path):
     assert f["spectral_peak_frequency"] == pytest.approx(30.0, abs=1.01)
     assert f["peak_ice_torque"]["value"] == pytest.approx(1300.0)
     assert f["mean_thrust"] == pytest.approx(500.0, rel=1e-2)
+    assert f["blade"]["blade2"]["peak_root_moment"] == pytest.approx([1300.0, -1300.0, 0.0])
     written = []
     plot_shaft(results, tmp_path, written)
     assert sorted(p.name for p in written) == ["shaft_loads.png", "shaft_spectrum.png"]

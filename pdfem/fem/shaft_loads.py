@@ -37,7 +37,10 @@ Sign conventions (SI units: N, N m, N m s, W, J, Pa, m, rad):
   e_t . M`` (bending out of the plane of rotation, from axial loads) and ``bending_in_plane =
   e_a . M`` (in the plane of rotation, from tangential loads). These are the ice-load moments
   at the root section (the quasi-static part, without the blade's own inertia and centrifugal
-  load); the support reactions ``reaction_<group>`` hold the total force at a clamped root.
+  load). ``root_moment`` (e_r, e_t, e_a components: spindle, out of plane, in plane) is the
+  moment the blade puts on its supports at the held nodes of ``blade{k}_root`` about the root
+  centroid, ``-sum (r - p) x R`` with the supports' nodal forces R: the whole root-section
+  moment, with the blade's inertia and centrifugal load (zero if the root is not held).
 
 Rows (every coupling step; forces are the step's impulses over its length): ``shaft/<name>``:
 ``frame_angle`` (rad), ``ice_torque``, ``thrust``, ``ice_force`` (3, world), ``shaft_torque``,
@@ -48,7 +51,7 @@ the energy (``energy_change``: true kinetic energy with the lumped mass plus str
 ``damping_dissipated``, and ``max_von_mises`` (Pa, nodal average) with its node's reference
 position ``max_von_mises_location`` (m, frame axes at t = 0); ``shaft/<name>.blade<k>``:
 ``force`` (world), ``force_blade``, ``ice_torque``, ``thrust``, ``spindle_torque``,
-``bending_out_of_plane``, ``bending_in_plane``, ``max_von_mises`` (over the volume group
+``bending_out_of_plane``, ``bending_in_plane``, ``root_moment``, ``max_von_mises`` (over the volume group
 ``blade<k>``, else the blade's surface nodes) and its location.
 
 Blades are found by the mesh's surface groups ``blade{k}_surface`` (k = 1, 2, ...); without
@@ -123,6 +126,7 @@ class ShaftLoads:
         r0 = structure.points - self.center
         self.blades = []
         groups = blade_groups(structure)
+        self._roots = [root for _, _, root in groups]
         for k, (label, mask, root) in enumerate(groups):
             p = r0[root].mean(axis=0) if len(root) else r0[structure.surface_nodes[mask]].mean(0)
             e_r = spindle(self.axis, 2.0 * np.pi * k / len(groups),
@@ -140,6 +144,7 @@ class ShaftLoads:
         self._held_nodes, self._held_row = np.unique(node[self._held], return_inverse=True)
         self._held_comp = comp[self._held]
         self._all_nodes = np.arange(structure.n_nodes)
+        self._root_rows = [np.flatnonzero(np.isin(self._held_nodes, root)) for root in self._roots]
         self._r0 = r0                                             # m, X - c0
         n = len(structure.surface_nodes)
         self.impulse_world = np.zeros((n, 3))    # N s, since the last row
@@ -168,6 +173,15 @@ class ShaftLoads:
         self.moment_frame += m
         self.ice_work += work
         self.ice_angular_impulse -= float(m.sum(axis=0) @ self.axis)
+
+    def held_reactions(self) -> np.ndarray:
+        """(H, 3) force (N, frame axes) of the supports on each held node (``_held_nodes``)."""
+        sol = self.structure.solver
+        d = self._held
+        reaction = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
+        force = np.zeros((len(self._held_nodes), 3))
+        np.add.at(force, (self._held_row, self._held_comp), reaction)
+        return force
 
     def support_torque_power(self) -> tuple[float, float]:
         """The shaft's moment about the shaft axis (N m, positive in the rotation's sense) and
@@ -239,7 +253,10 @@ class ShaftLoads:
                     "energy_change": self.kinetic_energy() + s.strain_energy() - self.energy0,
                     "damping_dissipated": s.solver.damping_dissipated,
                     "max_von_mises": peak, "max_von_mises_location": where}}
-        for label, mask, p, axes in self.blades:
+        held = self.held_reactions()
+        r_held = self._r0[self._held_nodes] + s.dofmap.to_nodal(s.solver.u)[self._held_nodes]
+        for (label, mask, p, axes), rows in zip(self.blades, self._root_rows):
+            root_moment = -np.cross(r_held[rows] - p, held[rows]).sum(axis=0)
             jf = self.impulse_frame[mask].sum(axis=0) * scale
             m = (self.moment_frame[mask].sum(axis=0) - np.cross(p, self.impulse_frame[mask].sum(
                 axis=0))) * scale
@@ -253,6 +270,7 @@ class ShaftLoads:
                           "spindle_torque": float(axes[0] @ m),
                           "bending_out_of_plane": float(axes[1] @ m),
                           "bending_in_plane": float(axes[2] @ m),
+                          "root_moment": axes @ root_moment,
                           "max_von_mises": bpeak, "max_von_mises_location": bwhere}
         self.impulse_world[:] = 0.0
         self.impulse_frame[:] = 0.0

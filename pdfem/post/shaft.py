@@ -64,7 +64,8 @@ def shaft_figures(h: dict, blades: dict[str, dict]) -> dict:
         (Hz, largest amplitude of the ice torque's spectrum above 0 Hz; None for < 4 samples),
         ``max_von_mises`` {value Pa, time s, location m (frame axes)}, and per blade
         ``peak_spindle_torque``, ``peak_bending_out_of_plane``, ``peak_bending_in_plane``
-        (N m, signed, largest |value|) and ``max_von_mises`` (Pa).
+        (N m, signed, largest |value|; the ice load's moments), ``peak_root_moment`` (N m, the
+        same per component of the supports' root moment) and ``max_von_mises`` (Pa).
     """
     t = np.asarray(h["time"])
     q, thrust = np.asarray(h["ice_torque"]), np.asarray(h["thrust"])
@@ -92,6 +93,8 @@ def shaft_figures(h: dict, blades: dict[str, dict]) -> dict:
             "blade": {b: {"peak_spindle_torque": signed_peak(g["spindle_torque"]),
                           "peak_bending_out_of_plane": signed_peak(g["bending_out_of_plane"]),
                           "peak_bending_in_plane": signed_peak(g["bending_in_plane"]),
+                          "peak_root_moment": [signed_peak(c) for c in
+                                               np.asarray(g["root_moment"]).T],
                           "max_von_mises": float(np.max(g["max_von_mises"]))}
                       for b, g in blades.items()}}
 
@@ -121,7 +124,9 @@ def shaft_lines(summary: dict) -> list[str]:
         for b, g in f["blade"].items():
             lines.append(f"  {b}: spindle torque {g['peak_spindle_torque']:.4g} N m, root "
                          f"bending out of plane {g['peak_bending_out_of_plane']:.4g} N m, in "
-                         f"plane {g['peak_bending_in_plane']:.4g} N m, max von Mises "
+                         f"plane {g['peak_bending_in_plane']:.4g} N m (ice load); at the "
+                         f"supports {', '.join(f'{c:.4g}' for c in g['peak_root_moment'])} "
+                         f"N m; max von Mises "
                          f"{g['max_von_mises']:.4g} Pa")
     return lines
 
