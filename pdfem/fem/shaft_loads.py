@@ -48,11 +48,11 @@ Rows (every coupling step; forces are the step's impulses over its length): ``sh
 (world, on the true velocity), ``ice_angular_impulse`` (opposing positive), the changes since
 t = 0 of the angular momentum about the axis (``angular_momentum_change``, true motion) and of
 the energy (``energy_change``: true kinetic energy with the lumped mass plus strain energy),
-``damping_dissipated``, and ``max_von_mises`` (Pa, nodal average) with its node's reference
-position ``max_von_mises_location`` (m, frame axes at t = 0); ``shaft/<name>.blade<k>``:
+``damping_dissipated``, and ``max_von_mises`` (Pa, element centres) with its element's centre
+``max_von_mises_location`` (m, reference position in frame axes at t = 0); ``shaft/<name>.blade<k>``:
 ``force`` (world), ``force_blade``, ``ice_torque``, ``thrust``, ``spindle_torque``,
-``bending_out_of_plane``, ``bending_in_plane``, ``root_moment``, ``max_von_mises`` (over the volume group
-``blade<k>``, else the blade's surface nodes) and its location.
+``bending_out_of_plane``, ``bending_in_plane``, ``root_moment``, ``max_von_mises`` (over the
+elements of the volume group ``blade<k>``, else all) and its location.
 
 Blades are found by the mesh's surface groups ``blade{k}_surface`` (k = 1, 2, ...); without
 them the whole contact surface is one blade whose root is the union of the clamped groups.
@@ -63,6 +63,9 @@ from __future__ import annotations
 import re
 
 import numpy as np
+import scipy.sparse as sp
+
+from pdfem.fem.stress import von_mises
 
 BLADE_SURFACE = re.compile(r"blade(\d+)_surface\Z")
 """Name of blade k's surface group (its faces but the root)."""
@@ -108,6 +111,24 @@ def spindle(axis: np.ndarray, psi: float, point: np.ndarray) -> np.ndarray:
     return best if best @ radial > np.cos(np.radians(30.0)) else radial
 
 
+def gradient_operator(basis) -> sp.csr_matrix:
+    """(9 Ne, n DOFs) sparse operator giving ``du_i/dx_j`` at the one evaluation point of each
+    element of a :func:`pdfem.fem.stress.centre_basis` (row ``(3 i + j) Ne + e``, 1/1): the
+    displacement gradient of :func:`pdfem.fem.stress.element_stress` as one product."""
+    dofs = basis.element_dofs                                  # (Nb, Ne)
+    ne = dofs.shape[1]
+    rows, cols, vals = [], [], []
+    for a in range(dofs.shape[0]):
+        g = basis.basis[a][0].grad[:, :, :, 0]                 # (3, 3, Ne)
+        for i in range(3):
+            for j in range(3):
+                rows.append((3 * i + j) * ne + np.arange(ne))
+                cols.append(dofs[a])
+                vals.append(g[i, j])
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(9 * ne, basis.N))
+
+
 class ShaftLoads:
     """Shaft and blade loads of one rotating frame structure (module docstring).
 
@@ -144,6 +165,8 @@ class ShaftLoads:
         self._held_nodes, self._held_row = np.unique(node[self._held], return_inverse=True)
         self._held_comp = comp[self._held]
         self._all_nodes = np.arange(structure.n_nodes)
+        self._cells = structure.cells                             # (Ne, k) FE nodes
+        self._grad = gradient_operator(structure._stress_basis)  # u -> du_i/dx_j at centres
         self._root_rows = [np.flatnonzero(np.isin(self._held_nodes, root)) for root in self._roots]
         self._r0 = r0                                             # m, X - c0
         n = len(structure.surface_nodes)
@@ -157,7 +180,7 @@ class ShaftLoads:
         self.shaft_torque, self.shaft_power = q, p
         self.shaft_work = 0.0                    # J
         self.shaft_angular_impulse = 0.0         # N m s
-        self.energy0 = self.kinetic_energy() + structure.strain_energy()   # J, at the start
+        self.energy0 = self.kinetic_energy() + self.strain_energy()        # J, at the start
         self.angular_momentum0 = self.angular_momentum()                   # kg m^2/s
 
     # ------------------------------------------------------------------ hooks
@@ -228,10 +251,35 @@ class ShaftLoads:
         _, w = s.frame.to_world(s.solver.time, r, v)
         return 0.5 * float(np.sum(s._node_mass[:, None] * w * w))
 
-    def _stress_peak(self, vm: np.ndarray, nodes: np.ndarray | None) -> tuple[float, np.ndarray]:
-        sel = np.arange(len(vm)) if nodes is None else nodes
+    def von_mises(self) -> np.ndarray:
+        """(Ne,) von Mises stress (Pa) at the element centres, as
+        :meth:`pdfem.fem.structure.ElasticStructure.von_mises` (one sparse product)."""
+        s = self.structure
+        grad = (self._grad @ s.solver.u).reshape(3, 3, -1)
+        eps = 0.5 * (grad + grad.transpose(1, 0, 2))
+        lam, mu = s.material.lame
+        sigma = 2.0 * mu * eps
+        tr = eps[0, 0] + eps[1, 1] + eps[2, 2]
+        for i in range(3):
+            sigma[i, i] += lam * tr
+        return von_mises(sigma.transpose(2, 0, 1))
+
+    def strain_energy(self) -> float:
+        """Strain energy ``1/2 u . K u`` (J) without a product with K: ``K u`` is ``f_ext -
+        C v - M a`` on the free DOFs (the integrator's equation at the step's end) and the held
+        rows of K on the held DOFs."""
+        sol = self.structure.solver
+        ku = sol.f_ext - sol.f_damp - sol.m * sol.a
+        ku[self._held] = self._k_held @ sol.u
+        return 0.5 * float(np.einsum("i,i", sol.u, ku))   # not BLAS: no thread start-up
+
+    def _stress_peak(self, vm: np.ndarray, elements: np.ndarray | None
+                     ) -> tuple[float, np.ndarray]:
+        """Largest element von Mises stress (Pa) among ``elements`` (all: None) and its
+        element's centre (m, reference, frame axes at t = 0)."""
+        sel = np.arange(len(vm)) if elements is None else elements
         i = sel[int(np.argmax(vm[sel]))]
-        return float(vm[i]), self.structure.points[i].copy()
+        return float(vm[i]), self.structure.points[self._cells[i]].mean(axis=0)
 
     def rows(self) -> dict[str, dict[str, float | np.ndarray]]:
         """The rows of the coupling step ending now (forces are the step's impulses over its
@@ -241,7 +289,7 @@ class ShaftLoads:
         scale = 1.0 / step if step > 0.0 else 0.0
         force = self.impulse_world.sum(axis=0) * scale
         moment = self.moment_frame.sum(axis=0) * scale
-        vm = s.nodal_von_mises()
+        vm = self.von_mises()
         peak, where = self._stress_peak(vm, None)
         out = {"": {"frame_angle": s.frame.angle(s.solver.time),
                     "ice_torque": -float(moment @ self.axis), "thrust": float(force @ self.axis),
@@ -250,7 +298,7 @@ class ShaftLoads:
                     "shaft_angular_impulse": self.shaft_angular_impulse,
                     "ice_work": self.ice_work, "ice_angular_impulse": self.ice_angular_impulse,
                     "angular_momentum_change": self.angular_momentum() - self.angular_momentum0,
-                    "energy_change": self.kinetic_energy() + s.strain_energy() - self.energy0,
+                    "energy_change": self.kinetic_energy() + self.strain_energy() - self.energy0,
                     "damping_dissipated": s.solver.damping_dissipated,
                     "max_von_mises": peak, "max_von_mises_location": where}}
         held = self.held_reactions()
@@ -260,9 +308,7 @@ class ShaftLoads:
             jf = self.impulse_frame[mask].sum(axis=0) * scale
             m = (self.moment_frame[mask].sum(axis=0) - np.cross(p, self.impulse_frame[mask].sum(
                 axis=0))) * scale
-            blade_vm = f"{label}" in s.mesh.element_sets
-            bpeak, bwhere = self._stress_peak(vm, s.group_nodes(label) if blade_vm else
-                                              s.surface_nodes[mask])
+            bpeak, bwhere = self._stress_peak(vm, s.mesh.element_sets.get(label))
             out[label] = {"force": self.impulse_world[mask].sum(axis=0) * scale,
                           "force_blade": axes @ jf,
                           "ice_torque": -float(self.moment_frame[mask].sum(axis=0) @ self.axis)

@@ -119,7 +119,7 @@ def shaft_lines(summary: dict) -> list[str]:
                   f"  mean thrust {f['mean_thrust']:.4g} N, peak {f['peak_thrust']:.4g} N; "
                   f"ice torque spectrum peaks at "
                   + ("-" if sp is None else f"{sp:.4g} Hz"),
-                  f"  max von Mises {vm['value']:.4g} Pa at t = {vm['time']:.4g} s, node "
+                  f"  max von Mises {vm['value']:.4g} Pa at t = {vm['time']:.4g} s, element at "
                   f"{[round(c, 4) for c in vm['location']]} m (frame)"]
         for b, g in f["blade"].items():
             lines.append(f"  {b}: spindle torque {g['peak_spindle_torque']:.4g} N m, root "
