@@ -16,6 +16,8 @@ The drive holds the frame's motion whatever the loads, so the work it does on th
 motion is part of ``support_work``: the work of the inertial loads (trapezoid rule, as the
 integrator counts every force) minus the work of the contact impulses on the frame's own
 velocity (the drive absorbs it). With it the structure's balance closes to round-off.
+When the frame turns, ``shaft`` (:class:`pdfem.fem.shaft_loads.ShaftLoads`) records the contact
+impulses and the shaft's torque every step (shaft torque, thrust, blade loads).
 SI units throughout.
 """
 
