@@ -44,6 +44,9 @@ class Structure(SurfaceBody, ABC):
     work of the contact loads on it is then energy supplied to the ice from outside, not energy
     the structure stores. False for a structure that responds to its loads."""
 
+    shaft = None
+    """Shaft and blade loads of a rotating structure (:mod:`pdfem.fem.shaft_loads`), else None."""
+
     # -- time stepping -------------------------------------------------------------------------
     @abstractmethod
     def step(self, dt: float) -> None:

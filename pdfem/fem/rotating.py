@@ -16,6 +16,8 @@ The drive holds the frame's motion whatever the loads, so the work it does on th
 motion is part of ``support_work``: the work of the inertial loads (trapezoid rule, as the
 integrator counts every force) minus the work of the contact impulses on the frame's own
 velocity (the drive absorbs it). With it the structure's balance closes to round-off.
+When the frame turns, ``shaft`` (:class:`pdfem.fem.shaft_loads.ShaftLoads`) records the contact
+impulses and the shaft's torque every step (shaft torque, thrust, blade loads).
 SI units throughout.
 """
 
@@ -25,6 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from pdfem.fem.moving_frame import MovingFrame
+from pdfem.fem.shaft_loads import ShaftLoads
 from pdfem.fem.stress_stiffening import centrifugal_stiffness
 from pdfem.fem.structure import ElasticStructure
 
@@ -54,6 +57,7 @@ class FrameStructure(ElasticStructure):
         self.drive_impulse_work = 0.0  # J, work of contact impulses on the frame's velocity
         self._f_inertial = self._inertial_dofs(0.0)
         self.solver.initialize(f_ext=self.external_force_dofs(0.0) + self._f_inertial)
+        self.shaft = ShaftLoads(self) if np.any(frame.angular_velocity) else None
 
     # ------------------------------------------------------------------ frame kinematics
     def _relative(self) -> tuple[np.ndarray, np.ndarray]:
@@ -100,6 +104,8 @@ class FrameStructure(ElasticStructure):
         self.solver.step(dt, self.external_force_dofs(t_new) + f_in)
         self.inertial_work += 0.5 * float((self._f_inertial + f_in) @ (self.solver.u - u_old))
         self._f_inertial = f_in
+        if self.shaft is not None:
+            self.shaft.after_step(dt)
 
     def set_state(self, displacement: np.ndarray | None = None,
                   velocity: np.ndarray | None = None) -> None:
@@ -109,6 +115,8 @@ class FrameStructure(ElasticStructure):
         self._f_inertial = self._inertial_dofs(self.solver.time)
         self.solver.initialize(self.solver.u, self.solver.v,
                                self.external_force_dofs() + self._f_inertial, self.solver.time)
+        if self.shaft is not None:
+            self.shaft.shaft_torque, self.shaft.shaft_power = self.shaft.support_torque_power()
 
     # ------------------------------------------------------------------ contact interface
     def surface_points(self) -> np.ndarray:
@@ -138,6 +146,8 @@ class FrameStructure(ElasticStructure):
         drive = float(np.sum((vf * j)[free]))
         work = super().apply_surface_impulse(j @ self.rotation())
         self.drive_impulse_work += drive
+        if self.shaft is not None:
+            self.shaft.add_impulse(j, self.rotation(), r[self.surface_nodes], work + drive)
         return work + drive
 
     # ------------------------------------------------------------------ results
@@ -178,7 +188,8 @@ class FrameStructure(ElasticStructure):
         """The elastic structure's state plus the frame's inertial loads and works."""
         out = super().checkpoint_state()
         out.update(f_inertial=self._f_inertial.copy(), inertial_work=self.inertial_work,
-                   drive_impulse_work=self.drive_impulse_work)
+                   drive_impulse_work=self.drive_impulse_work,
+                   **(self.shaft.checkpoint_state() if self.shaft is not None else {}))
         return out
 
     def restore_state(self, state: dict) -> None:
@@ -187,6 +198,8 @@ class FrameStructure(ElasticStructure):
         self._f_inertial = np.array(state["f_inertial"], dtype=np.float64)
         self.inertial_work = float(state["inertial_work"])
         self.drive_impulse_work = float(state["drive_impulse_work"])
+        if self.shaft is not None:
+            self.shaft.restore_state(state)
 
     def describe(self) -> str:
         """As :meth:`ElasticStructure.describe`, with the frame's motion."""

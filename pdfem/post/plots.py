@@ -18,6 +18,7 @@ from pdfem.post.lowpass import lowpass as lowpassed
 from pdfem.post.pressure_area import pressure_area
 from pdfem.post.motions import plot_motions
 from pdfem.post.resistance import plot_resistance
+from pdfem.post.shaft import plot_shaft
 from pdfem.post.spectrum import amplitude_spectrum
 
 
@@ -182,7 +183,9 @@ def write_plots(results: dict, out_dir: str | os.PathLike,
         needs ice and a frame), ``energy.png`` (the energy history; needs 1 or more rows),
         ``patch_loads.png`` (the force on each load patch), ``pressure_area.png`` (the
         pressure-area curves of the frames and their envelope; needs contact pressure),
-        ``ship_motions.png`` (the 6 DOF of each free hull, :mod:`pdfem.post.motions`).
+        ``ship_motions.png`` (the 6 DOF of each free hull, :mod:`pdfem.post.motions`),
+        ``shaft_loads.png`` and ``shaft_spectrum.png`` (rotating structures,
+        :func:`pdfem.post.shaft.plot_shaft`).
     cutoff
         With a cut-off (Hz), the load plots also show the zero-phase low-passed |F|.
     """
@@ -204,6 +207,7 @@ def write_plots(results: dict, out_dir: str | os.PathLike,
                     "Reaction of ice region '{}' (force on the ice)")
     plot_resistance(results, out / "resistance.png", written)
     plot_motions(results, out / "ship_motions.png", written)
+    plot_shaft(results, out, written)
     spectra = {n: h for n, h in loads.items() if h["time"].size >= 4}
     if spectra:
         _plot_spectrum(spectra, out / "load_spectrum.png", written)

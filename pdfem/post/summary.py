@@ -35,6 +35,7 @@ from pdfem.post.ice_loads import (SURFACE_SUFFIX, filtered_figures, is_contact_s
                                   load_split, pressure_figures)
 from pdfem.post.motions import motion_figures, ship_motions
 from pdfem.post.resistance import resistance_summary
+from pdfem.post.shaft import shaft_summary
 from pdfem.post.windowed import peak_windowed_force
 
 
@@ -188,7 +189,8 @@ def summarize(results: dict, lowpass: float | None = None) -> dict:
         force on the ice)}; ``resistance`` {ship hull: ice resistance -F_x over its steady phase: ``start``, ``end``
         (s), ``samples``, ``mean``, ``std``, ``peak`` (N); :mod:`pdfem.post.resistance`};
         ``motions`` {free hull: largest ``translation`` of G (m) and ``rotation`` (deg) per
-        axis; :mod:`pdfem.post.motions`};
+        axis; :mod:`pdfem.post.motions`}; ``shaft`` {rotating structure: ice torque, thrust,
+        spectral peak, blade loads; :func:`pdfem.post.shaft.shaft_figures`};
         ``structures`` {name:
         ``max_von_mises`` / ``max_displacement`` {value, time, element or node, location},
         ``reactions`` {group: {peak, time, force_at_peak}}}; ``monitors`` {probe: ``peak_u``,
@@ -221,6 +223,7 @@ def summarize(results: dict, lowpass: float | None = None) -> dict:
     out["resistance"] = {n: {k: _num(v) if isinstance(v, float) else v for k, v in f.items()}
                          for n, f in resistance_summary(results).items()}  # groups: floats
     out["motions"] = {n: motion_figures(h) for n, h in ship_motions(results).items()}
+    out["shaft"] = shaft_summary(results)   # rotating structures: :mod:`pdfem.post.shaft`
     out["ice"] = {name: _ice_figures(results, b) for name, b in sorted(results["ice"].items())}
     e = hist.get("energy")
     out["energy"] = ({k: _num(v[-1]) for k, v in sorted(e.items()) if k != "time"}

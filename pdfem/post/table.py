@@ -8,6 +8,7 @@ ice, energies).
 from __future__ import annotations
 
 from pdfem.post.groups import AXES
+from pdfem.post.shaft import shaft_lines
 
 
 def _g(x: float | None) -> str:
@@ -138,6 +139,7 @@ def format_summary(summary: dict) -> str:
         lines += ["", "Monitors (every coupling step)"]
         lines += _table(["monitor", "peak |u| [m]", "at t [s]", "peak von Mises [Pa]",
                          "at t [s]"], rows)
+    lines += shaft_lines(s)
     rows = [[name, str(b["particles"]), _g(b.get("max_damage")), _g(b.get("mean_damage")),
              str(b.get("damaged_particles", "-"))] for name, b in s["ice"].items()]
     if rows:

@@ -180,8 +180,24 @@ class MonitorSource(Source):
         return {f"monitors/{self.name}": {"u": u, "von_mises": vm, "stress": stress}}
 
 
+class ShaftSource(Source):
+    """A rotating structure's shaft and blade loads every coupling step (``shaft/<name>`` and
+    ``shaft/<name>.<blade>``, :mod:`pdfem.fem.shaft_loads`)."""
+
+    def __init__(self, structure) -> None:
+        self.shaft, self.name = structure.shaft, structure.name
+
+    @classmethod
+    def of_run(cls, setup, per_rank: bool) -> list[Source]:
+        return [cls(s) for s in setup.structures if s.shaft is not None]
+
+    def step_rows(self) -> Rows:
+        return {f"shaft/{self.name}" + (f".{k}" if k else ""): row
+                for k, row in self.shaft.rows().items()}
+
+
 SOURCE_KINDS = (IceSource, FacetLoadSource, StructureSource, LoadSource, RegionSource, PairSource,
-                MonitorSource)
+                MonitorSource, ShaftSource)
 """The kinds of output source of a run, in writing order; each makes its sources of a built run
 with ``of_run(setup, per_rank)``. A new kind: its class (a new file, or here) and one entry."""
 

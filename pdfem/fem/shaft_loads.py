@@ -1,0 +1,346 @@
+"""Shaft and blade loads of a rotating elastic structure (a propeller): ice torque and thrust,
+the shaft's torque, work and angular impulse, per-blade forces, spindle torque and root bending
+moments, and the largest von Mises stress (docs/rotating_structures.md, "Shaft and blade loads").
+
+A :class:`ShaftLoads` belongs to a :class:`pdfem.fem.rotating.FrameStructure` whose frame turns
+(shaft axis ``n`` = the unit ``angular_velocity`` through ``center``). It is fed by two hooks:
+
+* every contact impulse ``J`` (world axes, on the contact-surface nodes) at the instant it is
+  applied (:meth:`ShaftLoads.add_impulse`): kept per node in world axes and in frame axes with
+  its moment ``r x J`` (frame axes, ``r = X - c0 + u_e`` the node's position from the shaft
+  centre), so moments about any point fixed in the frame (a blade's root) are exact;
+* every structure step (:meth:`ShaftLoads.after_step`): the force the supports exert on the
+  structure node by node (``K u + C v + M a - f_ext`` on the held DOFs, frame axes; it includes
+  the inertial loads on the held nodes, so it is the true force of the hub on the blade roots),
+  whose moment about the axis is the **shaft torque** and whose power on the nodes' true
+  velocity is the **shaft power**; both are integrated by the trapezoid rule, which is how the
+  central-difference scheme integrates a force into momentum.
+
+Sign conventions (SI units: N, N m, N m s, W, J, Pa, m, rad):
+
+* ``ice_torque`` = ``-n . M_ice``: the moment of the ice's force about the shaft axis, positive
+  when it opposes the rotation; ``thrust`` = ``n . F_ice``: the ice's force along the axis,
+  positive along ``angular_velocity``;
+* ``shaft_torque`` = ``n . M_shaft``: the moment the shaft puts on the structure, positive in
+  the direction of rotation (at constant speed in a steady state it balances ``ice_torque``):
+  the supports' forces, plus the Rayleigh mass-damping forces on the free nodes (damping acts
+  on the motion relative to the frame, so its force is one between the structure and the
+  frame, which the shaft drives; zero without damping or at rest); ``shaft_power`` (W) is
+  their power on the frame's velocity at the nodes;
+* blade axes (frame, fixed to blade k of Z): ``e_r`` radial along the spindle, the radial line
+  at ``psi_k = 2 pi (k - 1) / Z`` about the axis from +z (the propeller model's reference
+  line, :func:`spindle`; the radial direction of the root centroid when that line is not near
+  it, e.g. for an axis along z), ``e_t = n x e_r`` tangential (the direction the blade moves
+  in), ``e_a = n`` axial. ``force_blade`` = the ice's force on the blade in (e_r, e_t, e_a);
+  the moment ``M`` of the ice's force about the root section's centroid (the centroid of the
+  nodes of ``blade{k}_root``) gives ``spindle_torque = e_r . M``, ``bending_out_of_plane =
+  e_t . M`` (bending out of the plane of rotation, from axial loads) and ``bending_in_plane =
+  e_a . M`` (in the plane of rotation, from tangential loads). These are the ice-load moments
+  at the root section (the quasi-static part, without the blade's own inertia and centrifugal
+  load). ``root_moment`` (e_r, e_t, e_a components: spindle, out of plane, in plane) is the
+  moment the blade puts on its supports at the held nodes of ``blade{k}_root`` about the root
+  centroid, ``-sum (r - p) x R`` with the supports' nodal forces R: the whole root-section
+  moment, with the blade's inertia and centrifugal load (zero if the root is not held).
+
+Rows (every coupling step; forces are the step's impulses over its length): ``shaft/<name>``:
+``frame_angle`` (rad), ``ice_torque``, ``thrust``, ``ice_force`` (3, world), ``shaft_torque``,
+``shaft_power``, the running integrals ``shaft_work``, ``shaft_angular_impulse``, ``ice_work``
+(world, on the true velocity), ``ice_angular_impulse`` (opposing positive), the changes since
+t = 0 of the angular momentum about the axis (``angular_momentum_change``, true motion) and of
+the energy (``energy_change``: true kinetic energy with the lumped mass plus strain energy),
+``damping_dissipated``, and ``max_von_mises`` (Pa, element centres) with its element's centre
+``max_von_mises_location`` (m, reference position in frame axes at t = 0); ``shaft/<name>.blade<k>``:
+``force`` (world), ``force_blade``, ``ice_torque``, ``thrust``, ``spindle_torque``,
+``bending_out_of_plane``, ``bending_in_plane``, ``root_moment``, ``max_von_mises`` (over the
+elements of the volume group ``blade<k>``, else all) and its location.
+
+Blades are found by the mesh's surface groups ``blade{k}_surface`` (k = 1, 2, ...); without
+them the whole contact surface is one blade whose root is the union of the clamped groups.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import scipy.sparse as sp
+
+from pdfem.fem.stress import von_mises
+
+BLADE_SURFACE = re.compile(r"blade(\d+)_surface\Z")
+"""Name of blade k's surface group (its faces but the root)."""
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
+
+
+def blade_groups(structure) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """``[(label, surface-node mask (Ns,) bool, root nodes)]`` of the blades of ``structure``:
+    ``blade{k}`` from the groups ``blade{k}_surface`` and ``blade{k}_root`` of its mesh (the
+    root falls back on the clamped groups), in k order; else one ``blade1``, the whole contact
+    surface with the clamped groups as its root."""
+    found = sorted((int(m.group(1)), g) for g in structure.mesh.facet_sets
+                   if (m := BLADE_SURFACE.match(g)))
+    held = np.unique(np.concatenate([structure.group_nodes(g) for g in structure.fixed_groups]
+                                    or [np.zeros(0, np.int32)]))
+    if not found:
+        return [("blade1", np.ones(len(structure.surface_nodes), bool), held)]
+    out = []
+    for k, g in found:
+        mask = np.isin(structure.surface_nodes, structure.group_nodes(g))
+        root = f"blade{k}_root"
+        nodes = structure.group_nodes(root) if root in structure.mesh.facet_sets else held
+        out.append((f"blade{k}", mask, nodes))
+    return out
+
+
+def spindle(axis: np.ndarray, psi: float, point: np.ndarray) -> np.ndarray:
+    """Unit spindle direction (frame axes) of a blade: the radial line at ``psi`` (rad) about
+    the shaft ``axis`` from +z (the propeller model's reference line, either sense of ``psi``:
+    the one nearer the blade), when it lies within 30 deg of the radial direction of ``point``
+    (m from the shaft centre: the root centroid); else (an axis along z, or another layout)
+    that radial direction."""
+    radial = _unit(point - (point @ axis) * axis)
+    z = np.array([0.0, 0.0, 1.0]) - axis[2] * axis
+    if np.linalg.norm(z) < 1e-6:
+        return radial
+    z = _unit(z)
+    best = max((np.cos(a) * z + np.sin(a) * np.cross(axis, z) for a in (psi, -psi)),
+               key=lambda e: float(e @ radial))
+    return best if best @ radial > np.cos(np.radians(30.0)) else radial
+
+
+def gradient_operator(basis) -> sp.csr_matrix:
+    """(9 Ne, n DOFs) sparse operator giving ``du_i/dx_j`` at the one evaluation point of each
+    element of a :func:`pdfem.fem.stress.centre_basis` (row ``(3 i + j) Ne + e``, 1/1): the
+    displacement gradient of :func:`pdfem.fem.stress.element_stress` as one product."""
+    dofs = basis.element_dofs                                  # (Nb, Ne)
+    ne = dofs.shape[1]
+    rows, cols, vals = [], [], []
+    for a in range(dofs.shape[0]):
+        g = basis.basis[a][0].grad[:, :, :, 0]                 # (3, 3, Ne)
+        for i in range(3):
+            for j in range(3):
+                rows.append((3 * i + j) * ne + np.arange(ne))
+                cols.append(dofs[a])
+                vals.append(g[i, j])
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(9 * ne, basis.N))
+
+
+class ShaftLoads:
+    """Shaft and blade loads of one rotating frame structure (module docstring).
+
+    Parameters
+    ----------
+    structure
+        A :class:`pdfem.fem.rotating.FrameStructure` whose frame turns (non-zero
+        ``angular_velocity``).
+    """
+
+    def __init__(self, structure) -> None:
+        self.structure = structure
+        frame = structure.frame
+        self.axis = _unit(np.asarray(frame.angular_velocity, dtype=np.float64))
+        self.center = np.asarray(frame.center, dtype=np.float64)
+        r0 = structure.points - self.center
+        self.blades = []
+        groups = blade_groups(structure)
+        self._roots = [root for _, _, root in groups]
+        for k, (label, mask, root) in enumerate(groups):
+            p = r0[root].mean(axis=0) if len(root) else r0[structure.surface_nodes[mask]].mean(0)
+            e_r = spindle(self.axis, 2.0 * np.pi * k / len(groups),
+                          r0[structure.surface_nodes[mask]].mean(axis=0) if len(root) == 0
+                          or np.linalg.norm(p - (p @ self.axis) * self.axis) < 1e-9 else p)
+            axes = np.array([e_r, np.cross(self.axis, e_r), self.axis])  # rows: e_r, e_t, e_a
+            self.blades.append((label, mask, p, axes))
+        self._held = structure.solver.fixed                       # held DOFs
+        self._k_held = structure.K.tocsr()[self._held]
+        table = structure.dofmap.nodal_dofs                       # (3, Nn) DOF of each node
+        node = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
+        node[table.ravel()] = np.tile(np.arange(table.shape[1]), 3)
+        comp = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
+        comp[table.ravel()] = np.repeat(np.arange(3), table.shape[1])
+        self._held_nodes, self._held_row = np.unique(node[self._held], return_inverse=True)
+        self._held_comp = comp[self._held]
+        self._all_nodes = np.arange(structure.n_nodes)
+        self._cells = structure.cells                             # (Ne, k) FE nodes
+        self._grad = gradient_operator(structure._stress_basis)  # u -> du_i/dx_j at centres
+        self._root_rows = [np.flatnonzero(np.isin(self._held_nodes, root)) for root in self._roots]
+        self._r0 = r0                                             # m, X - c0
+        n = len(structure.surface_nodes)
+        self.impulse_world = np.zeros((n, 3))    # N s, since the last row
+        self.impulse_frame = np.zeros((n, 3))    # N s, frame axes
+        self.moment_frame = np.zeros((n, 3))     # N m s, r x J, frame axes
+        self.last_time = structure.solver.time   # s, time of the last row
+        self.ice_work = 0.0                      # J, the ice's work on the structure (world)
+        self.ice_angular_impulse = 0.0           # N m s, about the axis, opposing positive
+        q, p = self.support_torque_power()
+        self.shaft_torque, self.shaft_power = q, p
+        self.shaft_work = 0.0                    # J
+        self.shaft_angular_impulse = 0.0         # N m s
+        self.energy0 = self.kinetic_energy() + self.strain_energy()        # J, at the start
+        self.angular_momentum0 = self.angular_momentum()                   # kg m^2/s
+
+    # ------------------------------------------------------------------ hooks
+    def add_impulse(self, impulse: np.ndarray, rotation: np.ndarray, r: np.ndarray,
+                    work: float) -> None:
+        """Contact impulses (N s, (Ns, 3), world axes) applied now to the surface nodes at
+        ``r`` (m, (Ns, 3), frame axes from the shaft centre), with the frame's ``rotation`` and
+        their ``work`` (J, world)."""
+        jf = impulse @ rotation
+        m = np.cross(r, jf)
+        self.impulse_world += impulse
+        self.impulse_frame += jf
+        self.moment_frame += m
+        self.ice_work += work
+        self.ice_angular_impulse -= float(m.sum(axis=0) @ self.axis)
+
+    def held_reactions(self) -> np.ndarray:
+        """(H, 3) force (N, frame axes) of the supports on each held node (``_held_nodes``)."""
+        sol = self.structure.solver
+        d = self._held
+        reaction = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
+        force = np.zeros((len(self._held_nodes), 3))
+        np.add.at(force, (self._held_row, self._held_comp), reaction)
+        return force
+
+    def support_torque_power(self) -> tuple[float, float]:
+        """The shaft's moment about the shaft axis (N m, positive in the rotation's sense) and
+        its power (W) now: the supports' forces on the held nodes (``K u + C v + M a - f_ext``
+        on the held DOFs), plus the Rayleigh mass-damping forces ``-alpha m u_e'`` on the free
+        nodes (a force between the structure and the frame, which the shaft drives; the
+        stiffness-proportional part is internal), on the frame's velocity at the nodes."""
+        s = self.structure
+        sol = s.solver
+        d = self._held
+        reaction = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
+        if sol.alpha:
+            g = -sol.alpha * sol.m * sol.v_half
+            g[d] = reaction
+            nodes, force = self._all_nodes, s.dofmap.to_nodal(g)
+        else:
+            nodes, force = self._held_nodes, np.zeros((len(self._held_nodes), 3))
+            np.add.at(force, (self._held_row, self._held_comp), reaction)
+        r = self._r0[nodes] + sol.u[s.dofmap.nodal_dofs[:, nodes].T]
+        f = s.frame.state(sol.time)
+        v = f["R"].T @ f["c_dot"] + np.cross(f["w"], r)       # frame velocity, frame axes
+        return float(np.cross(r, force).sum(axis=0) @ self.axis), float(np.sum(force * v))
+
+    def after_step(self, dt: float) -> None:
+        """After a structure step of ``dt`` (s): integrate the shaft's torque and power."""
+        q, p = self.support_torque_power()
+        self.shaft_angular_impulse += 0.5 * (self.shaft_torque + q) * dt
+        self.shaft_work += 0.5 * (self.shaft_power + p) * dt
+        self.shaft_torque, self.shaft_power = q, p
+
+    # ------------------------------------------------------------------ state
+    def angular_momentum(self) -> float:
+        """The structure's angular momentum about the shaft axis (kg m^2/s), true motion."""
+        s = self.structure
+        r, v = s._relative()
+        x, w = s.frame.to_world(s.solver.time, r, v)
+        return float((np.cross(x - s.frame.state(s.solver.time)["c"], w)
+                      * s._node_mass[:, None]).sum(axis=0) @ self.axis)
+
+    def kinetic_energy(self) -> float:
+        """The structure's kinetic energy in the world (J), true velocity, lumped mass."""
+        s = self.structure
+        r, v = s._relative()
+        _, w = s.frame.to_world(s.solver.time, r, v)
+        return 0.5 * float(np.sum(s._node_mass[:, None] * w * w))
+
+    def von_mises(self) -> np.ndarray:
+        """(Ne,) von Mises stress (Pa) at the element centres, as
+        :meth:`pdfem.fem.structure.ElasticStructure.von_mises` (one sparse product)."""
+        s = self.structure
+        grad = (self._grad @ s.solver.u).reshape(3, 3, -1)
+        eps = 0.5 * (grad + grad.transpose(1, 0, 2))
+        lam, mu = s.material.lame
+        sigma = 2.0 * mu * eps
+        tr = eps[0, 0] + eps[1, 1] + eps[2, 2]
+        for i in range(3):
+            sigma[i, i] += lam * tr
+        return von_mises(sigma.transpose(2, 0, 1))
+
+    def strain_energy(self) -> float:
+        """Strain energy ``1/2 u . K u`` (J) without a product with K: ``K u`` is ``f_ext -
+        C v - M a`` on the free DOFs (the integrator's equation at the step's end) and the held
+        rows of K on the held DOFs."""
+        sol = self.structure.solver
+        ku = sol.f_ext - sol.f_damp - sol.m * sol.a
+        ku[self._held] = self._k_held @ sol.u
+        return 0.5 * float(np.einsum("i,i", sol.u, ku))   # not BLAS: no thread start-up
+
+    def _stress_peak(self, vm: np.ndarray, elements: np.ndarray | None
+                     ) -> tuple[float, np.ndarray]:
+        """Largest element von Mises stress (Pa) among ``elements`` (all: None) and its
+        element's centre (m, reference, frame axes at t = 0)."""
+        sel = np.arange(len(vm)) if elements is None else elements
+        i = sel[int(np.argmax(vm[sel]))]
+        return float(vm[i]), self.structure.points[self._cells[i]].mean(axis=0)
+
+    def rows(self) -> dict[str, dict[str, float | np.ndarray]]:
+        """The rows of the coupling step ending now (forces are the step's impulses over its
+        length) and restart the step's sums: ``""`` (the shaft) and one per blade label."""
+        s = self.structure
+        step = s.solver.time - self.last_time
+        scale = 1.0 / step if step > 0.0 else 0.0
+        force = self.impulse_world.sum(axis=0) * scale
+        moment = self.moment_frame.sum(axis=0) * scale
+        vm = self.von_mises()
+        peak, where = self._stress_peak(vm, None)
+        out = {"": {"frame_angle": s.frame.angle(s.solver.time),
+                    "ice_torque": -float(moment @ self.axis), "thrust": float(force @ self.axis),
+                    "ice_force": force, "shaft_torque": self.shaft_torque,
+                    "shaft_power": self.shaft_power, "shaft_work": self.shaft_work,
+                    "shaft_angular_impulse": self.shaft_angular_impulse,
+                    "ice_work": self.ice_work, "ice_angular_impulse": self.ice_angular_impulse,
+                    "angular_momentum_change": self.angular_momentum() - self.angular_momentum0,
+                    "energy_change": self.kinetic_energy() + self.strain_energy() - self.energy0,
+                    "damping_dissipated": s.solver.damping_dissipated,
+                    "max_von_mises": peak, "max_von_mises_location": where}}
+        held = self.held_reactions()
+        r_held = self._r0[self._held_nodes] + s.dofmap.to_nodal(s.solver.u)[self._held_nodes]
+        for (label, mask, p, axes), rows in zip(self.blades, self._root_rows):
+            root_moment = -np.cross(r_held[rows] - p, held[rows]).sum(axis=0)
+            jf = self.impulse_frame[mask].sum(axis=0) * scale
+            m = (self.moment_frame[mask].sum(axis=0) - np.cross(p, self.impulse_frame[mask].sum(
+                axis=0))) * scale
+            bpeak, bwhere = self._stress_peak(vm, s.mesh.element_sets.get(label))
+            out[label] = {"force": self.impulse_world[mask].sum(axis=0) * scale,
+                          "force_blade": axes @ jf,
+                          "ice_torque": -float(self.moment_frame[mask].sum(axis=0) @ self.axis)
+                          * scale, "thrust": float(jf @ self.axis),
+                          "spindle_torque": float(axes[0] @ m),
+                          "bending_out_of_plane": float(axes[1] @ m),
+                          "bending_in_plane": float(axes[2] @ m),
+                          "root_moment": axes @ root_moment,
+                          "max_von_mises": bpeak, "max_von_mises_location": bwhere}
+        self.impulse_world[:] = 0.0
+        self.impulse_frame[:] = 0.0
+        self.moment_frame[:] = 0.0
+        self.last_time = s.solver.time
+        return out
+
+    def checkpoint_state(self) -> dict[str, np.ndarray | float]:
+        """The step's sums and the running integrals, for a checkpoint."""
+        return {"shaft_impulse_world": self.impulse_world.copy(),
+                "shaft_impulse_frame": self.impulse_frame.copy(),
+                "shaft_moment_frame": self.moment_frame.copy(),
+                "shaft_scalars": np.array([self.last_time, self.ice_work,
+                                           self.ice_angular_impulse, self.shaft_torque,
+                                           self.shaft_power, self.shaft_work,
+                                           self.shaft_angular_impulse, self.energy0,
+                                           self.angular_momentum0])}
+
+    def restore_state(self, state: dict) -> None:
+        """Restore :meth:`checkpoint_state` exactly."""
+        self.impulse_world = np.array(state["shaft_impulse_world"], dtype=np.float64)
+        self.impulse_frame = np.array(state["shaft_impulse_frame"], dtype=np.float64)
+        self.moment_frame = np.array(state["shaft_moment_frame"], dtype=np.float64)
+        (self.last_time, self.ice_work, self.ice_angular_impulse, self.shaft_torque,
+         self.shaft_power, self.shaft_work, self.shaft_angular_impulse, self.energy0,
+         self.angular_momentum0) = map(
+            float, state["shaft_scalars"])
