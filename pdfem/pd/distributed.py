@@ -135,6 +135,8 @@ class DistributedIce(DistributedCheckpoint):
         self._counted = plan.owned[np.repeat(np.arange(len(loc)), np.diff(row_ptr))]
         self._counted_broken = self._broken_count()
         self._owned_rows = plan.owned.astype(np.uint8)  # whose crushing energy this rank counts
+        if local.failure.crush_friction > 0.0:  # the friction's work on owned particles only
+            local.work_volume = np.where(plan.owned, local.vol, 0.0)
         self.update_intact_volume()  # pre-cracks: the halo's from their owners
 
     # -- exchanges ---------------------------------------------------------------------------
@@ -160,15 +162,20 @@ class DistributedIce(DistributedCheckpoint):
         b, mat = self.body, self.body.material
         b._ledger.prepare(b)
         self._exchange(b.y)
+        friction = b.crush_friction()
+        if friction[0] > 0.0:  # crushed bonds rub: their ends' velocities, halo included
+            self._exchange(b.v)
         broke = kernels.dilatation_and_forces(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight,
                                               b._broken_arg(), b.vol, b.m, mat.K, mat.mu, b.limits,
                                               b.nofail, b.theta, b.f, b._ws,
                                               between=self._exchange, rest=b.rest,
                                               crush_yield=b.failure.crush_yield,
                                               owned=self._owned_rows,
-                                              strength=b.strength_factors, m_now=b.m_now)
+                                              strength=b.strength_factors, m_now=b.m_now,
+                                              velocity=b.v, friction=friction,
+                                              f_friction=b.friction_force())
         if b.rest is not None:
-            b.fracture_dissipated += b._ws.crush_dissipated
+            b.book_crushing()
         if broke == 0:  # the usual step: no recount over the bonds
             return 0
         b.fracture_dissipated += b._ledger.released(b, self.plan.owned)

@@ -144,6 +144,28 @@ def crushed_bond(b, l, p, sy, w, r, vij):
 
 
 @numba.njit(**_INLINE)
+def crushed_friction(g, r, mu_f, dt_rho, vi, vj, tx, ty, tz):
+    """Friction between the ends of a pushing crushed bond (crushed ice is a frictional
+    granular material): a tangential force mu_f |F_n| against their relative sliding velocity
+    t = (tx, ty, tz) (m/s, v_j - v_i without its component along the bond), F_n = |g| V_i V_j r
+    the bond's normal force (N, ``g`` from :func:`crushed_bond`).
+
+    Below the sliding speed v_c = mu_f |F_n| dt (1/m_i + 1/m_j) (``dt_rho`` = dt / rho), at
+    which one step of the full friction force would reverse the pair's sliding, the force is
+    mu_f |F_n| |t| / v_c (it stops the sliding in one step instead of overshooting; an explicit
+    scheme cannot hold a stick state). Returns the scalar q: the force density on i is
+    q V_j t, on j -q V_i t (its work is booked from the velocities, :meth:`pdfem.pd.body.
+    IceBody.begin_step`)."""
+    vt = math.sqrt(tx * tx + ty * ty + tz * tz)
+    fn = abs(g) * r
+    vc = mu_f * fn * (vi + vj) * dt_rho
+    slide = max(vt, vc)
+    if slide <= 0.0:
+        return 0.0
+    return mu_f * fn / slide
+
+
+@numba.njit(**_INLINE)
 def crushed_bond_energy(b, l, p, w, r):
     """The stored energy of :func:`crushed_bond` per V_i V_j: b w (r_p - r)^2 / 2 (0 if r >= r_p)."""
     c = l * (1.0 + p) - r

@@ -128,6 +128,11 @@ class IceFailure:
         return 0.5 * self.compressive_strength / self.youngs_modulus
 
     @property
+    def crush_friction(self) -> float:
+        """tan(phi): crushed ice slides on itself with the friction of its Coulomb envelope."""
+        return math.tan(math.radians(self.friction_angle))
+
+    @property
     def youngs_modulus(self) -> float:
         """E = 9 K mu / (3 K + mu) (Pa)."""
         return 9.0 * self.K * self.mu / (3.0 * self.K + self.mu)
