@@ -44,6 +44,7 @@ from pdfem.pd.bonds import bond_lengths, cut_crack
 from pdfem.pd.damaged_volume import IntactVolume
 from pdfem.pd.constraints import VelocityConstraint, applied_forces, next_name, step_work
 from pdfem.pd.constraints import reaction_forces
+from pdfem.pd.crushed_shear import CrushedShear
 from pdfem.pd.failure import CriticalStretch, FailureLaw
 from pdfem.pd.fracture import FractureLedger
 from pdfem.pd.ice_interface import WholeBody
@@ -98,6 +99,9 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     # (P,) float32 stretch at which each bond broke, NaN if intact or broken for good: with a
     # failure law whose broken bonds keep pushing in compression (crushed ice), else None
     rest: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # the crushed bonds' shear springs (pdfem.pd.crushed_shear), for a law whose crushed ice
+    # has friction, else None
+    shear: CrushedShear | None = field(default=None, repr=False, compare=False)
     # strain rates and strength factors, for a law whose strength depends on the rate
     rates: RateTracker | None = field(default=None, repr=False, compare=False)
     # (N,) global particle numbers of a rank's part of a body (summation order); None: own
@@ -106,12 +110,6 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     _intact: IntactVolume | None = field(default=None, init=False, repr=False, compare=False)
     _ledger: FractureLedger = field(default_factory=FractureLedger, init=False, repr=False,
                                     compare=False)
-    # (N, 3) force density of the crushed bonds' friction (N/m^3, part of f) when the law has
-    # one, else None; the volumes its work is summed with (0 for an MPI rank's halo); the step
-    # under way (s)
-    f_friction: np.ndarray | None = field(default=None, init=False, repr=False, compare=False)
-    work_volume: np.ndarray | None = field(default=None, init=False, repr=False, compare=False)
-    _dt: float = field(default=0.0, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.failure is None:
@@ -121,6 +119,8 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
                 raise ValueError(f"the {self.failure.name!r} failure law needs the pair loop "
                                  "(pd_loop = \"pairs\")")
             self.rest = np.full(self.nbr.shape[0], np.nan, dtype=np.float32)
+        if self.failure.crush_friction > 0.0 and self.shear is None:
+            self.shear = CrushedShear.for_bonds(self.nbr.shape[0], self.failure.crush_friction)
         if self.failure.rate_dependent and self.rates is None:
             self.rates = RateTracker(self.failure, self.material.poisson_ratio)
 
@@ -307,8 +307,7 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
                                                self._ws, rest=self.rest,
                                                crush_yield=self.failure.crush_yield,
                                                strength=self.strength_factors, m_now=self.m_now,
-                                               velocity=self.v, friction=self.crush_friction(),
-                                               f_friction=self.friction_force())
+                                               shear=self.shear)
         else:
             fam_ptr, fam_nbr, fam_bond = self._family
             kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
@@ -321,44 +320,8 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
             self.fracture_dissipated += self._ledger.released(self)
             self.update_intact_volume()
         if self.rest is not None:
-            self.book_crushing()
+            self.fracture_dissipated += self._ws.crush_dissipated
         return nb
-
-    def crush_friction(self) -> tuple[float, float]:
-        """(mu_f, dt / rho) of the crushed bonds' friction for the step under way
-        (:func:`pdfem.pd.lps_law.crushed_friction`)."""
-        return self.failure.crush_friction, self._dt / self.material.density
-
-    def friction_force(self) -> np.ndarray | None:
-        """The (N, 3) force density array of the crushed bonds' friction (made on first use),
-        or None if the failure law has none."""
-        if self.failure.crush_friction <= 0.0:
-            return None
-        if self.f_friction is None:
-            self.f_friction = np.zeros_like(self.y)
-        if self.work_volume is None:
-            self.work_volume = self.vol
-        return self.f_friction
-
-    def book_crushing(self) -> None:
-        """After a force pass: the crushed bonds' sliding energy to the dissipation, and their
-        friction force into ``f`` (its work is booked by the kicks, :meth:`_kick`)."""
-        self.fracture_dissipated += self._ws.crush_dissipated
-        if self.f_friction is not None:
-            self.f += self.f_friction
-
-    def _kick(self, half: float) -> None:
-        """v += half (f / rho + g); the work of the crushed bonds' friction over the kick,
-        sum V f_friction . (v_before + v_after) / 2 half (J, exact for the kinetic energy the
-        kick changes), goes to the dissipation with its sign reversed."""
-        before = None if self.f_friction is None else self._friction_power()
-        self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
-        if before is not None:
-            self.fracture_dissipated -= 0.5 * (before + self._friction_power()) * half
-
-    def _friction_power(self) -> float:
-        """sum V f_friction . v (W) over the particles this body counts."""
-        return float(np.dot(self.work_volume, np.einsum("ij,ij->i", self.f_friction, self.v)))
 
     def _apply_constraints(self, t: float, step: float = 0.0) -> None:
         """The prescribed motion at ``t`` (s); with ``step``, the drift velocity over it."""
@@ -401,13 +364,14 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
         ``f``) and :meth:`end_step`."""
         half = 0.5 * dt
         t0 = self.time
-        self._dt = dt
         if self.rates is not None:
             self.rates.advance(self.theta, dt)
         self._force0 = applied_forces(self) if self.constraints else None
-        self._kick(half)
+        self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
         self._apply_constraints(t0, dt)
         y_old = self.y.copy() if keep_old else None
+        if self.shear is not None:
+            self.shear.begin_step(self.y)
         self.y += dt * self.v
         self.time = t0 + dt
         return y_old
@@ -415,7 +379,8 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     def end_step(self, dt: float) -> None:
         """Second half of the step begun by :meth:`begin_step`, once ``f`` holds the forces at
         the new positions: half kick, constraints, work of the constraints."""
-        self._kick(0.5 * dt)
+        half = 0.5 * dt
+        self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
         self._apply_constraints(self.time)
         if self.constraints:
             self.external_work += step_work(self, self._force0, dt)

@@ -32,6 +32,7 @@ import numpy as np
 from pdfem.pd import kernels
 from pdfem.pd.body import IceBody
 from pdfem.pd.constraints import reaction_forces
+from pdfem.pd.crushed_shear import shear_energy_args
 from pdfem.pd.distributed_state import DistributedCheckpoint
 
 
@@ -124,7 +125,8 @@ class DistributedIce(DistributedCheckpoint):
             flags=None,  # broken bonds are negative weights (replace would copy the flags)
             fixed=body.fixed[loc].copy(), constraints=[],
             loop="pairs", external_work=0.0, fracture_dissipated=0.0,
-            rest=None if body.rest is None else body.rest[pairs].copy(), rates=None, gid=loc)
+            rest=None if body.rest is None else body.rest[pairs].copy(), rates=None, gid=loc,
+            shear=None if body.shear is None else body.shear.subset(pairs))
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
@@ -135,8 +137,6 @@ class DistributedIce(DistributedCheckpoint):
         self._counted = plan.owned[np.repeat(np.arange(len(loc)), np.diff(row_ptr))]
         self._counted_broken = self._broken_count()
         self._owned_rows = plan.owned.astype(np.uint8)  # whose crushing energy this rank counts
-        if local.failure.crush_friction > 0.0:  # the friction's work on owned particles only
-            local.work_volume = np.where(plan.owned, local.vol, 0.0)
         self.update_intact_volume()  # pre-cracks: the halo's from their owners
 
     # -- exchanges ---------------------------------------------------------------------------
@@ -162,9 +162,6 @@ class DistributedIce(DistributedCheckpoint):
         b, mat = self.body, self.body.material
         b._ledger.prepare(b)
         self._exchange(b.y)
-        friction = b.crush_friction()
-        if friction[0] > 0.0:  # crushed bonds rub: their ends' velocities, halo included
-            self._exchange(b.v)
         broke = kernels.dilatation_and_forces(b.y, b.row_ptr, b.nbr, b.xi_len, b.weight,
                                               b._broken_arg(), b.vol, b.m, mat.K, mat.mu, b.limits,
                                               b.nofail, b.theta, b.f, b._ws,
@@ -172,10 +169,9 @@ class DistributedIce(DistributedCheckpoint):
                                               crush_yield=b.failure.crush_yield,
                                               owned=self._owned_rows,
                                               strength=b.strength_factors, m_now=b.m_now,
-                                              velocity=b.v, friction=friction,
-                                              f_friction=b.friction_force())
+                                              shear=b.shear)
         if b.rest is not None:
-            b.book_crushing()
+            b.fracture_dissipated += b._ws.crush_dissipated
         if broke == 0:  # the usual step: no recount over the bonds
             return 0
         b.fracture_dissipated += b._ledger.released(b, self.plan.owned)
@@ -298,7 +294,7 @@ class DistributedIce(DistributedCheckpoint):
                                   b.m, theta, mat.K, mat.mu, b._ws)
         crushed = 0.0 if b.rest is None else kernels.contact_bond_energy(
             b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b._broken_arg(), b.rest, b.vol, b.m,
-            mat.mu, owned=self.plan.owned)
+            mat.mu, owned=self.plan.owned, **shear_energy_args(b.shear))
         return float(self._sum(W * b.vol)) + float(self.comm.allreduce_sum(crushed))
 
     def momentum(self) -> np.ndarray:

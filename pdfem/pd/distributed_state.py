@@ -23,19 +23,25 @@ class DistributedCheckpoint:
         arrays = {k: self.gather(getattr(b, k)) for k in ("y", "v", "f", "theta")}
         counted = self._counted
         rest = b.rest[counted] if b.rest is not None else None
+        slip = b.shear.slip[counted] if b.shear is not None else None
         rate_parts = {k: self.gather(v) for k, v in self._rate_arrays().items()}
-        bonds = self.comm.gather((self.plan.pairs[counted], b.broken[counted], rest))
+        bonds = self.comm.gather((self.plan.pairs[counted], b.broken[counted], rest, slip))
         work = self.comm.gather(float(b.external_work))
         frac = self.comm.gather(float(b.fracture_dissipated))
         if bonds is None:
             return None
         broken = np.zeros(len(self.global_body.nbr), dtype=np.uint8)
         rests = np.full(len(self.global_body.nbr), np.nan, dtype=np.float32)
-        for idx, flags, rest in bonds:
+        slips = np.zeros((len(self.global_body.nbr), 3), dtype=np.float32)
+        for idx, flags, rest, slip in bonds:
             broken[idx] = flags
             if rest is not None:
                 rests[idx] = rest
+            if slip is not None:
+                slips[idx] = slip
         extra = {} if b.rest is None else {"rest": rests}
+        if b.shear is not None:
+            extra["slip"] = slips
         extra.update(rate_parts)
         return {**arrays, **extra, "broken": broken, "time": float(b.time),
                 "external_work": _rank_sum(work), "external_work_ranks": np.array(work),
@@ -64,6 +70,8 @@ class DistributedCheckpoint:
                                      self._rank_part(state, "fracture_dissipated"),
                                  **({} if self.body.rest is None
                                     else {"rest": state["rest"][pairs]}),
+                                 **({} if self.body.shear is None
+                                    else {"slip": state["slip"][pairs]}),
                                  **{k: state[k][loc] for k in ("rate_theta", "rate_factors")
                                     if k in state}})
         self._counted_broken = self._broken_count()

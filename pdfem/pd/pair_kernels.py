@@ -47,20 +47,20 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pdfem.pd.crushed_shear import shear_kernel_args
 from pdfem.pd.lps_law import force_coefficients, stretch_limits
 from pdfem.pd.pair_step_kernels import dilatation_pairs, forces_pairs, forces_pairs_law
 from pdfem.pd.pair_sum_kernels import family_sum_pairs
 from pdfem.pd.workspace import c_contiguous, workspace_for
 
 if TYPE_CHECKING:
+    from pdfem.pd.crushed_shear import CrushedShear
     from pdfem.pd.workspace import PairWorkspace
 
 _NO_R = np.zeros(0)  # stands for "no bond-length buffer" (read-only by convention)
 _NO_REST = np.zeros(0, dtype=np.float32)  # "broken bonds never push" (read-only by convention)
 _ALL_ROWS = np.zeros(0, dtype=np.uint8)  # "every row's crushing energy counts" (read-only)
 _NO_STRENGTH = np.zeros(0)  # "every particle's strength factor is 1" (read-only by convention)
-_NO_VELOCITY = np.zeros(0)  # "no crushed-bond friction" (read-only by convention)
-_NO_FORCE = np.zeros((0, 3))  # "no friction force density" (read-only by convention)
 _INTACT = np.zeros(0)  # "m' = m: no broken bond" (read-only by convention)
 
 
@@ -85,7 +85,7 @@ def plain_law(s0, granular: bool) -> bool:
 
 
 def _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail, f_out, rbuf,
-                use_r, rest, granular, crush_yield, owned, velocity, friction, f_friction) -> int:
+                use_r, rest, granular, crush_yield, owned, shear) -> int:
     """The force pass after :func:`~pdfem.pd.lps_law.force_coefficients`: the plain
     critical-stretch kernel, or the general one for other laws (compiled only when used)."""
     if plain_law(s0, granular):
@@ -96,29 +96,7 @@ def _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail
                                 ws.coef, ws.aux, wt, nofail, ws.chunk_ptr, ws.split, ws.ov_ptr,
                                 ws.ov, ws.counts, f_out, rbuf, use_r, rest, granular,
                                 float(crush_yield), owned, ws.crush, stretch_limits(s0),
-                                *_friction_args(ws, velocity, friction, f_friction, y)))
-
-
-def _friction_args(ws, velocity, friction, f_friction, y) -> tuple:
-    """(flat velocities, [mu_f, dt / rho], friction force density out, its overflow rows) for
-    the general kernel; without friction nothing is read or written."""
-    fric = np.array([float(friction[0]), float(friction[1])])
-    if fric[0] <= 0.0:
-        return _NO_VELOCITY, fric, _NO_FORCE, _NO_VELOCITY
-    if velocity is None or velocity.shape != y.shape:
-        raise ValueError("crushed-bond friction needs the (N, 3) velocities")
-    if f_friction is None or f_friction.shape != y.shape:
-        raise ValueError("crushed-bond friction needs an (N, 3) f_friction array")
-    if ws.ov_friction is None:
-        ws.ov_friction = np.zeros_like(ws.ov)
-    return (c_contiguous(velocity, "velocity").reshape(-1), fric,
-            c_contiguous(f_friction, "f_friction"), ws.ov_friction)
-
-
-def _crush_sums(ws, granular: bool) -> None:
-    """The crushed bonds' sliding dissipation of the last pass (J), summed in chunk order into
-    ``ws.crush_dissipated``."""
-    ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
+                                *shear_kernel_args(shear)))
 
 
 def check_broken(broken: np.ndarray, per_pair: np.ndarray) -> bool:
@@ -281,9 +259,7 @@ def forces(
     owned: np.ndarray | None = None,
     strength: np.ndarray | None = None,
     m_now: np.ndarray | None = None,
-    velocity: np.ndarray | None = None,
-    friction: tuple[float, float] = (0.0, 0.0),
-    f_friction: np.ndarray | None = None,
+    shear: CrushedShear | None = None,
 ) -> int:
     """LPS force density with the bond-break check (pair loop).
 
@@ -330,11 +306,10 @@ def forces(
         Optional (N,) weighted volume of each particle's intact bonds (m^5,
         :class:`pdfem.pd.damaged_volume.IntactVolume`): with broken bonds the force is
         then the exact gradient of the strain energy; default m (as if none were broken).
-    velocity, friction, f_friction
-        With ``rest``: the (N, 3) velocities (m/s) and (mu_f, dt / rho) of the friction between
-        the ends of pushing crushed bonds (:func:`pdfem.pd.lps_law.crushed_friction`; mu_f = 0:
-        none), and the (N, 3) array overwritten with its force density (N/m^3), which is not
-        in ``f_out``: the caller adds it (and books its work from the velocity kicks).
+    shear
+        Optional shear springs of the crushed bonds (:class:`pdfem.pd.crushed_shear.
+        CrushedShear`), advanced if a step is under way; their force is in ``f_out`` and the
+        energy lost by slipping in ``ws.crush_dissipated``.
 
     Returns
     -------
@@ -349,8 +324,8 @@ def forces(
     nb = _force_pass(ws, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                      check_broken(broken, nbr), vol, check_weight(weight, nbr), s0, nofail,
                      c_contiguous(f_out, "f_out"), _NO_R, False, rest, granular, crush_yield,
-                     owned, velocity, friction, f_friction)
-    _crush_sums(ws, granular)
+                     owned, shear)
+    ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
     return nb
 
 
@@ -376,9 +351,7 @@ def dilatation_and_forces(
     owned: np.ndarray | None = None,
     strength: np.ndarray | None = None,
     m_now: np.ndarray | None = None,
-    velocity: np.ndarray | None = None,
-    friction: tuple[float, float] = (0.0, 0.0),
-    f_friction: np.ndarray | None = None,
+    shear: CrushedShear | None = None,
 ) -> int:
     """One OSB step's internal forces: :func:`dilatation`, then :func:`forces` (pair loops).
 
@@ -391,8 +364,8 @@ def dilatation_and_forces(
     Parameters are those of :func:`dilatation` and :func:`forces`; ``theta_out`` (N,) and
     ``f_out`` (N, 3) are overwritten; ``ws`` is required. ``between``, if given, is called with
     ``theta_out`` between the two passes (an MPI rank's body exchanges its halo's dilatations
-    there). ``rest``, ``crush_yield``, ``owned``, ``strength``, ``m_now``, ``velocity``,
-    ``friction``, ``f_friction``: as in :func:`forces`.
+    there). ``rest``, ``crush_yield``, ``owned``, ``strength``, ``m_now``, ``shear``: as in
+    :func:`forces`.
 
     Returns
     -------
@@ -414,6 +387,6 @@ def dilatation_and_forces(
                        K, mu, _NO_STRENGTH if strength is None else strength, ws.coef, ws.aux)
     nb = _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail,
                      c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular, crush_yield, owned,
-                     velocity, friction, f_friction)
-    _crush_sums(ws, granular)
+                     shear)
+    ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
     return nb

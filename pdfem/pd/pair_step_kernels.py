@@ -25,8 +25,8 @@ from pdfem.pd.lps_law import (
     breaks_stretch,
     crushed_bond,
     crushed_bond_energy,
-    crushed_friction,
     crushed_rest,
+    crushed_shear,
     dilatation_of,
     dilatation_term,
     is_broken,
@@ -134,30 +134,42 @@ def _pair_force(g, vj, vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1, ov, base,
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _crushed_friction(g, r, mu_f, dt_rho, vi, vj, vel, i, j, j3, d0, d1, d2, fx, fy, fz, checked,
-                      r1, ov, base, f):
-    """The friction of a pushing crushed bond (:func:`~pdfem.pd.lps_law.crushed_friction`)
-    applied to both ends in the friction force density ``f`` (its own array and overflow
-    rows ``ov``); returns the row's sums."""
-    i3 = U64(3) * U64(i)
-    wx = vel[j3] - vel[i3]
-    wy = vel[j3 + U64(1)] - vel[i3 + U64(1)]
-    wz = vel[j3 + U64(2)] - vel[i3 + U64(2)]
-    along = (wx * d0 + wy * d1 + wz * d2) / (r * r)
-    tx = wx - along * d0
-    ty = wy - along * d1
-    tz = wz - along * d2
-    q = crushed_friction(g, r, mu_f, dt_rho, vi, vj, tx, ty, tz)
-    if q != 0.0:
-        fx, fy, fz = _pair_force(q, vj, vi, tx, ty, tz, fx, fy, fz, j, j3,
-                                 checked, r1, ov, base, f)
-    return fx, fy, fz
+def _crushed_shear(k, i, j, j3, y, y0, slip, shear, g, b, w, r, d0, d1, d2, vi, vj, fx, fy, fz,
+                   checked, r1, ov, base, f):
+    """The shear spring of crushed bond k (:func:`~pdfem.pd.lps_law.crushed_shear`):
+    ``shear`` = (mu, kappa, advance). With ``advance`` its stretch ``slip[3k:3k+3]`` (m) takes
+    the step's increment of the bond vector (from the positions ``y0`` at the step's start);
+    then its force kappa b w V_i V_j s acts on both ends. Returns the row's sums and the energy
+    (J) it dissipated by slipping."""
+    k3 = U64(3) * k
+    s0 = (1.0 * slip[k3])
+    s1 = (1.0 * slip[k3 + U64(1)])
+    s2 = (1.0 * slip[k3 + U64(2)])
+    kb = shear[1] * b * w
+    lost = 0.0
+    if shear[2] != 0.0:
+        i3 = U64(3) * U64(i)
+        u0 = d0 - (y0[j3] - y0[i3])
+        u1 = d1 - (y0[j3 + U64(1)] - y0[i3 + U64(1)])
+        u2 = d2 - (y0[j3 + U64(2)] - y0[i3 + U64(2)])
+        smax = shear[0] * (-g * r / (b * w)) / shear[1] if g < 0.0 else 0.0
+        s0, s1, s2, lost = crushed_shear(s0, s1, s2, u0, u1, u2, d0, d1, d2, r, smax)
+        slip[k3] = s0
+        slip[k3 + U64(1)] = s1
+        slip[k3 + U64(2)] = s2
+        s0 = (1.0 * slip[k3])
+        s1 = (1.0 * slip[k3 + U64(1)])
+        s2 = (1.0 * slip[k3 + U64(2)])
+    if s0 != 0.0 or s1 != 0.0 or s2 != 0.0:
+        fx, fy, fz = _pair_force(kb, vj, vi, s0, s1, s2, fx, fy, fz, j, j3, checked, r1, ov,
+                                 base, f)
+    return fx, fy, fz, lost * kb * vi * vj
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail, f,
-                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim, vel, fric, fr,
-                ovr):
+                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim, slip, y0,
+                shear):
     """Row i of the pair-loop forces; returns the number of bonds it broke and, with
     ``granular``, the energy its crushed bonds dissipated (J, if ``counted``): a broken bond
     whose ``rest`` (p) is set (not NaN) is a crushed bond (:func:`~pdfem.pd.lps_law.
@@ -177,10 +189,7 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
     fz = 0.0
     nb = 0
     diss = 0.0
-    mu_f = fric[0]
-    gx = 0.0
-    gy = 0.0
-    gz = 0.0
+    rubs = slip.shape[0] > 0
     for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
         w = wt[k]
         if is_broken(signed, w, broken, k):
@@ -195,17 +204,18 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
             l = xi_len[k]
             d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
             r = bond_length(d0, d1, d2)
-            g, p, dk = crushed_bond(bi + coef[j2 + U64(1)], l, sb, sy, abs(w), r, vi * vol[j])
-            if g == 0.0:
-                continue
+            bij = bi + coef[j2 + U64(1)]
+            g, p, dk = crushed_bond(bij, l, sb, sy, abs(w), r, vi * vol[j])
             if dk != 0.0:
                 rest[k] = p
                 diss += dk
-            if mu_f > 0.0:
-                share = 4.0
-                gx, gy, gz = _crushed_friction(g, r, mu_f, fric[1] * share, vi, vol[j], vel, i, j, j3,
-                                               d0, d1, d2, gx, gy, gz, checked, r1, ovr, base,
-                                               fr)
+            if rubs:
+                fx, fy, fz, dk = _crushed_shear(k, i, j, j3, y, y0, slip, shear, g, bij, abs(w),
+                                                r, d0, d1, d2, vi, vol[j], fx, fy, fz, checked,
+                                                r1, ov, base, f)
+                diss += dk
+            if g == 0.0:
+                continue
         else:
             j = U64(nbr[k])
             j3 = U64(3) * j
@@ -231,10 +241,6 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
     f[3 * i] += fx
     f[3 * i + 1] += fy
     f[3 * i + 2] += fz
-    if mu_f > 0.0:
-        fr[3 * i] += gx
-        fr[3 * i + 1] += gy
-        fr[3 * i + 2] += gz
     if not counted:
         diss = 0.0
     return nb, diss
@@ -242,8 +248,8 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt,
-                 nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim, vel, fric,
-                 fr, ovr):
+                 nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim, slip, y0,
+                 shear):
     """Rows i0..i1 with the overflow check ``checked``; bonds broken and energy dissipated."""
     nb = 0
     diss = 0.0
@@ -251,7 +257,7 @@ def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, 
     for i in range(i0, i1):
         n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt,
                            nofail, f, checked, r1, ov, base, rbuf, use_r, rest, granular, sy,
-                           every or owned[i] != 0, lim, vel, fric, fr, ovr)
+                           every or owned[i] != 0, lim, slip, y0, shear)
         nb += n
         diss += d
     return nb, diss
@@ -259,16 +265,16 @@ def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail,
-                 f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim, vel, fric, fr, ovr):
+                 f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim, slip, y0, shear):
     """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken and the
     energy the crushed bonds of the ``owned`` rows (all if empty) dissipated, under a general
     failure law (:func:`forces_pairs_law`)."""
     n1, d1 = _forces_span(r0, split, False, y, row_ptr, nbr, xi_len, broken, signed, vol,
                           coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
-                          granular, sy, owned, lim, vel, fric, fr, ovr)
+                          granular, sy, owned, lim, slip, y0, shear)
     n2, d2 = _forces_span(split, r1, True, y, row_ptr, nbr, xi_len, broken, signed, vol,
                           coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
-                          granular, sy, owned, lim, vel, fric, fr, ovr)
+                          granular, sy, owned, lim, slip, y0, shear)
     return n1 + n2, d1 + d2
 
 
@@ -373,7 +379,7 @@ def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, n
 @twin()
 def forces_pairs_law(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2, wt, nofail,
                      cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r, rest, granular, sy,
-                     owned, crush, lim, vel, fric, fr2, ovr2):
+                     owned, crush, lim, slip, y02, shear):
     """:func:`forces_pairs` for a failure law with dilatation-dependent bounds, strength
     factors or crushed bonds (:mod:`pdfem.pd.failure.ice`): one copy of the row loop, with
     ``signed`` and ``use_r`` tested per bond (a separate kernel, compiled only when a body
@@ -383,9 +389,7 @@ def forces_pairs_law(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2,
     aux = aux2.reshape(aux2.size)
     f = fout.reshape(fout.size)
     ov = ov2.reshape(ov2.size)
-    fr = fr2.reshape(fr2.size)
-    ovr = ovr2.reshape(ovr2.size)
-    rubs = fric[0] > 0.0
+    y0 = y02.reshape(y02.size)
     C = cb.shape[0] - 1
     for c in prange(C):
         r0 = cb[c]
@@ -395,20 +399,13 @@ def forces_pairs_law(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2,
             f[p] = 0.0
         for q in range(U64(3) * base, U64(3) * U64(ov_ptr[c + 1])):
             ov[q] = 0.0
-        if rubs:
-            for p in range(3 * r0, 3 * r1):
-                fr[p] = 0.0
-            for q in range(U64(3) * base, U64(3) * U64(ov_ptr[c + 1])):
-                ovr[q] = 0.0
         nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, signed, vol, coef,
                               aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy,
-                              owned, lim, vel, fric, fr, ovr)
+                              owned, lim, slip, y0, shear)
         counts[c] = nb
         crush[c] = dc
     for t in prange(C):
         add_overflow3(t, cb, ov_ptr, ov2, fout)
-        if rubs:
-            add_overflow3(t, cb, ov_ptr, ovr2, fr2)
     total = 0
     for c in range(C):
         total += counts[c]

@@ -119,7 +119,6 @@ class PairWorkspace:
         self.counts = np.zeros(C, dtype=np.int64)
         self.crush = np.zeros(C)  # energy (J) each chunk's crushed bonds dissipated, last pass
         self.crush_dissipated = 0.0  # their sum in chunk order
-        self.ov_friction = None  # overflow rows of the crushed-bond friction, made when used
         self.parallel = C > 1
         # per-particle loops (force coefficients) of a small body run serially even when the
         # pair loops are threaded: a parallel region over a few thousand particles costs more
