@@ -128,3 +128,60 @@ def test_restart_carries_the_springs_bit_for_bit():
     np.testing.assert_array_equal(other.y, body.y)
     np.testing.assert_array_equal(other.v, body.v)
     np.testing.assert_array_equal(other.shear.slip, body.shear.slip)
+
+
+CRUSH = """
+[run]
+end_time = 1.2e-3
+output_interval = 4.0e-4
+energy_tolerance = 0.1  # coarse first contact (not what this tests)
+
+[[ice]]
+name = "plate"
+dx = 0.02
+shape = { box = { min = [0.0, 0.0, 0.0], max = [1.0, 0.5, 0.04] } }
+material = { density = 900.0, youngs_modulus = 4.1e9, poisson_ratio = 0.3, failure = "ice", compressive_strength = 2.0e6, friction_angle = PHI }
+
+[[structure]]
+name = "cylinder"
+kind = "rigid"
+mesh = "indenters"
+params = { shape = "cylinder", radius = 0.1, length = 0.1, axis = "z", center_x = 0.5, center_y = 0.5905, center_z = 0.02, element_size = 0.02 }
+motion = { velocity = [0.0, -4.0, 0.0] }
+"""
+
+
+def test_one_and_two_ranks_agree_with_friction(tmp_path):
+    """A rigid cylinder crushing an ice plate's edge (the "ice" law, phi = 30 deg) on 1 and 2
+    ranks: a bond between particles owned by two ranks is evaluated on both, and its shear
+    spring advances alike there, so the runs agree to round-off (reference: the serial run);
+    without friction (phi = 0) the load differs, so the springs did act."""
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from pdfem.output import read_results
+
+    bindir = Path(sys.executable).parent
+    pdfem = str(bindir / "pdfem") if (bindir / "pdfem").exists() else shutil.which("pdfem")
+    mpiexec = (str(bindir / "mpiexec") if (bindir / "mpiexec").exists()
+               else shutil.which("mpiexec"))
+    results = {}
+    for name, phi, launch in (("r1", 30, [pdfem]), ("r2", 30, [mpiexec, "-n", "2", pdfem]),
+                              ("f0", 0, [pdfem])):
+        case = tmp_path / f"{name}.toml"
+        case.write_text(CRUSH.replace("PHI", str(phi)))
+        r = subprocess.run(launch + ["run", str(case), "--out", str(tmp_path / name), "--quiet"],
+                           capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr[-2000:]
+        results[name] = read_results(tmp_path / name / "results.h5")
+    ref, two = results["r1"], results["r2"]
+    u = ref["ice"]["plate"]["u"]
+    force = ref["histories"]["loads/cylinder"]["force"]
+    assert ref["ice"]["plate"]["damage"][-1].max() > 0.5   # crushed
+    np.testing.assert_allclose(two["ice"]["plate"]["u"], u, rtol=0, atol=1e-10 * np.abs(u).max())
+    np.testing.assert_allclose(two["histories"]["loads/cylinder"]["force"], force, rtol=0,
+                               atol=1e-10 * np.abs(force).max())
+    other = results["f0"]["histories"]["loads/cylinder"]["force"]
+    assert np.abs(other - force).max() > 1e-3 * np.abs(force).max()
