@@ -71,7 +71,8 @@ class IceMaterialSection(Section):
     friction_angle: Annotated[float, Number("deg", ge=0.0, lt=60.0)] = Field(
         30.0, description="Internal friction angle (degrees) of the \"ice\" law's Coulomb "
         "criterion: the compressive strength rises by (1 + sin phi) / (1 - sin phi) times the "
-        "confining pressure. Default: 30 (Schulson & Duval 2009: friction coefficient 0.5-0.9).")
+        "confining pressure, and crushed ice slides on itself with friction tan phi. "
+        "Default: 30 (Schulson & Duval 2009: friction coefficient 0.5-0.9).")
 
     transition_rate: Annotated[float, Positive("1/s")] | None = Field(
         None, description="Ductile-to-brittle transition strain rate (1/s) of the \"ice\" law: "

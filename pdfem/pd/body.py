@@ -44,6 +44,7 @@ from pdfem.pd.bonds import bond_lengths, cut_crack
 from pdfem.pd.damaged_volume import IntactVolume
 from pdfem.pd.constraints import VelocityConstraint, applied_forces, next_name, step_work
 from pdfem.pd.constraints import reaction_forces
+from pdfem.pd.crushed_shear import CrushedShear
 from pdfem.pd.failure import CriticalStretch, FailureLaw
 from pdfem.pd.fracture import FractureLedger
 from pdfem.pd.ice_interface import WholeBody
@@ -98,6 +99,9 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     # (P,) float32 stretch at which each bond broke, NaN if intact or broken for good: with a
     # failure law whose broken bonds keep pushing in compression (crushed ice), else None
     rest: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # the crushed bonds' shear springs (pdfem.pd.crushed_shear), for a law whose crushed ice
+    # has friction, else None
+    shear: CrushedShear | None = field(default=None, repr=False, compare=False)
     # strain rates and strength factors, for a law whose strength depends on the rate
     rates: RateTracker | None = field(default=None, repr=False, compare=False)
     # (N,) global particle numbers of a rank's part of a body (summation order); None: own
@@ -115,6 +119,8 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
                 raise ValueError(f"the {self.failure.name!r} failure law needs the pair loop "
                                  "(pd_loop = \"pairs\")")
             self.rest = np.full(self.nbr.shape[0], np.nan, dtype=np.float32)
+        if self.failure.crush_friction > 0.0 and self.shear is None:
+            self.shear = CrushedShear.for_bonds(self.nbr.shape[0], self.failure.crush_friction)
         if self.failure.rate_dependent and self.rates is None:
             self.rates = RateTracker(self.failure, self.material.poisson_ratio)
 
@@ -300,7 +306,8 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
                                                self.limits, self.nofail, self.theta, self.f,
                                                self._ws, rest=self.rest,
                                                crush_yield=self.failure.crush_yield,
-                                               strength=self.strength_factors, m_now=self.m_now)
+                                               strength=self.strength_factors, m_now=self.m_now,
+                                               shear=self.shear)
         else:
             fam_ptr, fam_nbr, fam_bond = self._family
             kernels.dilatation_family(self.y, fam_ptr, fam_nbr, fam_bond, self.xi_len,
@@ -363,6 +370,8 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
         self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
         self._apply_constraints(t0, dt)
         y_old = self.y.copy() if keep_old else None
+        if self.shear is not None:
+            self.shear.begin_step(self.y)
         self.y += dt * self.v
         self.time = t0 + dt
         return y_old

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from pdfem.pd import kernels
+from pdfem.pd.crushed_shear import shear_energy_args
 
 
 class BodyDiagnostics:
@@ -39,7 +40,7 @@ class BodyDiagnostics:
                                   br, self.vol, self.m, theta, mat.K, mat.mu, self._ws)
         crushed = 0.0 if self.rest is None else kernels.contact_bond_energy(
             self.y, self.row_ptr, self.nbr, self.xi_len, self.weight, br, self.rest, self.vol,
-            self.m, mat.mu)
+            self.m, mat.mu, **shear_energy_args(self.shear))
         return float(np.dot(W, self.vol)) + crushed
 
     def momentum(self) -> np.ndarray:

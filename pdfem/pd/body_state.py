@@ -16,12 +16,15 @@ class BodyCheckpoint:
         """Copies of the state that a restart needs: arrays :data:`STATE_ARRAYS` (``y`` m,
         ``v`` m/s, ``f`` N/m^3, ``broken`` uint8 per bond, ``theta``), scalars
         :data:`STATE_SCALARS` (``time`` s, ``external_work`` J, ``fracture_dissipated`` J) and,
-        for a body whose broken bonds push, ``rest`` (float32 per bond), and for a rate-dependent
+        for a body whose broken bonds push, ``rest`` (float32 per bond) and, with friction, their
+        shear springs' ``slip`` ((P, 3) float32, m), and for a rate-dependent
         law ``rate_theta`` and ``rate_factors`` (per particle)."""
         out = {k: np.array(getattr(self, k)) for k in STATE_ARRAYS}
         out.update({k: float(getattr(self, k)) for k in STATE_SCALARS})
         if self.rest is not None:
             out["rest"] = self.rest.copy()
+        if self.shear is not None:
+            out["slip"] = self.shear.slip.copy()
         if self.rates is not None and self.rates.theta is not None:
             out["rate_theta"] = self.rates.theta.copy()
             if self.rates.factors is not None:
@@ -50,6 +53,8 @@ class BodyCheckpoint:
             setattr(self, k, float(state[k]))
         if self.rest is not None:
             self.rest[:] = np.asarray(state["rest"], dtype=np.float32)
+        if self.shear is not None:
+            self.shear.slip[:] = np.asarray(state["slip"], dtype=np.float32)
         if self.rates is not None:
             self.rates.theta = (np.array(state["rate_theta"], dtype=np.float64)
                                 if "rate_theta" in state else None)

@@ -34,6 +34,7 @@ import numpy as np
 from pdfem.pd import kernels
 from pdfem.pd.body import IceBody
 from pdfem.pd.constraints import reaction_forces
+from pdfem.pd.crushed_shear import shear_energy_args
 from pdfem.pd.distributed_state import DistributedCheckpoint
 from pdfem.pd.distributed_surface import halo_exchange
 from pdfem.pd.distributed_timestep import split_stable_time_step
@@ -128,7 +129,8 @@ class DistributedIce(DistributedCheckpoint):
             flags=None,  # broken bonds are negative weights (replace would copy the flags)
             fixed=body.fixed[loc].copy(), constraints=[],
             loop="pairs", external_work=0.0, fracture_dissipated=0.0,
-            rest=None if body.rest is None else body.rest[pairs].copy(), rates=None, gid=loc)
+            rest=None if body.rest is None else body.rest[pairs].copy(), rates=None, gid=loc,
+            shear=None if body.shear is None else body.shear.subset(pairs))
         local._ws = kernels.PairWorkspace(row_ptr, nbr)
         for c in body.constraints:
             mine = c.index[np.asarray(owner)[c.index] == comm.rank]
@@ -187,7 +189,8 @@ class DistributedIce(DistributedCheckpoint):
                                               between=self._exchange, rest=b.rest,
                                               crush_yield=b.failure.crush_yield,
                                               owned=self._owned_rows,
-                                              strength=b.strength_factors, m_now=b.m_now)
+                                              strength=b.strength_factors, m_now=b.m_now,
+                                              shear=b.shear)
         if b.rest is not None:
             b.fracture_dissipated += b._ws.crush_dissipated
         if broke == 0:  # the usual step: no recount over the bonds
@@ -312,7 +315,7 @@ class DistributedIce(DistributedCheckpoint):
                                   b.m, theta, mat.K, mat.mu, b._ws)
         crushed = 0.0 if b.rest is None else kernels.contact_bond_energy(
             b.y, b.row_ptr, b.nbr, b.xi_len, b.weight, b._broken_arg(), b.rest, b.vol, b.m,
-            mat.mu, owned=self.plan.owned)
+            mat.mu, owned=self.plan.owned, **shear_energy_args(b.shear))
         return float(self._sum(W * b.vol)) + float(self.comm.allreduce_sum(crushed))
 
     @property

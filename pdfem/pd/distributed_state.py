@@ -23,19 +23,25 @@ class DistributedCheckpoint:
         arrays = {k: self.gather(getattr(b, k)) for k in ("y", "v", "f", "theta")}
         counted = self._counted
         rest = b.rest[counted] if b.rest is not None else None
+        slip = b.shear.slip[counted] if b.shear is not None else None
         rate_parts = {k: self.gather(v) for k, v in self._rate_arrays().items()}
-        bonds = self.comm.gather((self._bond_numbers()[counted], b.broken[counted], rest))
+        bonds = self.comm.gather((self._bond_numbers()[counted], b.broken[counted], rest, slip))
         work = self.comm.gather(float(b.external_work))
         frac = self.comm.gather(float(b.fracture_dissipated))
         if bonds is None:
             return None
         broken = np.zeros(self.global_bonds, dtype=np.uint8)
         rests = np.full(self.global_bonds, np.nan, dtype=np.float32)
-        for idx, flags, rest in bonds:
+        slips = np.zeros((self.global_bonds, 3), dtype=np.float32)
+        for idx, flags, rest, slip in bonds:
             broken[idx] = flags
             if rest is not None:
                 rests[idx] = rest
+            if slip is not None:
+                slips[idx] = slip
         extra = {} if b.rest is None else {"rest": rests}
+        if b.shear is not None:
+            extra["slip"] = slips
         extra.update(rate_parts)
         return {**arrays, **extra, "broken": broken, "time": float(b.time),
                 "external_work": _rank_sum(work), "external_work_ranks": np.array(work),
@@ -65,6 +71,8 @@ class DistributedCheckpoint:
                                      self._rank_part(state, "fracture_dissipated"),
                                  **({} if self.body.rest is None
                                     else {"rest": self._local_bonds(state["rest"])}),
+                                 **({} if self.body.shear is None
+                                    else {"slip": self._local_bonds(state["slip"])}),
                                  **{k: state[k][loc] for k in ("rate_theta", "rate_factors")
                                     if k in state}})
         self._counted_broken = self._broken_count()
@@ -97,7 +105,7 @@ class DistributedCheckpoint:
         if self.plan.pairs is not None:
             return values[self.plan.pairs]
         counted = self._counted
-        out = np.empty(len(self.body.nbr), dtype=values.dtype)
+        out = np.empty((len(self.body.nbr),) + values.shape[1:], dtype=values.dtype)
         out[counted] = values[self._bond_numbers()[counted]]
         owner = np.full(self.body.n, self.comm.rank, dtype=np.int64)
         for q, idx in self.plan.recv.items():
@@ -107,7 +115,7 @@ class DistributedCheckpoint:
         sends = {q: np.ascontiguousarray(out[counted & (owner[j_of] == q)])
                  for q in self.plan.send}
         want = {q: (~counted) & (owner[i_of] == q) for q in self.plan.recv}
-        recvs = {q: ((int(m.sum()),), values.dtype) for q, m in want.items()}
+        recvs = {q: ((int(m.sum()),) + values.shape[1:], values.dtype) for q, m in want.items()}
         for q, got in self.comm.exchange(sends, recvs).items():
             out[want[q]] = got
         return out

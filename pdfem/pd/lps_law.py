@@ -144,6 +144,54 @@ def crushed_bond(b, l, p, sy, w, r, vij):
 
 
 @numba.njit(**_INLINE)
+def crushed_shear(s0, s1, s2, u0, u1, u2, d0, d1, d2, r, smax):
+    """Shear of a pushing crushed bond: the tangential spring with Coulomb slip between its
+    ends (crushed ice is a frictional granular material; Cundall & Strack 1979).
+
+    ``s`` (m) is the spring's stretch: the sliding of j past i since the bond was crushed,
+    normal to the bond, less what has slipped. Each step it is turned into the plane normal to
+    the current bond d (its length kept), the tangential part of the bond vector's increment
+    ``u`` = d - d_old (m) is added, and it is capped at ``smax`` = mu c / kappa (the Coulomb
+    limit |k_t s| <= mu k c of a bond compressed by c, tangential stiffness k_t = kappa k);
+    the excess slips. Returns the new s and the energy lost by slipping per k_t (m^2): the
+    step's work on the spring, k_t (s_old + s_new) / 2 . u as the integrator's trapezoid does
+    it, less the change of its energy k_t |s|^2 / 2, which the caller books as dissipated."""
+    n0 = d0 / r
+    n1 = d1 / r
+    n2 = d2 / r
+    old2 = s0 * s0 + s1 * s1 + s2 * s2
+    sn = s0 * n0 + s1 * n1 + s2 * n2
+    p0 = s0 - sn * n0
+    p1 = s1 - sn * n1
+    p2 = s2 - sn * n2
+    pl2 = p0 * p0 + p1 * p1 + p2 * p2
+    if pl2 > 0.0:  # turned with the bond, its length kept
+        scale = math.sqrt(old2 / pl2)
+        p0 *= scale
+        p1 *= scale
+        p2 *= scale
+    else:
+        p0 = 0.0
+        p1 = 0.0
+        p2 = 0.0
+    un = u0 * n0 + u1 * n1 + u2 * n2
+    t0 = p0 + u0 - un * n0
+    t1 = p1 + u1 - un * n1
+    t2 = p2 + u2 - un * n2
+    new2 = t0 * t0 + t1 * t1 + t2 * t2
+    lost = 0.0 if pl2 > 0.0 else 0.5 * old2  # along the bond: nothing to turn, released
+    if new2 > smax * smax:
+        keep = smax / math.sqrt(new2)
+        # the step's work (trapezoid, k_t (s_old + s_new) / 2 . u, as the integrator does it)
+        # less the spring's energy change: (s_old + s_new) / 2 . (s_trial - s_new)
+        lost += 0.5 * (1.0 - keep) * (p0 * t0 + p1 * t1 + p2 * t2 + keep * new2)
+        t0 *= keep
+        t1 *= keep
+        t2 *= keep
+    return t0, t1, t2, lost
+
+
+@numba.njit(**_INLINE)
 def crushed_bond_energy(b, l, p, w, r):
     """The stored energy of :func:`crushed_bond` per V_i V_j: b w (r_p - r)^2 / 2 (0 if r >= r_p)."""
     c = l * (1.0 + p) - r

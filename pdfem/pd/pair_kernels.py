@@ -47,12 +47,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pdfem.pd.crushed_shear import shear_kernel_args
 from pdfem.pd.lps_law import force_coefficients, stretch_limits
 from pdfem.pd.pair_step_kernels import dilatation_pairs, forces_pairs, forces_pairs_law
 from pdfem.pd.pair_sum_kernels import family_sum_pairs
 from pdfem.pd.workspace import c_contiguous, workspace_for
 
 if TYPE_CHECKING:
+    from pdfem.pd.crushed_shear import CrushedShear
     from pdfem.pd.workspace import PairWorkspace
 
 _NO_R = np.zeros(0)  # stands for "no bond-length buffer" (read-only by convention)
@@ -83,7 +85,7 @@ def plain_law(s0, granular: bool) -> bool:
 
 
 def _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail, f_out, rbuf,
-                use_r, rest, granular, crush_yield, owned) -> int:
+                use_r, rest, granular, crush_yield, owned, shear) -> int:
     """The force pass after :func:`~pdfem.pd.lps_law.force_coefficients`: the plain
     critical-stretch kernel, or the general one for other laws (compiled only when used)."""
     if plain_law(s0, granular):
@@ -93,7 +95,8 @@ def _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail
     return int(forces_pairs_law(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol,
                                 ws.coef, ws.aux, wt, nofail, ws.chunk_ptr, ws.split, ws.ov_ptr,
                                 ws.ov, ws.counts, f_out, rbuf, use_r, rest, granular,
-                                float(crush_yield), owned, ws.crush, stretch_limits(s0)))
+                                float(crush_yield), owned, ws.crush, stretch_limits(s0),
+                                *shear_kernel_args(shear)))
 
 
 def check_broken(broken: np.ndarray, per_pair: np.ndarray) -> bool:
@@ -256,6 +259,7 @@ def forces(
     owned: np.ndarray | None = None,
     strength: np.ndarray | None = None,
     m_now: np.ndarray | None = None,
+    shear: CrushedShear | None = None,
 ) -> int:
     """LPS force density with the bond-break check (pair loop).
 
@@ -302,6 +306,10 @@ def forces(
         Optional (N,) weighted volume of each particle's intact bonds (m^5,
         :class:`pdfem.pd.damaged_volume.IntactVolume`): with broken bonds the force is
         then the exact gradient of the strain energy; default m (as if none were broken).
+    shear
+        Optional shear springs of the crushed bonds (:class:`pdfem.pd.crushed_shear.
+        CrushedShear`), advanced if a step is under way; their force is in ``f_out`` and the
+        energy lost by slipping in ``ws.crush_dissipated``.
 
     Returns
     -------
@@ -316,7 +324,7 @@ def forces(
     nb = _force_pass(ws, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                      check_broken(broken, nbr), vol, check_weight(weight, nbr), s0, nofail,
                      c_contiguous(f_out, "f_out"), _NO_R, False, rest, granular, crush_yield,
-                     owned)
+                     owned, shear)
     ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
     return nb
 
@@ -343,6 +351,7 @@ def dilatation_and_forces(
     owned: np.ndarray | None = None,
     strength: np.ndarray | None = None,
     m_now: np.ndarray | None = None,
+    shear: CrushedShear | None = None,
 ) -> int:
     """One OSB step's internal forces: :func:`dilatation`, then :func:`forces` (pair loops).
 
@@ -355,7 +364,8 @@ def dilatation_and_forces(
     Parameters are those of :func:`dilatation` and :func:`forces`; ``theta_out`` (N,) and
     ``f_out`` (N, 3) are overwritten; ``ws`` is required. ``between``, if given, is called with
     ``theta_out`` between the two passes (an MPI rank's body exchanges its halo's dilatations
-    there). ``rest``, ``crush_yield``, ``owned``, ``strength``, ``m_now``: as in :func:`forces`.
+    there). ``rest``, ``crush_yield``, ``owned``, ``strength``, ``m_now``, ``shear``: as in
+    :func:`forces`.
 
     Returns
     -------
@@ -376,6 +386,7 @@ def dilatation_and_forces(
     force_coefficients(ws.parallel_particles, m, _INTACT if m_now is None else m_now, theta_out,
                        K, mu, _NO_STRENGTH if strength is None else strength, ws.coef, ws.aux)
     nb = _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail,
-                     c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular, crush_yield, owned)
+                     c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular, crush_yield, owned,
+                     shear)
     ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
     return nb

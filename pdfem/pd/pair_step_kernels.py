@@ -26,6 +26,7 @@ from pdfem.pd.lps_law import (
     crushed_bond,
     crushed_bond_energy,
     crushed_rest,
+    crushed_shear,
     dilatation_of,
     dilatation_term,
     is_broken,
@@ -133,8 +134,42 @@ def _pair_force(g, vj, vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1, ov, base,
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
+def _crushed_shear(k, i, j, j3, y, y0, slip, shear, g, b, w, r, d0, d1, d2, vi, vj, fx, fy, fz,
+                   checked, r1, ov, base, f):
+    """The shear spring of crushed bond k (:func:`~pdfem.pd.lps_law.crushed_shear`):
+    ``shear`` = (mu, kappa, advance). With ``advance`` its stretch ``slip[3k:3k+3]`` (m) takes
+    the step's increment of the bond vector (from the positions ``y0`` at the step's start);
+    then its force kappa b w V_i V_j s acts on both ends. Returns the row's sums and the energy
+    (J) it dissipated by slipping."""
+    k3 = U64(3) * k
+    s0 = (1.0 * slip[k3])
+    s1 = (1.0 * slip[k3 + U64(1)])
+    s2 = (1.0 * slip[k3 + U64(2)])
+    kb = shear[1] * b * w
+    lost = 0.0
+    if shear[2] != 0.0:
+        i3 = U64(3) * U64(i)
+        u0 = d0 - (y0[j3] - y0[i3])
+        u1 = d1 - (y0[j3 + U64(1)] - y0[i3 + U64(1)])
+        u2 = d2 - (y0[j3 + U64(2)] - y0[i3 + U64(2)])
+        smax = shear[0] * (-g * r / (b * w)) / shear[1] if g < 0.0 else 0.0
+        s0, s1, s2, lost = crushed_shear(s0, s1, s2, u0, u1, u2, d0, d1, d2, r, smax)
+        slip[k3] = s0
+        slip[k3 + U64(1)] = s1
+        slip[k3 + U64(2)] = s2
+        s0 = (1.0 * slip[k3])
+        s1 = (1.0 * slip[k3 + U64(1)])
+        s2 = (1.0 * slip[k3 + U64(2)])
+    if s0 != 0.0 or s1 != 0.0 or s2 != 0.0:
+        fx, fy, fz = _pair_force(kb, vj, vi, s0, s1, s2, fx, fy, fz, j, j3, checked, r1, ov,
+                                 base, f)
+    return fx, fy, fz, lost * kb * vi * vj
+
+
+@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail, f,
-                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim):
+                checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim, slip, y0,
+                shear):
     """Row i of the pair-loop forces; returns the number of bonds it broke and, with
     ``granular``, the energy its crushed bonds dissipated (J, if ``counted``): a broken bond
     whose ``rest`` (p) is set (not NaN) is a crushed bond (:func:`~pdfem.pd.lps_law.
@@ -154,6 +189,7 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
     fz = 0.0
     nb = 0
     diss = 0.0
+    rubs = slip.shape[0] > 0
     for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
         w = wt[k]
         if is_broken(signed, w, broken, k):
@@ -168,12 +204,18 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
             l = xi_len[k]
             d0, d1, d2 = bond_vector(y, j3, yi0, yi1, yi2)
             r = bond_length(d0, d1, d2)
-            g, p, dk = crushed_bond(bi + coef[j2 + U64(1)], l, sb, sy, abs(w), r, vi * vol[j])
-            if g == 0.0:
-                continue
+            bij = bi + coef[j2 + U64(1)]
+            g, p, dk = crushed_bond(bij, l, sb, sy, abs(w), r, vi * vol[j])
             if dk != 0.0:
                 rest[k] = p
                 diss += dk
+            if rubs:
+                fx, fy, fz, dk = _crushed_shear(k, i, j, j3, y, y0, slip, shear, g, bij, abs(w),
+                                                r, d0, d1, d2, vi, vol[j], fx, fy, fz, checked,
+                                                r1, ov, base, f)
+                diss += dk
+            if g == 0.0:
+                continue
         else:
             j = U64(nbr[k])
             j3 = U64(3) * j
@@ -206,7 +248,8 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt,
-                 nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim):
+                 nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim, slip, y0,
+                 shear):
     """Rows i0..i1 with the overflow check ``checked``; bonds broken and energy dissipated."""
     nb = 0
     diss = 0.0
@@ -214,7 +257,7 @@ def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, 
     for i in range(i0, i1):
         n, d = _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt,
                            nofail, f, checked, r1, ov, base, rbuf, use_r, rest, granular, sy,
-                           every or owned[i] != 0, lim)
+                           every or owned[i] != 0, lim, slip, y0, shear)
         nb += n
         diss += d
     return nb, diss
@@ -222,16 +265,16 @@ def _forces_span(i0, i1, checked, y, row_ptr, nbr, xi_len, broken, signed, vol, 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail,
-                 f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim):
+                 f, r1, ov, base, rbuf, use_r, rest, granular, sy, owned, lim, slip, y0, shear):
     """Rows r0..r1 of one chunk (unchecked up to ``split``); returns the bonds broken and the
     energy the crushed bonds of the ``owned`` rows (all if empty) dissipated, under a general
     failure law (:func:`forces_pairs_law`)."""
     n1, d1 = _forces_span(r0, split, False, y, row_ptr, nbr, xi_len, broken, signed, vol,
                           coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
-                          granular, sy, owned, lim)
+                          granular, sy, owned, lim, slip, y0, shear)
     n2, d2 = _forces_span(split, r1, True, y, row_ptr, nbr, xi_len, broken, signed, vol,
                           coef, aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest,
-                          granular, sy, owned, lim)
+                          granular, sy, owned, lim, slip, y0, shear)
     return n1 + n2, d1 + d2
 
 
@@ -336,7 +379,7 @@ def forces_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, wt, s0, n
 @twin()
 def forces_pairs_law(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2, wt, nofail,
                      cb, split, ov_ptr, ov2, counts, fout, rbuf, use_r, rest, granular, sy,
-                     owned, crush, lim):
+                     owned, crush, lim, slip, y02, shear):
     """:func:`forces_pairs` for a failure law with dilatation-dependent bounds, strength
     factors or crushed bonds (:mod:`pdfem.pd.failure.ice`): one copy of the row loop, with
     ``signed`` and ``use_r`` tested per bond (a separate kernel, compiled only when a body
@@ -346,6 +389,7 @@ def forces_pairs_law(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2,
     aux = aux2.reshape(aux2.size)
     f = fout.reshape(fout.size)
     ov = ov2.reshape(ov2.size)
+    y0 = y02.reshape(y02.size)
     C = cb.shape[0] - 1
     for c in prange(C):
         r0 = cb[c]
@@ -357,7 +401,7 @@ def forces_pairs_law(y2, row_ptr, nbr, xi_len, broken, signed, vol, coef2, aux2,
             ov[q] = 0.0
         nb, dc = _forces_rows(r0, split[c], y, row_ptr, nbr, xi_len, broken, signed, vol, coef,
                               aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy,
-                              owned, lim)
+                              owned, lim, slip, y0, shear)
         counts[c] = nb
         crush[c] = dc
     for t in prange(C):

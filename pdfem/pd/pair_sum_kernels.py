@@ -139,13 +139,15 @@ def damage_pairs(row_ptr, nbr, broken, signed, wt, cb, ov_ptr, ov, nb, deg):
 
 @numba.njit(cache=True)
 def contact_bond_energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, wt, rest, vol, m, mu,
-                              owned):
+                              owned, slip, kappa):
     """Total energy (J) stored in the crushed bonds (:func:`~pdfem.pd.lps_law.
     crushed_bond_energy`, ``rest`` not NaN) in the rows i with ``owned[i]`` (all rows if
-    ``owned`` is empty), summed serially in bond order."""
+    ``owned`` is empty), summed serially in bond order; with ``slip`` (flat (3P,), m) also
+    that of their shear springs, kappa b w V_i V_j |s|^2 / 2 (:mod:`pdfem.pd.crushed_shear`)."""
     total = 0.0
     c = 15.0 * mu
     every = owned.shape[0] == 0
+    sheared = slip.shape[0] > 0
     for i in range(row_ptr.shape[0] - 1):
         if not every and not owned[i]:
             continue
@@ -160,5 +162,11 @@ def contact_bond_energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, wt, rest,
             j = U64(nbr[k])
             bj = c / m[j] if m[j] > 0.0 else 0.0
             r = bond_length(y[j, 0] - y[i, 0], y[j, 1] - y[i, 1], y[j, 2] - y[i, 2])
-            total += crushed_bond_energy(bi + bj, xi_len[k], sb, abs(w), r) * vol[i] * vol[j]
+            e = crushed_bond_energy(bi + bj, xi_len[k], sb, abs(w), r)
+            if sheared:
+                k3 = U64(3) * k
+                s2 = ((1.0 * slip[k3]) ** 2 + (1.0 * slip[k3 + U64(1)]) ** 2
+                      + (1.0 * slip[k3 + U64(2)]) ** 2)
+                e += 0.5 * kappa * (bi + bj) * abs(w) * s2
+            total += e * vol[i] * vol[j]
     return total

@@ -13,6 +13,8 @@ from pdfem.pd.pair_kernels import rest_arg, check_broken, check_weight
 from pdfem.pd.pair_sum_kernels import contact_bond_energy_pairs, damage_pairs, energy_pairs
 from pdfem.pd.workspace import c_contiguous, workspace_for
 
+_NO_SLIP = np.zeros(0, dtype=np.float32)  # "no shear springs" (read-only by convention)
+
 if TYPE_CHECKING:
     from pdfem.pd.workspace import PairWorkspace
 
@@ -61,16 +63,21 @@ def contact_bond_energy(
     m: np.ndarray,
     mu: float,
     owned: np.ndarray | None = None,
+    slip: np.ndarray | None = None,
+    kappa: float = 0.0,
 ) -> float:
     """Energy (J) stored in the crushed bonds (``rest`` of :func:`pdfem.pd.pair_kernels.forces`):
     sum of (b_i + b_j) |omega| V_i V_j (r_p - r)^2 / 2 over those shorter than their plastic
     rest length r_p = |xi| (1 + rest), b = 15 mu / m; only the bonds i < j with ``owned[i]``
-    if ``owned`` ((N,) bool) is given."""
+    if ``owned`` ((N,) bool) is given. With ``slip`` ((P, 3), m) and ``kappa``, plus the energy
+    of their shear springs (:mod:`pdfem.pd.crushed_shear`)."""
     rest, _ = rest_arg(rest, nbr)
     mask = np.zeros(0, dtype=np.bool_) if owned is None else np.asarray(owned, dtype=np.bool_)
     return float(contact_bond_energy_pairs(c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                                            check_broken(broken, nbr), check_weight(weight, nbr),
-                                           rest, vol, m, float(mu), mask))
+                                           rest, vol, m, float(mu), mask,
+                                           _NO_SLIP if slip is None else slip.reshape(-1),
+                                           float(kappa)))
 
 
 def damage(

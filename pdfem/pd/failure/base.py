@@ -46,6 +46,10 @@ class FailureLaw(Protocol):
     """The yield compression (stretch) of those pushing bonds (:func:`pdfem.pd.lps_law.
     crushed_bond`); ``inf`` if they do not push."""
 
+    crush_friction: float
+    """The friction coefficient between the ends of a pushing bond (:func:`pdfem.pd.lps_law.
+    crushed_friction`, -); 0 if they do not push."""
+
     rate_dependent: bool
     """True if the compressive strength depends on the strain rate (:meth:`strength_factor`,
     rates from :mod:`pdfem.pd.strain_rate`)."""

@@ -28,6 +28,7 @@ class CriticalStretch:
     name: str = "critical_stretch"
     broken_bonds_push: bool = False
     crush_yield: float = math.inf
+    crush_friction: float = 0.0
     rate_dependent: bool = False
 
     @classmethod

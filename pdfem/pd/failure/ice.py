@@ -50,7 +50,10 @@ with and the work done while it slides are counted with the fracture dissipation
 is thus granular: it carries compression up to a crushing pressure and, through the compressed
 bonds at every angle in a horizon, shear in proportion to the confinement (a frictional
 resistance), but no tension; it is never deleted and can be squeezed out of the contact
-zone. Pairs that were never bonded meet through the short-range contact force
+zone; between the ends of a pushing crushed bond a shear spring with Coulomb slip
+(:mod:`pdfem.pd.crushed_shear`, friction tan phi) holds the crushed layer in the contact as a
+granular material's internal friction does. Pairs that were never bonded meet through the
+short-range contact force
 (:mod:`pdfem.forces.short_range`, switched on for a body with this law).
 
 Strain rate (optional, off by default): ice is ductile at low strain rates, where its
@@ -126,6 +129,11 @@ class IceFailure:
     def crush_yield(self) -> float:
         """sigma_c / (2 E): crushed bonds yield at half the compressive strength's uniaxial strain."""
         return 0.5 * self.compressive_strength / self.youngs_modulus
+
+    @property
+    def crush_friction(self) -> float:
+        """tan(phi): crushed ice slides on itself with the friction of its Coulomb envelope."""
+        return math.tan(math.radians(self.friction_angle))
 
     @property
     def youngs_modulus(self) -> float:
