@@ -48,6 +48,11 @@ BYTES_PER_PARTICLE = 240
 BYTES_PER_PAIR = 30
 """Estimated resident bytes per bond (pair arrays and the pair-loop workspace)."""
 
+CRUSHED_ICE_BYTES_PER_PAIR = 16
+"""Extra bytes per bond of a body whose crushed bonds push and rub (``failure = "ice"``): the
+plastic rest length (float32) and the shear spring's stretch (3 x float32,
+:mod:`pdfem.pd.crushed_shear`)."""
+
 FIXED_BYTES = 200 * 2**20
 """Interpreter, libraries and compiled kernels (bytes), measured about 100-200 MB."""
 
@@ -61,11 +66,12 @@ class BodyEstimate:
     pairs: int
     pairs_per_interior_particle: int
     exact: bool
+    pair_bytes: int = BYTES_PER_PAIR
 
     @property
     def bytes(self) -> int:
         """Estimated memory of the body (bytes)."""
-        return self.particles * BYTES_PER_PARTICLE + self.pairs * BYTES_PER_PAIR
+        return self.particles * BYTES_PER_PARTICLE + self.pairs * self.pair_bytes
 
 
 def lattice_offsets(horizon_factor: float) -> np.ndarray:
@@ -146,9 +152,10 @@ def _particles(shape, dx: float) -> tuple[float, bool]:
     return min(box, shape.volume_bound() / dx ** 3), False
 
 
-def estimate_body(name: str, shape, dx: float, horizon: float) -> BodyEstimate:
+def estimate_body(name: str, shape, dx: float, horizon: float,
+                  pair_bytes: int = BYTES_PER_PAIR) -> BodyEstimate:
     """Particles and pairs of an ice body from its shape (m), spacing dx (m) and horizon (m),
-    without building it (see the module docstring)."""
+    without building it (see the module docstring); ``pair_bytes`` per bond."""
     offsets = lattice_offsets(horizon / dx)
     n, exact = _particles(shape, dx)
     if exact:
@@ -158,7 +165,8 @@ def estimate_body(name: str, shape, dx: float, horizon: float) -> BodyEstimate:
         pairs = float(np.prod(np.maximum(0.0, counts[None, :] - np.abs(offsets)), axis=1).sum())
     else:
         pairs = n * len(offsets)
-    return BodyEstimate(name, int(round(n)), int(round(pairs)), len(offsets), exact)
+    return BodyEstimate(name, int(round(n)), int(round(pairs)), len(offsets), exact,
+                        int(pair_bytes))
 
 
 def available_memory() -> int | None:

@@ -28,9 +28,9 @@ from pdfem.case.schema import Case
 from pdfem.errors import InputError
 from pdfem.parallel.nodes import block_layout, node_layout, per_node
 from pdfem.run.parallel import splits_bodies
-from pdfem.run.estimates import (BYTES_PER_PAIR, BYTES_PER_PARTICLE, FIXED_BYTES, BodyEstimate,
-                                 available_memory, best_split, estimate_body, format_bytes,
-                                 lattice_counts)
+from pdfem.run.estimates import (BYTES_PER_PAIR, BYTES_PER_PARTICLE, CRUSHED_ICE_BYTES_PER_PAIR,
+                                 FIXED_BYTES, BodyEstimate, available_memory, best_split,
+                                 estimate_body, format_bytes, lattice_counts)
 
 SETUP_TEXT = {True: "distributed set-up: each rank builds only its subdomain and halo",
               False: "global set-up: every rank builds the whole ice body, then keeps its part, "
@@ -52,7 +52,8 @@ class RankEstimate:
 def estimate_case(case: Case) -> list[BodyEstimate]:
     """Particles, pairs and memory of every ice body of a case, before building
     (:func:`pdfem.run.estimates.estimate_body`)."""
-    return [estimate_body(c.name, c.shape, c.dx, c.horizon) for c in case.ice]
+    return [estimate_body(c.name, c.shape, c.dx, c.horizon, BYTES_PER_PAIR + (
+        CRUSHED_ICE_BYTES_PER_PAIR if c.material.failure == "ice" else 0)) for c in case.ice]
 
 
 def split_body(cfg, est: BodyEstimate, n_ranks: int, file: str | None = None
@@ -84,7 +85,7 @@ def estimate_rank_memory(case: Case, n_ranks: int, distributed_setup: bool
         owned += o
         halo += h
         bonds += p
-        local += (o + h) * BYTES_PER_PARTICLE + p * BYTES_PER_PAIR
+        local += (o + h) * BYTES_PER_PARTICLE + p * est.pair_bytes
     whole = sum(e.bytes for e in bodies) if (n_ranks > 1 and not distributed_setup) else 0
     return [RankEstimate(r, int(owned[r]), int(halo[r]), int(bonds[r]),
                          int(FIXED_BYTES + whole + local[r])) for r in range(n_ranks)]
