@@ -60,10 +60,8 @@ from pdfem.pd.strain_rate import RateTracker
 
 @dataclass
 class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
-    """State of one peridynamic ice body (all arrays SI, particles in cell order).
-
-    Build one with :meth:`from_points` (or :func:`pdfem.run.build_ice.build_ice_body` from a case).
-    """
+    """State of one peridynamic ice body (all arrays SI, particles in cell order); build one
+    with :meth:`from_points` (or :func:`pdfem.run.build_ice.build_ice_body` from a case)."""
 
     name: str
     x0: np.ndarray            # (N,3) reference positions, m
@@ -92,15 +90,13 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     fracture_dissipated: float = 0.0
     time: float = 0.0
     failure: FailureLaw | None = None  # default: critical stretch of the material at delta
-    # Optional (P,) uint8 broken flags. Without them (how the builders make bodies) a broken
-    # bond is a negative weight. Given (e.g. by dataclasses.replace(body, flags=...)), the body
-    # keeps them as a separate array that the kernels update in place, and ``broken`` is it.
+    # Optional (P,) uint8 broken flags (else a broken bond is a negative weight, as builders
+    # make bodies); given, the kernels update them in place and ``broken`` is them.
     flags: np.ndarray | None = field(default=None, repr=False, compare=False)
     # (P,) float32 stretch at which each bond broke, NaN if intact or broken for good: with a
     # failure law whose broken bonds keep pushing in compression (crushed ice), else None
     rest: np.ndarray | None = field(default=None, repr=False, compare=False)
-    # the crushed bonds' shear springs (pdfem.pd.crushed_shear), for a law whose crushed ice
-    # has friction, else None
+    # crushed bonds' shear springs (pdfem.pd.crushed_shear) if crushed ice has friction
     shear: CrushedShear | None = field(default=None, repr=False, compare=False)
     # strain rates and strength factors, for a law whose strength depends on the rate
     rates: RateTracker | None = field(default=None, repr=False, compare=False)
@@ -370,7 +366,7 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
         self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
         self._apply_constraints(t0, dt)
         y_old = self.y.copy() if keep_old else None
-        if self.shear is not None:
+        if self.shear is not None:  # the springs advance by this step's change of the bonds
             self.shear.begin_step(self.y)
         self.y += dt * self.v
         self.time = t0 + dt

@@ -18,6 +18,7 @@ import numba
 from numba import prange
 
 from pdfem.pd.chunk_kernels import FASTMATH, U64, add_overflow1, add_overflow3, fma, twin
+from pdfem.pd.pair_force_kernels import apply_crushed_shear, apply_pair_force
 from pdfem.pd.lps_law import (
     bond_length,
     bond_vector,
@@ -26,7 +27,6 @@ from pdfem.pd.lps_law import (
     crushed_bond,
     crushed_bond_energy,
     crushed_rest,
-    crushed_shear,
     dilatation_of,
     dilatation_term,
     is_broken,
@@ -112,61 +112,6 @@ def dilatation_pairs(y2, row_ptr, nbr, xi_len, broken, signed, vol, m, wt, cb, s
 
 
 @numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _pair_force(g, vj, vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1, ov, base, f):
-    """A bond's force scalar ``g`` applied to both ends: the row's sums (fx, fy, fz) get
-    g V_j d (returned), partner j gets -g V_i d, in ``f`` or, past row r1 with ``checked``, in
-    the chunk's overflow rows."""
-    gi = g * vj
-    fx = fma(gi, d0, fx)
-    fy = fma(gi, d1, fy)
-    fz = fma(gi, d2, fz)
-    gj = -g * vi
-    if checked and j >= r1:
-        q = U64(3) * (base + (j - r1))
-        ov[q] = fma(gj, d0, ov[q])
-        ov[q + U64(1)] = fma(gj, d1, ov[q + U64(1)])
-        ov[q + U64(2)] = fma(gj, d2, ov[q + U64(2)])
-    else:
-        f[j3] = fma(gj, d0, f[j3])
-        f[j3 + U64(1)] = fma(gj, d1, f[j3 + U64(1)])
-        f[j3 + U64(2)] = fma(gj, d2, f[j3 + U64(2)])
-    return fx, fy, fz
-
-
-@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
-def _crushed_shear(k, i, j, j3, y, y0, slip, shear, g, b, w, r, d0, d1, d2, vi, vj, fx, fy, fz,
-                   checked, r1, ov, base, f):
-    """The shear spring of crushed bond k (:func:`~pdfem.pd.lps_law.crushed_shear`):
-    ``shear`` = (mu, kappa, advance). With ``advance`` its stretch ``slip[3k:3k+3]`` (m) takes
-    the step's increment of the bond vector (from the positions ``y0`` at the step's start);
-    then its force kappa b w V_i V_j s acts on both ends. Returns the row's sums and the energy
-    (J) it dissipated by slipping."""
-    k3 = U64(3) * k
-    s0 = (1.0 * slip[k3])
-    s1 = (1.0 * slip[k3 + U64(1)])
-    s2 = (1.0 * slip[k3 + U64(2)])
-    kb = shear[1] * b * w
-    lost = 0.0
-    if shear[2] != 0.0:
-        i3 = U64(3) * U64(i)
-        u0 = d0 - (y0[j3] - y0[i3])
-        u1 = d1 - (y0[j3 + U64(1)] - y0[i3 + U64(1)])
-        u2 = d2 - (y0[j3 + U64(2)] - y0[i3 + U64(2)])
-        smax = shear[0] * (-g * r / (b * w)) / shear[1] if g < 0.0 else 0.0
-        s0, s1, s2, lost = crushed_shear(s0, s1, s2, u0, u1, u2, d0, d1, d2, r, smax)
-        slip[k3] = s0
-        slip[k3 + U64(1)] = s1
-        slip[k3 + U64(2)] = s2
-        s0 = (1.0 * slip[k3])
-        s1 = (1.0 * slip[k3 + U64(1)])
-        s2 = (1.0 * slip[k3 + U64(2)])
-    if s0 != 0.0 or s1 != 0.0 or s2 != 0.0:
-        fx, fy, fz = _pair_force(kb, vj, vi, s0, s1, s2, fx, fy, fz, j, j3, checked, r1, ov,
-                                 base, f)
-    return fx, fy, fz, lost * kb * vi * vj
-
-
-@numba.njit(cache=True, inline="always", fastmath=FASTMATH, error_model="numpy")
 def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, nofail, f,
                 checked, r1, ov, base, rbuf, use_r, rest, granular, sy, counted, lim, slip, y0,
                 shear):
@@ -210,7 +155,7 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
                 rest[k] = p
                 diss += dk
             if rubs:
-                fx, fy, fz, dk = _crushed_shear(k, i, j, j3, y, y0, slip, shear, g, bij, abs(w),
+                fx, fy, fz, dk = apply_crushed_shear(k, i, j, j3, y, y0, slip, shear, g, bij, abs(w),
                                                 r, d0, d1, d2, vi, vol[j], fx, fy, fz, checked,
                                                 r1, ov, base, f)
                 diss += dk
@@ -236,7 +181,7 @@ def _forces_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, aux, wt, 
                                                 r) * vi * vol[j]
                 nb += 1
             g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
-        fx, fy, fz = _pair_force(g, vol[j], vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1,
+        fx, fy, fz = apply_pair_force(g, vol[j], vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1,
                                  ov, base, f)
     f[3 * i] += fx
     f[3 * i + 1] += fy
@@ -312,7 +257,7 @@ def _plain_row(i, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, wt, s0, no
             nb += 1
         j2 = U64(2) * j
         g = pair_force_scalar(ai + coef[j2], bi + coef[j2 + U64(1)], l, e, w, r)
-        fx, fy, fz = _pair_force(g, vol[j], vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1,
+        fx, fy, fz = apply_pair_force(g, vol[j], vi, d0, d1, d2, fx, fy, fz, j, j3, checked, r1,
                                  ov, base, f)
     f[3 * i] += fx
     f[3 * i + 1] += fy
