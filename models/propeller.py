@@ -57,7 +57,7 @@ PARAMETERS: dict[str, tuple] = {
     "skew_angle": (0.35, "rad", "skew at the tip (skew-back > 0), linear in r from 0 at the hub"),
     "rake_angle": (0.0, "rad", "rake angle (aft > 0): mid-chord line moved by -(r - r_h) tan(rake) along x"),
     "edge_fraction": (0.1, "-", "chord fraction of the leading- and trailing-edge strips"),
-    "sections": (8, "-", "number of sections lofted from hub to tip"),
+    "sections": (16, "-", "number of sections lofted from hub to tip"),
     "element_size": (0.04, "m", "target edge length of the tetrahedra"),
     "element_order": (2, "-", "2: 10-node tetrahedra (default), 1: 4-node tetrahedra"),
 }

@@ -28,6 +28,7 @@ MODULES: tuple[str, ...] = (
     "floating",            # floating_draught.toml, floating_heave.toml: draught, heave period
     "ship",                # ship_rest.toml, ship_heave.toml, ship_pitch.toml: drift, periods
     "spinning",            # spinning_bar*.toml: radial stress, flapwise frequency (Southwell)
+    "milling",             # propeller_milling_tiny.toml: impulse balance, torque spectrum at Z n
 )
 """The case modules, in the order of the report."""
 
