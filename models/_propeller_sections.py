@@ -36,7 +36,7 @@ import numpy as np
 
 from pdfem.models.propeller_blade import NACA_AREA_FACTOR, _CLOSED_TE
 
-__all__ = ["NACA_AREA_FACTOR", "chord_shape", "max_chord", "chord", "thickness", "section_area",
+__all__ = ["NACA_AREA_FACTOR", "chord_shape", "max_chord", "chord", "thickness_ratio", "thickness", "section_area",
            "blade_volume", "expanded_area_ratio", "profile", "section_points", "chordwise"]
 
 _GAUSS = np.polynomial.legendre.leggauss(64)

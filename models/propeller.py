@@ -214,7 +214,7 @@ def build(path: str | Path, **params) -> MeshReport:
     if straight:
         report.notes.append("some curved 10-node tetrahedra were inverted at the thin edges: all mid-side "
                             "nodes were put on the straight edges instead (the faceted first-order shape)")
-    R, rh = p["diameter"] / 2, p["hub_diameter"] / 2
+    rh = p["hub_diameter"] / 2
     report.notes.append(f"largest chord {sec.max_chord(p):.4g} m (EAR {p['ear']:g}); blade volume "
                         f"{sec.blade_volume(p):.4g} m^3 (section-area integral); pitch angle "
                         f"{math.degrees(math.atan(p['pitch_ratio'] * p['diameter'] / (2 * math.pi * rh))):.1f} deg "
