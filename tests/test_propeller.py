@@ -127,6 +127,11 @@ def test_ur_i3_torque_formula():
     H_ice = 1.5 m (D < 1.8 H_ice: the D^3 branch)."""
     by_hand = 10.9 * 0.7 * 0.7**0.16 * 0.035**0.6 * 10.0**0.17 * 8.0 * 1e3
     assert milling.ur_i3_ice_torque(2.0, 0.6, 1.4, 0.07, 5.0, 1.5) == pytest.approx(by_hand, rel=1e-12)
+    # PC7 (S_ice = 1, H_ice = 1.5 m), EAR = 0.5, Z = 4: D = 2 m >= 0.85 H^1.4 = 1.50 m (F_b's
+    # second branch), D < 2 H / (1 - d/D) = 4.29 m (F_f's first branch)
+    fb = 23.0 * 10.0**0.7 * 0.125**0.3 * 1.5**1.4 * 2.0 * 1e3
+    ff = 250.0 * 0.125 * 4.0 * 1e3
+    assert milling.ur_i3_blade_forces(2.0, 0.6, 0.5, 4, 5.0, 1.5, 1.0) == pytest.approx((fb, ff), rel=1e-12)
 
 
 def test_tiny_milling_impulse_balance(tmp_path):

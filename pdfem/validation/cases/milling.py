@@ -160,9 +160,30 @@ def ur_i3_ice_torque(diameter: float, hub_diameter: float, pitch_07: float, thic
     return 1e3 * 20.7 * shape * D**1.9 * ice_thickness**1.1
 
 
+def ur_i3_blade_forces(diameter: float, hub_diameter: float, ear: float, blades: int, rev_per_s: float,
+                       ice_thickness: float, ice_strength_index: float) -> tuple[float, float]:
+    """Maximum backward and forward blade forces F_b, F_f (N) on an open propeller, IACS UR I3
+    (same section as :func:`ur_i3_ice_torque`):
+
+        D <  0.85 H_ice^1.4:        F_b = 27 S_ice (n D)^0.7 (EAR/Z)^0.3 D^2                kN
+        D >= 0.85 H_ice^1.4:        F_b = 23 S_ice (n D)^0.7 (EAR/Z)^0.3 H_ice^1.4 D        kN
+        D <  2 H_ice / (1 - d/D):   F_f = 250 (EAR/Z) D^2                                   kN
+        D >= 2 H_ice / (1 - d/D):   F_f = 500 (EAR/Z) D H_ice / (1 - d/D)                   kN
+
+    D, d, H_ice in m, n in rev/s, S_ice the ice strength index of the Polar Class."""
+    D, H, a = diameter, ice_thickness, ear / blades
+    base = ice_strength_index * (rev_per_s * D) ** 0.7 * a**0.3
+    fb = 27.0 * base * D**2 if D < 0.85 * H**1.4 else 23.0 * base * H**1.4 * D
+    lim = 2.0 * H / (1.0 - hub_diameter / D)
+    ff = 250.0 * a * D**2 if D < lim else 500.0 * a * D * H / (1.0 - hub_diameter / D)
+    return 1e3 * fb, 1e3 * ff
+
+
 def rule_comparison(case: Case, data: dict, polar_class: str = "PC7") -> dict[str, float]:
-    """Peak simulated ice torque (N m), the UR I3 Q_max for the case's propeller at
-    ``polar_class`` (its H_ice) and their ratio. Reported, not asserted."""
+    """Peak simulated ice torque (N m) and blade forces along the shaft (N; backward = -x, aft,
+    forward = +x, the largest over the blades of the ``loads/<structure>.blade<k>_surface``
+    force), the UR I3 Q_max, F_b and F_f for the case's propeller at ``polar_class`` and the
+    ratios. Reported, not asserted."""
     from pdfem.models import _propeller_sections as sec
     from pdfem.models.propeller import PARAMETERS
     from pdfem.meshing import check_parameters
@@ -175,7 +196,14 @@ def rule_comparison(case: Case, data: dict, polar_class: str = "PC7") -> dict[st
                             float(sec.thickness(0.7 * R, p)), rps, POLAR_CLASS[polar_class][1])
     _, q = shaft_torque(case, data)
     peak = float(np.max(q))
-    return {"peak_torque": peak, "ur_i3_qmax": rule, "ratio": peak / rule}
+    s_ice, h_ice = POLAR_CLASS[polar_class]
+    fb, ff = ur_i3_blade_forces(p["diameter"], p["hub_diameter"], p["ear"], p["blades"], rps, h_ice, s_ice)
+    axial = np.concatenate([data["histories"][f"loads/{s.name}.blade{k}_surface"]["force"][:, 0]
+                            for k in range(1, p["blades"] + 1)])
+    backward, forward = float(max(-axial.min(), 0.0)), float(max(axial.max(), 0.0))
+    return {"peak_torque": peak, "ur_i3_qmax": rule, "ratio": peak / rule,
+            "peak_backward_force": backward, "ur_i3_fb": fb, "backward_ratio": backward / fb,
+            "peak_forward_force": forward, "ur_i3_ff": ff, "forward_ratio": forward / ff}
 
 
 def spectrum_plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
