@@ -60,11 +60,18 @@ def shaft_torque(case: Case, data: dict) -> tuple[np.ndarray, np.ndarray]:
     return h["time"], -(moment @ n)
 
 
+def propeller_parameters(case: Case) -> dict:
+    """The full parameter set (defaults filled in) of the case's ``propeller`` mesh."""
+    from pdfem.meshing import check_parameters
+    from pdfem.models.propeller import PARAMETERS
+
+    return check_parameters(PARAMETERS, dict(case.structures[0].params))
+
+
 def blade_passing_frequency(case: Case) -> float:
-    """Z n (Hz): the blade count of the propeller mesh's parameters times the shaft speed."""
-    s = case.structures[0]
-    blades = int(s.params.get("blades", 4))
-    return blades * float(np.linalg.norm(s.angular_velocity)) / (2.0 * math.pi)
+    """Z n (Hz): the propeller's blade count times the shaft speed."""
+    omega = float(np.linalg.norm(case.structures[0].angular_velocity))
+    return propeller_parameters(case)["blades"] * omega / (2.0 * math.pi)
 
 
 def spectral_peak(time: np.ndarray, signal: np.ndarray, start: float = 0.0) -> tuple[np.ndarray, np.ndarray, float]:
@@ -185,11 +192,9 @@ def rule_comparison(case: Case, data: dict, polar_class: str = "PC7") -> dict[st
     force), the UR I3 Q_max, F_b and F_f for the case's propeller at ``polar_class`` and the
     ratios. Reported, not asserted."""
     from pdfem.models import _propeller_sections as sec
-    from pdfem.models.propeller import PARAMETERS
-    from pdfem.meshing import check_parameters
 
     s = case.structures[0]
-    p = check_parameters(PARAMETERS, dict(s.params))
+    p = propeller_parameters(case)
     R = p["diameter"] / 2
     rps = float(np.linalg.norm(s.angular_velocity)) / (2.0 * math.pi)
     rule = ur_i3_ice_torque(p["diameter"], p["hub_diameter"], p["pitch_ratio"] * p["diameter"],
