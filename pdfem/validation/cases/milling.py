@@ -228,7 +228,7 @@ def spectrum_plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> No
     ax2.set_xlim(0, min(freq[-1], 8 * bpf))
     ax2.set_xlabel("frequency [Hz]")
     ax2.set_ylabel("amplitude / max")
-    ax2.legend()
+    ax2.legend(loc="upper right")
 
 
 CASES = (
