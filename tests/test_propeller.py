@@ -146,3 +146,18 @@ def test_tiny_milling_impulse_balance(tmp_path):
     assert np.linalg.norm(ice + prop) <= 1e-9 * np.linalg.norm(prop)
     t, q = milling.shaft_torque(case, data)
     assert q.max() > 0.0        # the ice resists the rotation
+
+
+def test_rake_moves_the_tip_aft(tmp_path):
+    """Rake (aft > 0) moves the section at r along x by -(r - r_h) tan(rake): the area-weighted
+    centroid of blade 1's tip face moves by -(R - r_h) tan(0.2) = -0.1419 m between a raked and
+    an unraked propeller (the same tip section, translated)."""
+    def tip_centroid(rake: float) -> np.ndarray:
+        path = tmp_path / f"r{rake}.msh"
+        propeller.build(path, blades=2, element_size=0.12, element_order=1, sections=6, rake_angle=rake)
+        m = meshio.read(path)
+        tri = m.points[_tris(m, "blade1_tip")]
+        area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        return (area[:, None] * tri.mean(axis=1)).sum(axis=0) / area.sum()
+    shift = tip_centroid(0.2) - tip_centroid(0.0)
+    assert shift[0] == pytest.approx(-0.7 * math.tan(0.2), abs=2e-3)
