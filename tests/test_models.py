@@ -86,6 +86,10 @@ MODEL_CASES = {
     "hull_panel": (HULL_PARAMS, {"hull": 3, "contact": 2, "fixed": 2, "bay1": 2, "bay2": 2}),
     "propeller_blade": (BLADE_PARAMS, {"blade": 3, "contact": 2, "root": 2}),
     "indenters": (dict(shape="sphere", element_size=0.25), {"contact": 2}),
+    "propeller": (dict(blades=2, element_size=0.12, sections=6),
+                  {"root": 2, "contact": 2, **{f"blade{k}": 3 for k in (1, 2)},
+                   **{f"blade{k}_{s}": 2 for k in (1, 2) for s in ("root", "leading_edge", "trailing_edge", "tip",
+                                                                  "face", "back", "surface")}}),
     "icebreaker": (dict(element_size=0.1), {"bow": 2, "shoulder": 2, "midship": 2, "stern": 2,
                                             "bow_panel": 2, "contact": 2}),
 }

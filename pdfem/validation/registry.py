@@ -29,6 +29,7 @@ MODULES: tuple[str, ...] = (
     "ship",                # ship_rest.toml, ship_heave.toml, ship_pitch.toml: drift, periods
     "spinning",            # spinning_bar*.toml: radial stress, flapwise frequency (Southwell)
     "shaft_energy",        # shaft_energy.toml: shaft + ice work and angular impulse balances
+    "milling",             # propeller_milling_tiny.toml: impulse balance, torque spectrum at Z n
 )
 """The case modules, in the order of the report."""
 
