@@ -95,10 +95,9 @@ def test_kernel_breaks_at_the_compressive_strength_in_a_homogeneous_field(factor
     assert np.all(np.isnan(body.rest[~broken]))
 
 
-def _crushed_block(speed, phi=30.0):
-    """A block whose bonds are all crushed at their reference length, halves moving together;
-    ``phi`` (deg) sets the crushed ice's friction (tan phi, pdfem.pd.crushed_shear; 0: none)."""
-    body = _block(_material(phi))
+def _crushed_block(speed):
+    """A block whose bonds are all crushed at their reference length, halves moving together."""
+    body = _block(_material())
     body.weight[:] = -np.abs(body.weight)  # every bond broken ...
     body.rest[:] = 0.0                     # ... and crushed at its reference length
     body.start()
@@ -117,14 +116,13 @@ def _energy_history(body, frac, duration):
 
 
 def test_crushed_bonds_push_only_in_compression_and_conserve_energy():
-    """Frictionless crushed ice (phi = 0) squeezed by its own inertia below the yield
-    compression: the crushed bonds are a conservative, compression-only potential, so velocity
-    Verlet conserves kinetic + stored energy to O(dt^2) (the error falls by about 4 when dt
-    halves), and the halves fly apart again (no bond pulls). With friction the shear springs
-    slip and dissipate (tests/test_crushed_shear.py)."""
+    """Crushed ice squeezed by its own inertia below the yield compression: the crushed bonds
+    are a conservative, compression-only potential, so velocity Verlet conserves kinetic +
+    stored energy to O(dt^2) (the error falls by about 4 when dt halves), and the halves fly
+    apart again (no bond pulls)."""
     drift = []
     for frac in (0.4, 0.2):
-        body = _crushed_block(0.02, phi=0.0)
+        body = _crushed_block(0.02)
         e0 = body.kinetic_energy() + body.strain_energy()
         e = _energy_history(body, frac, 2e-4)
         drift.append(np.abs(e - e0).max() / e0)

@@ -71,8 +71,13 @@ class IceMaterialSection(Section):
     friction_angle: Annotated[float, Number("deg", ge=0.0, lt=60.0)] = Field(
         30.0, description="Internal friction angle (degrees) of the \"ice\" law's Coulomb "
         "criterion: the compressive strength rises by (1 + sin phi) / (1 - sin phi) times the "
-        "confining pressure, and crushed ice slides on itself with friction tan phi. "
-        "Default: 30 (Schulson & Duval 2009: friction coefficient 0.5-0.9).")
+        "confining pressure. Default: 30 (Schulson & Duval 2009: friction coefficient 0.5-0.9).")
+    crushed_friction: Annotated[float, Number("-", ge=0.0, le=2.0)] = Field(
+        0.0, description="Friction coefficient (-) of the \"ice\" law's crushed ice sliding on "
+        "itself: a shear spring with Coulomb slip on every pushing crushed bond holds a crushed "
+        "layer in the contact (docs/ice_failure.md: edge crushing then reaches 1.3 "
+        "compressive_strength, but the damage reaches 2.5 thicknesses into the sheet). "
+        "Granular ice: 0.5-1 (tan of a 30-45 degree friction angle). Default: 0 (off).")
 
     transition_rate: Annotated[float, Positive("1/s")] | None = Field(
         None, description="Ductile-to-brittle transition strain rate (1/s) of the \"ice\" law: "
@@ -105,8 +110,8 @@ class IceMaterialSection(Section):
             raise fail('failure = "ice" needs compressive_strength (Pa), e.g. 3.0e6',
                        key="compressive_strength")
         if self.failure != "ice":
-            for key in ("compressive_strength", "friction_angle", "transition_rate",
-                        "rate_exponent"):
+            for key in ("compressive_strength", "friction_angle", "crushed_friction",
+                        "transition_rate", "rate_exponent"):
                 if key in self.model_fields_set:
                     raise fail(f'{key} is a parameter of failure = "ice"; set failure = "ice" '
                                "or remove it", key=key)

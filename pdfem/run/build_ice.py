@@ -46,7 +46,8 @@ def ice_material(m: IceMaterialSection, dx: float | None = None,
                        fracture_energy=m.fracture_energy if by_energy else None,
                        critical_stretch=m.critical_stretch, tensile_strength=tensile,
                        compressive_strength=m.compressive_strength,
-                       friction_angle=m.friction_angle, transition_rate=m.transition_rate,
+                       friction_angle=m.friction_angle, crushed_friction=m.crushed_friction,
+                       transition_rate=m.transition_rate,
                        rate_exponent=m.rate_exponent)
 
 

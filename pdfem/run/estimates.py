@@ -48,9 +48,12 @@ BYTES_PER_PARTICLE = 240
 BYTES_PER_PAIR = 30
 """Estimated resident bytes per bond (pair arrays and the pair-loop workspace)."""
 
-CRUSHED_ICE_BYTES_PER_PAIR = 16
-"""Extra bytes per bond of a body whose crushed bonds push and rub (``failure = "ice"``): the
-plastic rest length (float32) and the shear spring's stretch (3 x float32,
+CRUSHED_ICE_BYTES_PER_PAIR = 4
+"""Extra bytes per bond of a body whose crushed bonds push (``failure = "ice"``): the plastic
+rest length (float32)."""
+
+SHEAR_SPRING_BYTES_PER_PAIR = 12
+"""Extra bytes per bond when crushed ice has friction: the shear spring's stretch (3 x float32,
 :mod:`pdfem.pd.crushed_shear`)."""
 
 FIXED_BYTES = 200 * 2**20

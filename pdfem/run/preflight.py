@@ -29,8 +29,9 @@ from pdfem.errors import InputError
 from pdfem.parallel.nodes import block_layout, node_layout, per_node
 from pdfem.run.parallel import splits_bodies
 from pdfem.run.estimates import (BYTES_PER_PAIR, BYTES_PER_PARTICLE, CRUSHED_ICE_BYTES_PER_PAIR,
-                                 FIXED_BYTES, BodyEstimate, available_memory, best_split,
-                                 estimate_body, format_bytes, lattice_counts)
+                                 FIXED_BYTES, SHEAR_SPRING_BYTES_PER_PAIR, BodyEstimate,
+                                 available_memory, best_split, estimate_body, format_bytes,
+                                 lattice_counts)
 
 SETUP_TEXT = {True: "distributed set-up: each rank builds only its subdomain and halo",
               False: "global set-up: every rank builds the whole ice body, then keeps its part, "
@@ -52,8 +53,16 @@ class RankEstimate:
 def estimate_case(case: Case) -> list[BodyEstimate]:
     """Particles, pairs and memory of every ice body of a case, before building
     (:func:`pdfem.run.estimates.estimate_body`)."""
-    return [estimate_body(c.name, c.shape, c.dx, c.horizon, BYTES_PER_PAIR + (
-        CRUSHED_ICE_BYTES_PER_PAIR if c.material.failure == "ice" else 0)) for c in case.ice]
+    return [estimate_body(c.name, c.shape, c.dx, c.horizon, pair_bytes(c.material))
+            for c in case.ice]
+
+
+def pair_bytes(material) -> int:
+    """Bytes per bond of an ice body with this case material (crushed ice holds more)."""
+    if material.failure != "ice":
+        return BYTES_PER_PAIR
+    return BYTES_PER_PAIR + CRUSHED_ICE_BYTES_PER_PAIR + (
+        SHEAR_SPRING_BYTES_PER_PAIR if material.crushed_friction > 0.0 else 0)
 
 
 def split_body(cfg, est: BodyEstimate, n_ranks: int, file: str | None = None

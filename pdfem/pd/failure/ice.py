@@ -50,9 +50,9 @@ with and the work done while it slides are counted with the fracture dissipation
 is thus granular: it carries compression up to a crushing pressure and, through the compressed
 bonds at every angle in a horizon, shear in proportion to the confinement (a frictional
 resistance), but no tension; it is never deleted and can be squeezed out of the contact
-zone; between the ends of a pushing crushed bond a shear spring with Coulomb slip
-(:mod:`pdfem.pd.crushed_shear`, friction tan phi) holds the crushed layer in the contact as a
-granular material's internal friction does. Pairs that were never bonded meet through the
+zone. Optionally (``crushed_friction`` > 0, off by default) a shear spring with Coulomb slip
+between the ends of a pushing crushed bond (:mod:`pdfem.pd.crushed_shear`) holds the crushed
+layer in the contact as a granular material's internal friction does. Pairs that were never bonded meet through the
 short-range contact force
 (:mod:`pdfem.forces.short_range`, switched on for a body with this law).
 
@@ -108,6 +108,7 @@ class IceFailure:
     mu: float
     transition_rate: float | None = None
     rate_exponent: float = 1.0 / 3.0
+    crushed_friction: float = 0.0
     name: str = "ice"
     broken_bonds_push: bool = True
 
@@ -132,8 +133,8 @@ class IceFailure:
 
     @property
     def crush_friction(self) -> float:
-        """tan(phi): crushed ice slides on itself with the friction of its Coulomb envelope."""
-        return math.tan(math.radians(self.friction_angle))
+        """mu of crushed ice sliding on itself (:mod:`pdfem.pd.crushed_shear`; 0: none)."""
+        return self.crushed_friction
 
     @property
     def youngs_modulus(self) -> float:
@@ -152,7 +153,8 @@ class IceFailure:
             st = material.youngs_modulus * material.s0(delta)
         return cls(float(st), float(material.compressive_strength),
                    float(material.friction_angle), float(material.K), float(material.mu),
-                   material.transition_rate, float(material.rate_exponent))
+                   material.transition_rate, float(material.rate_exponent),
+                   float(material.crushed_friction))
 
     def stretch_limits(self) -> tuple[float, ...]:
         """(t0, t1, c0, c1, d0, d1) of the module doc's s_max and s_min."""

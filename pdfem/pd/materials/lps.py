@@ -208,6 +208,9 @@ class IceMaterial:
         Uniaxial compressive strength (Pa), for the ``"ice"`` failure law.
     friction_angle
         Internal friction angle (degrees) of the ``"ice"`` failure law's Coulomb criterion.
+    crushed_friction
+        Friction coefficient (-) of crushed ice sliding on itself (:mod:`pdfem.pd.crushed_shear`);
+        0: none.
     transition_rate
         Ductile-to-brittle transition strain rate (1/s) of the ``"ice"`` law's compressive
         strength; None: no rate dependence.
@@ -223,6 +226,7 @@ class IceMaterial:
     tensile_strength: float | None = None
     compressive_strength: float | None = None
     friction_angle: float = 30.0
+    crushed_friction: float = 0.0
     transition_rate: float | None = None
     rate_exponent: float = 1.0 / 3.0
 
