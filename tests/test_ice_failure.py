@@ -216,7 +216,7 @@ def test_a_block_crushed_to_pieces_keeps_its_energy(law_name):
 
 def test_nominal_pressure_of_the_edge_crushing_case():
     """A constant wall load F after a 10 ms ramp of the push gives F / (h w(t)) averaged over
-    time, with w = 2 (push + dx/2) / tan(20 deg) the wedge's width (the measure issue 14's
+    time, with w = 2 (push + dx/2) / tan(30 deg) the wedge's width (the measure issue 14's
     0.5-2.5 sigma_c band, after Korzhavin, applies to)."""
     import types
 
@@ -230,6 +230,6 @@ def test_nominal_pressure_of_the_edge_crushing_case():
     outcome = types.SimpleNamespace(case=case, data={"histories": {"loads/wall": {
         "time": t, "force": force}}})
     tl = t[t >= 0.1]
-    width = np.minimum(2 * (0.1 * (tl - 0.005) + 0.02) / np.tan(np.radians(20.0)), 1.0)
+    width = np.minimum(2 * (0.1 * (tl - 0.005) + 0.02) / np.tan(np.radians(30.0)), 1.0)
     expect = np.mean(50e3 / (0.2 * width)) / 2.0e6
     assert nominal_pressure(outcome) == pytest.approx(expect, rel=1e-12)
