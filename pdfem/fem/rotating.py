@@ -129,13 +129,13 @@ class FrameStructure(ElasticStructure):
 
     def apply_surface_impulse(self, impulse: np.ndarray) -> float:
         """Impulses (N s, (Ns, 3), world axes) as a jump of u_e' (R^T J); returns their work
-        (J) in the world, ``v . J + J^2 / (2 m)`` with the true velocity ``v`` (zero on
-        supports); the part ``v_frame . J`` goes to the drive (``support_work``)."""
+        (J) in the world, ``v . J + J^2 / (2 m)`` with the true velocity ``v`` (on supports,
+        which move with the frame, ``v_frame . J``); the part ``v_frame . J`` goes to the drive
+        (``support_work``)."""
         j = np.asarray(impulse, dtype=np.float64).reshape(-1, 3)
         r, _ = self._relative()
         vf = self.frame.frame_velocity(self.solver.time, r[self.surface_nodes])
-        free = self.solver.free[self._surface_dofs].reshape(-1, 3)
-        drive = float(np.sum((vf * j)[free]))
+        drive = float(np.sum(vf * j))   # supports too: the frame carries them into the ice
         work = super().apply_surface_impulse(j @ self.rotation())
         self.drive_impulse_work += drive
         return work + drive
