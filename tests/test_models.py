@@ -88,6 +88,7 @@ MODEL_CASES = {
     "indenters": (dict(shape="sphere", element_size=0.25), {"contact": 2}),
     "icebreaker": (dict(element_size=0.1), {"bow": 2, "shoulder": 2, "midship": 2, "stern": 2,
                                             "bow_panel": 2, "contact": 2}),
+    "bow_panel": ({}, {"hull": 3, "contact": 2, "fixed": 2, "bay1": 2, "bay2": 2}),
 }
 
 
