@@ -124,3 +124,23 @@ def test_panel_pulse_reaches_the_ship_through_its_supports(tmp_path):
     np.testing.assert_allclose(m["attached_impulse"][-1], J, rtol=0, atol=2e-3 * np.linalg.norm(J))
     e = res["histories"]["energy"]
     assert abs(e["residual"][-1]) <= 1e-6 * e["supplied"][-1]
+
+
+def test_attached_to_must_name_a_ship_listed_before(tmp_path):
+    """``attached_to`` naming no ship before the structure is refused naming the file, the field
+    and what is valid; with a motion it is refused by the schema."""
+    from pdfem.case.schema import parse_case
+    from pdfem.errors import InputError
+    from pdfem.run.build_structures import build_all
+
+    text = (CASES / "icebreaker_free_ship_tiny.toml").read_text()
+    case = parse_case(text.replace('attached_to = "hull"', 'attached_to = "hul"'), "bad.toml",
+                      CASES)
+    with pytest.raises(InputError) as err:
+        build_all(case.structures, tmp_path, case.file)
+    msg = err.value.text()
+    assert "bad.toml" in msg and "structure[1].attached_to" in msg and "hull" in msg
+    with pytest.raises(InputError) as err:
+        parse_case(text.replace('attached_to = "hull"', 'attached_to = "hull"\nmotion = '
+                                '{ velocity = [1.0, 0.0, 0.0] }'), "bad.toml", CASES)
+    assert "attached_to" in err.value.text()
