@@ -304,12 +304,15 @@ class Ship(Structure):
         """One row every coupling step: ``position`` of the centre of gravity (m),
         ``rotation`` vector (rad, from the hull as given), ``velocity`` (m/s),
         ``angular_velocity`` (rad/s, world axes), ``hydrostatic_force`` (N),
-        ``hydrostatic_moment`` (N m, about the centre of gravity)."""
+        ``hydrostatic_moment`` (N m, about the centre of gravity); ``attached_impulse`` (N s)
+        and ``attached_work`` (J) handed over by structures riding on the hull so far,
+        ``external_impulse`` (N s) of gravity, water, thrust and held surge so far."""
         return {"position": self.c.copy(), "rotation": rotation_vector(self.q),
                 "velocity": self.v.copy(), "angular_velocity": self.omega.copy(),
                 "hydrostatic_force": self.hydro.force.copy(),
                 "hydrostatic_moment": self.hydro.moment.copy(),
                 "attached_impulse": self.attached_impulse.copy(),
+                "attached_work": self.attached_work,
                 "external_impulse": self.external_impulse.copy()}
 
     def output_mesh(self) -> tuple[np.ndarray, np.ndarray, str]:
