@@ -107,7 +107,8 @@ class MotionSection(Section):
                           "piecewise linear, t strictly increasing, first t >= 0; the first "
                           "point's displacement before it (the body starts there), the last "
                           "point's after it; the rotation stays angular_velocity about the "
-                          "moving centre. Default: none (constant velocity).")
+                          "moving centre (an elastic structure's frame follows it too, e.g. a "
+                          "panel on a towed hull). Default: none (constant velocity).")
     ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
         0.0, description="Elastic structures only: time over which velocity and "
                          "angular_velocity rise linearly from rest, from t = 0 (s). "
@@ -282,10 +283,6 @@ class StructureSection(Section):
         if self.kind == "ship" and "motion" in self.model_fields_set:
             raise fail("a ship moves under its own dynamics; it takes no motion (use the ship "
                        "table)", key="motion")
-        if self.kind == "elastic" and self.motion.path is not None:
-            raise fail("an elastic structure's frame moves at a constant velocity (with "
-                       "ramp_time); a translation path is for rigid bodies only",
-                       key="motion.path")
         if self.kind == "rigid" and self.motion.ramp_time > 0.0:
             raise fail("ramp_time is for elastic structures only; a rigid body moves at its "
                        "velocity from t = 0 (or follows its path)", self.motion.ramp_time,

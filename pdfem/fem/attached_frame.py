@@ -61,6 +61,10 @@ class ShipFrame:
         """``(1, 0, t)``: the frame is always at its full (the ship's) speed."""
         return 1.0, 0.0, t
 
+    def velocity_jump(self, t0: float, t1: float) -> np.ndarray:
+        """Zero: the ship's velocity changes enter through its mean acceleration."""
+        return np.zeros(3)
+
     def angle(self, t: float) -> float:
         """The ship's rotation angle (rad) from the mesh's attitude now."""
         return float(np.linalg.norm(rotation_vector(self.ship.q)))

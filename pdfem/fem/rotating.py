@@ -95,6 +95,13 @@ class FrameStructure(ElasticStructure):
         """Advance by ``dt`` (s) with the applied, contact and inertial loads (the inertial
         ones at ``t + dt`` on the state at ``t``)."""
         t_new = self.solver.time + dt
+        jump = self.frame.velocity_jump(self.solver.time, t_new)
+        if jump.any():  # a kink of the frame's path: the nodes keep their world velocity
+            before = self.kinetic_energy()
+            dv = np.broadcast_to(-(self.rotation().T @ jump), (self.n_nodes, 3))
+            self.solver.apply_impulse(np.arange(self.dofmap.n_dofs),
+                                      self.solver.m * self.dofmap.to_dofs(dv))
+            self.drive_impulse_work -= self.kinetic_energy() - before  # the drive's work
         f_in = self._inertial_dofs(t_new)
         u_old = self.solver.u
         self.solver.step(dt, self.external_force_dofs(t_new) + f_in)

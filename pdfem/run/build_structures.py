@@ -58,7 +58,8 @@ def _elastic(cfg: StructureConfig, path: Path, file: str, ship=None) -> ElasticS
     component), damping and surface loads; solved in its moving frame if it has a motion, or in
     the frame of the ship ``ship`` it is attached to."""
     material = ElasticMaterial(cfg.density, cfg.youngs_modulus, cfg.poisson_ratio)
-    frame = MovingFrame(cfg.angular_velocity, cfg.center, cfg.velocity, cfg.ramp_time)
+    frame = MovingFrame(cfg.angular_velocity, cfg.center, cfg.velocity, cfg.ramp_time,
+                        path=None if cfg.path is None else tuple(map(tuple, cfg.path)))
     kind, extra = (ElasticStructure, {}) if frame.is_still else (FrameStructure, {"frame": frame})
     if ship is not None:
         kind, extra = AttachedStructure, {"ship": ship}
