@@ -144,3 +144,37 @@ def test_attached_to_must_name_a_ship_listed_before(tmp_path):
         parse_case(text.replace('attached_to = "hull"', 'attached_to = "hull"\nmotion = '
                                 '{ velocity = [1.0, 0.0, 0.0] }'), "bad.toml", CASES)
     assert "attached_to" in err.value.text()
+
+
+def test_frame_path_kink_keeps_the_nodes_world_velocity(tmp_path):
+    """A moving frame on a path whose velocity jumps from 0 to 0.5 m/s at t = 9e-6 s: in the
+    step over the kink the supported nodes take the frame's new velocity, the free nodes keep
+    their world velocity (0, to the elastic response of one step: < 5 % of the jump), and the drive's work is
+    the kinetic-energy change of the elastic motion (1/2 m_free 0.5^2)."""
+    from pdfem.fem.moving_frame import MovingFrame
+    from pdfem.fem.rotating import FrameStructure
+    from pdfem.fem.elasticity import ElasticMaterial
+
+    case = load_case(CASES / "icebreaker_panel_tiny.toml")
+    mesh = build_structure(case.structures[1], tmp_path, case.file)   # meshes the panel
+    frame = MovingFrame(path=((0.0, 0.0, 0.0, 0.0), (9e-6, 0.0, 0.0, 0.0),
+                              (1.0, 0.5 * (1.0 - 9e-6), 0.0, 0.0)))
+    st = FrameStructure.from_file(tmp_path / "panel.msh", ElasticMaterial(7850.0, 4.2e9, 0.3),
+                                  fixed_groups=["fixed"], contact_group="contact",
+                                  element_order=1, frame=frame)
+    assert mesh.n_nodes == st.n_nodes
+    dt = 2e-6
+    for _ in range(5):                                # to t = 1e-5 s, the kink in the last step
+        st.step(dt)
+    r, v = st._relative()
+    _, world = frame.to_world(st.solver.time, r, v)
+    fixed = st.group_nodes("fixed")
+    free = np.setdiff1d(np.arange(st.n_nodes), fixed)
+    np.testing.assert_allclose(world[fixed], [[0.5, 0.0, 0.0]] * len(fixed), atol=1e-12)
+    speed = np.linalg.norm(world[free], axis=1)
+    # one step's elastic response to the supports' jump (here up to 3 %); without the jump of
+    # u_e' the free nodes would move at the frame's 0.5 m/s at once
+    assert speed.max() < 0.05 * 0.5
+    m = st.dofmap.to_nodal(st.solver.m)[:, 0]
+    kick = 0.5 * m[free].sum() * 0.5 ** 2
+    assert st.frame_history()["drive_work"] == pytest.approx(kick, rel=1e-9)
