@@ -92,6 +92,7 @@ MODEL_CASES = {
                                                                   "face", "back", "surface")}}),
     "icebreaker": (dict(element_size=0.1), {"bow": 2, "shoulder": 2, "midship": 2, "stern": 2,
                                             "bow_panel": 2, "contact": 2}),
+    "bow_panel": ({}, {"hull": 3, "contact": 2, "fixed": 2, "bay1": 2, "bay2": 2}),
 }
 
 

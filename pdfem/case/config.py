@@ -159,6 +159,7 @@ class StructureConfig:
     field: str = ""
     ship: ShipConfig | None = None  # kind = "ship" only
     ramp_time: float = 0.0          # s, the elastic structure's moving frame
+    attached_to: str | None = None  # the ship an elastic structure rides on
 
 
 @dataclass(frozen=True)
@@ -236,7 +237,8 @@ def _structure(s: StructureSection, at: str, water=None,
         element_order=s.element_order, contact_group=s.contact_group,
         damping_alpha=s.damping.alpha, damping_beta=s.damping.beta, loads=tuple(loads),
         velocity=m.velocity, angular_velocity=m.angular_velocity, center=m.center, path=m.path,
-        field=at, ship=ship_config(s, water, gravity), ramp_time=m.ramp_time)
+        field=at, ship=ship_config(s, water, gravity), ramp_time=m.ramp_time,
+        attached_to=s.attached_to)
 
 
 def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:

@@ -107,7 +107,8 @@ class MotionSection(Section):
                           "piecewise linear, t strictly increasing, first t >= 0; the first "
                           "point's displacement before it (the body starts there), the last "
                           "point's after it; the rotation stays angular_velocity about the "
-                          "moving centre. Default: none (constant velocity).")
+                          "moving centre (an elastic structure's frame follows it too, e.g. a "
+                          "panel on a towed hull). Default: none (constant velocity).")
     ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
         0.0, description="Elastic structures only: time over which velocity and "
                          "angular_velocity rise linearly from rest, from t = 0 (s). "
@@ -230,6 +231,14 @@ class StructureSection(Section):
                     "`angular_velocity` (fixed axis through `center`), `center`, `ramp_time` (s) "
                     "(docs/rotating_structures.md). Default: at rest.")
 
+    attached_to: Name | None = Field(
+        None, description="Elastic structures only: the name of a ship (kind = \"ship\", listed "
+                          "before this structure) whose hull carries it, e.g. an elastic bow "
+                          "panel: its frame moves with the ship (position, attitude, velocity, "
+                          "acceleration) and the loads on it reach the ship through its supports "
+                          "(docs/icebreaking.md). The mesh is in the hull mesh's coordinates. "
+                          "Default: none.")
+
     ship: ShipSection | None = Field(
         None, description="Ships only (kind = \"ship\"): `mass` (kg), `center_of_gravity` (m), "
                           "`radii_of_gyration` (m), `initial_displacement` (m), "
@@ -274,14 +283,14 @@ class StructureSection(Section):
         if self.kind == "ship" and "motion" in self.model_fields_set:
             raise fail("a ship moves under its own dynamics; it takes no motion (use the ship "
                        "table)", key="motion")
-        if self.kind == "elastic" and self.motion.path is not None:
-            raise fail("an elastic structure's frame moves at a constant velocity (with "
-                       "ramp_time); a translation path is for rigid bodies only",
-                       key="motion.path")
         if self.kind == "rigid" and self.motion.ramp_time > 0.0:
             raise fail("ramp_time is for elastic structures only; a rigid body moves at its "
                        "velocity from t = 0 (or follows its path)", self.motion.ramp_time,
                        key="motion.ramp_time")
+        if self.attached_to is not None and (self.kind != "elastic"
+                                             or "motion" in self.model_fields_set):
+            raise fail("only an elastic structure without a motion rides on a ship (its frame is "
+                       "the ship's)", self.attached_to, key="attached_to")
         if self.kind != "ship" and self.ship is not None:
             raise fail("only a ship (kind = \"ship\") takes a ship table", key="ship")
         if self.kind == "ship" and (self.fixed_groups or self.loads or self.supports):

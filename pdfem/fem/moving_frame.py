@@ -15,6 +15,12 @@ elastic motion in frame axes gets the inertial (d'Alembert) loads, per lumped ma
     f = -m [ R^T a_c + w' x r + w x (w x r) + 2 w x u_e' ],     r = X - c0 + u_e,
 
 (translation, Euler, centrifugal, Coriolis; ``a_c = s'(t) V``). SI units: m, s, rad, N.
+
+Instead of ``velocity`` the centre may follow a piecewise-linear translation ``path`` (the same
+``[[t, ux, uy, uz], ...]`` as a towed rigid hull's, :class:`pdfem.geometry.path.DisplacementPath`):
+``c(t) = c0 + path(t)``; between its points the frame does not accelerate, and at a point its
+velocity jumps (:meth:`MovingFrame.velocity_jump`), which the structure takes as a jump of u_e'
+(the nodes keep their world velocity).
 """
 
 from __future__ import annotations
@@ -22,6 +28,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from pdfem.geometry.path import DisplacementPath
 
 
 def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -44,17 +52,30 @@ class MovingFrame:
         (3,) final velocity of the centre (m/s).
     ramp_time
         Time (s) over which the speeds rise linearly from 0, from t = 0 (0: at once).
+    path
+        Rows ``[t, ux, uy, uz]`` (s, m) of a piecewise-linear translation of the centre, instead
+        of ``velocity``; ``None``: none.
     """
 
     angular_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     center: tuple[float, float, float] = (0.0, 0.0, 0.0)
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     ramp_time: float = 0.0
+    path: tuple | None = None
 
     @property
     def is_still(self) -> bool:
         """Whether the frame never moves (no rotation, no translation)."""
-        return not (np.any(self.angular_velocity) or np.any(self.velocity))
+        return not (np.any(self.angular_velocity) or np.any(self.velocity)
+                    or self.path is not None)
+
+    def velocity_jump(self, t0: float, t1: float) -> np.ndarray:
+        """(3,) jump (m/s, world) of the centre's velocity over ``(t0, t1]`` (s): the path's
+        kinks there; zero without a path (the ramp is a finite acceleration)."""
+        if self.path is None:
+            return np.zeros(3)
+        p = DisplacementPath(self.path)
+        return p.velocity(t1) - p.velocity(t0)
 
     def speed_factor(self, t: float) -> tuple[float, float, float]:
         """``s(t)`` (-), ``s'(t)`` (1/s) and ``S(t) = int_0^t s`` (s) of the linear ramp."""
@@ -78,8 +99,12 @@ class MovingFrame:
         V = np.asarray(self.velocity, dtype=np.float64)
         speed = float(np.linalg.norm(w))
         R = _rotation(w / speed, speed * S) if speed > 0.0 else np.eye(3)
-        return {"R": R, "c": np.asarray(self.center, dtype=np.float64) + V * S,
-                "c_dot": s * V, "c_ddot": ds * V, "w": s * w, "w_dot": ds * w}
+        c, c_dot = V * S, s * V
+        if self.path is not None:
+            p = DisplacementPath(self.path)
+            c, c_dot = c + p.displacement(t), c_dot + p.velocity(t)
+        return {"R": R, "c": np.asarray(self.center, dtype=np.float64) + c,
+                "c_dot": c_dot, "c_ddot": ds * V, "w": s * w, "w_dot": ds * w}
 
     def inertial_force(self, t: float, r: np.ndarray, v: np.ndarray,
                        mass: np.ndarray) -> np.ndarray:

@@ -99,6 +99,13 @@ class FrameStructure(ElasticStructure):
         """Advance by ``dt`` (s) with the applied, contact and inertial loads (the inertial
         ones at ``t + dt`` on the state at ``t``)."""
         t_new = self.solver.time + dt
+        jump = self.frame.velocity_jump(self.solver.time, t_new)
+        if jump.any():  # a kink of the frame's path: the nodes keep their world velocity
+            before = self.kinetic_energy()
+            dv = np.broadcast_to(-(self.rotation().T @ jump), (self.n_nodes, 3))
+            self.solver.apply_impulse(np.arange(self.dofmap.n_dofs),
+                                      self.solver.m * self.dofmap.to_dofs(dv))
+            self.drive_impulse_work -= self.kinetic_energy() - before  # the drive's work
         f_in = self._inertial_dofs(t_new)
         u_old = self.solver.u
         self.solver.step(dt, self.external_force_dofs(t_new) + f_in)
@@ -137,13 +144,13 @@ class FrameStructure(ElasticStructure):
 
     def apply_surface_impulse(self, impulse: np.ndarray) -> float:
         """Impulses (N s, (Ns, 3), world axes) as a jump of u_e' (R^T J); returns their work
-        (J) in the world, ``v . J + J^2 / (2 m)`` with the true velocity ``v`` (zero on
-        supports); the part ``v_frame . J`` goes to the drive (``support_work``)."""
+        (J) in the world, ``v . J + J^2 / (2 m)`` with the true velocity ``v`` (on supports,
+        which move with the frame, ``v_frame . J``); the part ``v_frame . J`` goes to the drive
+        (``support_work``)."""
         j = np.asarray(impulse, dtype=np.float64).reshape(-1, 3)
         r, _ = self._relative()
         vf = self.frame.frame_velocity(self.solver.time, r[self.surface_nodes])
-        free = self.solver.free[self._surface_dofs].reshape(-1, 3)
-        drive = float(np.sum((vf * j)[free]))
+        drive = float(np.sum(vf * j))   # supports too: the frame carries them into the ice
         work = super().apply_surface_impulse(j @ self.rotation())
         self.drive_impulse_work += drive
         if self.shaft is not None:

@@ -136,6 +136,7 @@ class Ship(Structure):
         k = np.asarray(radii_of_gyration, dtype=np.float64).reshape(3)
         self.inertia = self.mass * k * k                       # body axes, kg m^2
         self.body_points = self.x_mesh - cg                    # body-frame coordinates, m
+        self.cg_mesh = cg                                      # G in the mesh as given, m
         self.q = rotation_quaternion(initial_rotation)
         self.c = cg + np.asarray(initial_displacement, dtype=np.float64).reshape(3)
         self.x0 = self.c + self.body_points @ quaternion_matrix(self.q).T
@@ -146,10 +147,16 @@ class Ship(Structure):
         self.thrust, self.surge_speed, self.ramp_time = float(thrust), surge_speed, ramp_time
         self.time = 0.0
         self.thrust_work = self.surge_work = 0.0
+        # structures riding on the hull (pdfem.fem.attached_frame): their support impulses (N s,
+        # world, summed) and work (J); the mean accelerations of the last step (m/s^2, rad/s^2)
+        self.attached_impulse, self.attached_work = np.zeros(3), 0.0
+        self.external_impulse = np.zeros(3)   # N s: gravity, water, thrust, held surge
+        self.acceleration, self.angular_acceleration = np.zeros(3), np.zeros(3)
         self._surface_forces = np.zeros((len(self.x_mesh), 3))
         height = float(np.ptp(self.x_mesh[:, 2]))
         self.datum = np.array([0.0, 0.0, self.level - height])  # m, potential datum
         self._update()
+        self._v_prev, self._w_prev = self.v.copy(), self.omega.copy()
 
     @classmethod
     def from_msh(cls, path, group: str = "contact", **kwargs) -> "Ship":
@@ -207,7 +214,7 @@ class Ship(Structure):
     def step(self, dt: float) -> None:
         """Advance by ``dt`` (s): velocity Verlet with an exact rotation update."""
         h = float(dt)
-        thrust0 = self.thrust_force
+        thrust0, force0 = self.thrust_force, self.force
         self.v += 0.5 * h * self.force / self.mass
         self.L += 0.5 * h * self.moment
         c_old = self.c.copy()
@@ -221,9 +228,13 @@ class Ship(Structure):
         self.v += 0.5 * h * self.force / self.mass
         self.L += 0.5 * h * self.moment
         self.thrust_work += float(0.5 * (thrust0 + self.thrust_force) @ (self.c - c_old))
+        self.external_impulse += 0.5 * h * (force0 + self.force)
         self.time += h
         self._update_velocity()
         self._hold_surge()
+        self.acceleration = (self.v - self._v_prev) / h
+        self.angular_acceleration = (self.omega - self._w_prev) / h
+        self._v_prev, self._w_prev = self.v.copy(), self.omega.copy()
 
     def _hold_surge(self) -> None:
         """Hold the surge speed (if given); book the work of holding it."""
@@ -232,6 +243,7 @@ class Ship(Structure):
         ramp = 1.0 if self.ramp_time <= 0.0 else min(1.0, self.time / self.ramp_time)
         target = self.surge_speed * ramp
         self.surge_work += 0.5 * self.mass * (target * target - self.v[0] * self.v[0])
+        self.external_impulse[0] += self.mass * (target - self.v[0])
         self.v[0] = target
         self._update_velocity()
 
@@ -246,6 +258,19 @@ class Ship(Structure):
         work = self.kinetic_energy() - before
         self._hold_surge()
         return work
+
+    def apply_attached_impulse(self, points: np.ndarray, impulse: np.ndarray) -> None:
+        """The impulses (N s, (N, 3), world) that a structure riding on the hull passes on
+        through its supports at ``points`` (m): a jump of ``v`` and ``L`` as for the ice's;
+        their work (J, the kinetic-energy change) is booked in ``support_work``."""
+        j = np.asarray(impulse, dtype=np.float64).reshape(-1, 3)
+        before = self.kinetic_energy()
+        self.v += j.sum(axis=0) / self.mass
+        self.L += np.cross(np.asarray(points, dtype=np.float64) - self.c, j).sum(axis=0)
+        self._update_velocity()
+        self.attached_impulse += j.sum(axis=0)
+        self.attached_work += self.kinetic_energy() - before
+        self._hold_surge()
 
     def _update_velocity(self) -> None:
         """Angular velocity and surface velocities after a change of ``v`` or ``L``."""
@@ -267,7 +292,7 @@ class Ship(Structure):
         """``load_work``: work of the thrust (J); ``support_work``: of holding the surge
         speed."""
         return {"load_work": self.thrust_work,
-                "support_work": self.surge_work, "damping_dissipated": 0.0,
+                "support_work": self.surge_work + self.attached_work, "damping_dissipated": 0.0,
                 "kinetic_correction": 0.0}
 
     def applied_load(self) -> np.ndarray:
@@ -279,11 +304,16 @@ class Ship(Structure):
         """One row every coupling step: ``position`` of the centre of gravity (m),
         ``rotation`` vector (rad, from the hull as given), ``velocity`` (m/s),
         ``angular_velocity`` (rad/s, world axes), ``hydrostatic_force`` (N),
-        ``hydrostatic_moment`` (N m, about the centre of gravity)."""
+        ``hydrostatic_moment`` (N m, about the centre of gravity); ``attached_impulse`` (N s)
+        and ``attached_work`` (J) handed over by structures riding on the hull so far,
+        ``external_impulse`` (N s) of gravity, water, thrust and held surge so far."""
         return {"position": self.c.copy(), "rotation": rotation_vector(self.q),
                 "velocity": self.v.copy(), "angular_velocity": self.omega.copy(),
                 "hydrostatic_force": self.hydro.force.copy(),
-                "hydrostatic_moment": self.hydro.moment.copy()}
+                "hydrostatic_moment": self.hydro.moment.copy(),
+                "attached_impulse": self.attached_impulse.copy(),
+                "attached_work": self.attached_work,
+                "external_impulse": self.external_impulse.copy()}
 
     def output_mesh(self) -> tuple[np.ndarray, np.ndarray, str]:
         """Hull nodes at t = 0 (m) and triangles."""
@@ -322,7 +352,10 @@ class Ship(Structure):
         """c, q, v, L, time and the work counters."""
         return {"c": self.c.copy(), "q": self.q.copy(), "v": self.v.copy(), "L": self.L.copy(),
                 "time": self.time, "thrust_work": self.thrust_work,
-                "surge_work": self.surge_work, "surface_forces": self._surface_forces.copy()}
+                "surge_work": self.surge_work, "surface_forces": self._surface_forces.copy(),
+                "attached": np.concatenate([self.attached_impulse, self.external_impulse,
+                                            self._v_prev, self._w_prev, self.acceleration,
+                                            self.angular_acceleration, [self.attached_work]])}
 
     def restore_state(self, state: dict) -> None:
         """Restore a state from :meth:`checkpoint_state` exactly."""
@@ -333,3 +366,7 @@ class Ship(Structure):
         self.thrust_work, self.surge_work = float(state["thrust_work"]), float(state["surge_work"])
         self._surface_forces[:] = state["surface_forces"]
         self._update()
+        a = np.array(state["attached"], dtype=np.float64)
+        (self.attached_impulse, self.external_impulse, self._v_prev, self._w_prev,
+         self.acceleration, self.angular_acceleration) = (a[k:k + 3].copy() for k in range(0, 18, 3))
+        self.attached_work = float(a[18])

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from pdfem.case.schema import StructureConfig
 from pdfem.errors import InputError
+from pdfem.fem.attached_frame import AttachedStructure
 from pdfem.fem.base import Structure
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.moving_frame import MovingFrame
@@ -52,12 +53,16 @@ def _rigid(cfg: StructureConfig, path: Path, file: str) -> RigidBody:
                               name=cfg.name, translation=motion)
 
 
-def _elastic(cfg: StructureConfig, path: Path, file: str) -> ElasticStructure:
+def _elastic(cfg: StructureConfig, path: Path, file: str, ship=None) -> ElasticStructure:
     """An elastic FE structure of the case's element order with its supports (clamped and per
-    component), damping and surface loads; solved in its moving frame if it has a motion."""
+    component), damping and surface loads; solved in its moving frame if it has a motion, or in
+    the frame of the ship ``ship`` it is attached to."""
     material = ElasticMaterial(cfg.density, cfg.youngs_modulus, cfg.poisson_ratio)
-    frame = MovingFrame(cfg.angular_velocity, cfg.center, cfg.velocity, cfg.ramp_time)
+    frame = MovingFrame(cfg.angular_velocity, cfg.center, cfg.velocity, cfg.ramp_time,
+                        path=None if cfg.path is None else tuple(map(tuple, cfg.path)))
     kind, extra = (ElasticStructure, {}) if frame.is_still else (FrameStructure, {"frame": frame})
+    if ship is not None:
+        kind, extra = AttachedStructure, {"ship": ship}
     s = kind.from_file(path, material, fixed_groups=cfg.fixed_groups,
                        supports=dict(cfg.supports), element_order=cfg.element_order,
                        contact_group=cfg.contact_group, name=cfg.name,
@@ -81,21 +86,45 @@ line here (builder errors: :class:`ValueError` or :class:`OSError` for a bad mes
 :class:`~pdfem.errors.InputError` naming the field)."""
 
 
+def _ship_of(cfg: StructureConfig, ships: dict, file: str) -> Ship:
+    """The ship an elastic structure is attached to, among the ships built before it."""
+    if cfg.attached_to not in ships:
+        raise InputError(file, f"{cfg.field}.attached_to", "a structure rides on a ship "
+                         "(kind = \"ship\") listed before it in the case file; there is no such "
+                         "ship before this structure (ships listed before it: "
+                         f"{', '.join(ships) or 'none'})", cfg.attached_to)
+    return ships[cfg.attached_to]
+
+
 def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
-                    remesh: bool = True) -> Structure:
+                    remesh: bool = True, ships: dict | None = None) -> Structure:
     """Build the structure that ``cfg`` describes with the builder of its kind
-    (:data:`STRUCTURE_KINDS`; ``remesh``: see :func:`structure_mesh`).
+    (:data:`STRUCTURE_KINDS`; ``remesh``: see :func:`structure_mesh`); ``ships``: the ships
+    built before it by name (the one a structure is ``attached_to``).
 
     Raises
     ------
     InputError
-        For a mesh or group the structure cannot be built from.
+        For a mesh or group the structure cannot be built from, or a missing ship.
     """
+    ship = None if cfg.attached_to is None else _ship_of(cfg, ships or {}, file)
     path = structure_mesh(cfg, out_dir, file, remesh)
     check_groups(cfg, path, file)
     try:
+        if ship is not None:
+            return _elastic(cfg, path, file, ship)
         return STRUCTURE_KINDS[cfg.kind](cfg, path, file)
     except InputError:
         raise
     except (ValueError, OSError) as exc:
         raise InputError(file, f"{cfg.field}.mesh", f"{exc} (mesh file {path})") from None
+
+
+def build_all(configs, out_dir: Path, file: str = "<case>", remesh: bool = True) -> list:
+    """The case's structures in order (:func:`build_structure`), each seeing those before it."""
+    built, ships = [], {}
+    for cfg in configs:
+        built.append(build_structure(cfg, out_dir, file, remesh, ships))
+        if cfg.kind == "ship":
+            ships[cfg.name] = built[-1]
+    return built

@@ -23,7 +23,7 @@ from pdfem.parallel.comm import SerialComm
 from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.coupler import ContactPair, Coupler
 from pdfem.forces.short_range import ShortRangeContact
-from pdfem.run.build_structures import build_structure
+from pdfem.run.build_structures import build_all
 from pdfem.fem.rigid import RigidBody
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
@@ -42,13 +42,13 @@ MAX_RANKS_LISTED = 16
 def build_structures(configs, out: Path, file: str, comm) -> list:
     """The case's structures on every rank, meshed once (by rank 0)."""
     if comm.size == 1:
-        return [build_structure(cfg, out, file) for cfg in configs]
+        return build_all(configs, out, file)
     # rank 0 meshes; if it fails, run_guarded aborts the job while the others wait in bcast
-    first = [build_structure(cfg, out, file) for cfg in configs] if comm.rank == 0 else None
+    first = build_all(configs, out, file) if comm.rank == 0 else None
     comm.bcast(True)
     if comm.rank == 0:
         return first
-    return [build_structure(cfg, out, file, remesh=False) for cfg in configs]
+    return build_all(configs, out, file, remesh=False)
 
 
 SPLIT_SHAPES = (Box, Cylinder, Sphere)
