@@ -75,9 +75,9 @@ class IceMaterialSection(Section):
     crushed_friction: Annotated[float, Number("-", ge=0.0, le=2.0)] = Field(
         0.0, description="Friction coefficient (-) of the \"ice\" law's crushed ice sliding on "
         "itself: a shear spring with Coulomb slip on every pushing crushed bond holds a crushed "
-        "layer in the contact (docs/ice_failure.md: edge crushing then reaches 1.3 "
-        "compressive_strength, but the damage reaches 2.5 thicknesses into the sheet). "
-        "Granular ice: 0.5-1 (tan of a 30-45 degree friction angle). Default: 0 (off).")
+        "layer in the contact, so that edge crushing stays at Korzhavin's pressures "
+        "(docs/ice_failure.md; without it the crushed layer flows out frictionless). Granular "
+        "ice: 0.5-1 (tan of a 30-45 degree friction angle). Default: 0 (off).")
 
     transition_rate: Annotated[float, Positive("1/s")] | None = Field(
         None, description="Ductile-to-brittle transition strain rate (1/s) of the \"ice\" law: "
