@@ -1,0 +1,47 @@
+"""The floating plate on a Winkler foundation (pdfem/validation/cases/winkler.py).
+
+References: Hertz 1884 / Wyman 1950 for the infinite plate on a foundation k (P / w0 =
+8 sqrt(D k), w(r) ~ kei(r / l), l = (D / k)^(1/4)); Morley 1968 for the finite plate the
+validation case compares against. SI units.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pdfem.validation import all_cases
+from pdfem.validation.cases import winkler
+from pdfem.validation.runner import run_validation
+
+D = 2.745e6 * 0.04**3 / (12.0 * (1.0 - 0.3**2))  # N m: the case's ice plate
+K = 1025.0 * 9.81                                  # N/m^3: rho_w g
+L0 = (D / K) ** 0.25                               # m: 0.200
+
+
+def test_morley_reference_is_hertz_for_a_large_plate():
+    """A free plate reaching 6 l each way from a small square punch (half-width l / 20) is the
+    infinite plate: its profile is kei(r / l) with l = (D / k)^(1/4) (measured: within 0.3 %),
+    and its P / w0 is Hertz's 8 sqrt(D k) for a point load, raised a little by the punch's
+    finite size (measured: 1.022)."""
+    stiff, x, w = winkler.morley_plate(6 * L0, 0.01, D, 0.3, K, 0.0025, L0 / 8)
+    assert 1.0 < stiff / (8.0 * math.sqrt(D * K)) < 1.04   # a punch is stiffer than a point
+    assert winkler.fit_length(x, w, L0) == pytest.approx(L0, rel=0.01)
+
+
+def test_quick_floating_plate_records_the_bending_deficit(tmp_path):
+    """The quick run (2 particles through h, a 0.8 m plate: edges 2 l from the load) against the
+    same finite plate with Morley elements: the peridynamic plate is too soft in bending
+    (docs/water.md, "Winkler plate"), P / w0 = 0.84 and l = 0.87 of the Kirchhoff plate's. The check records that deficit: it fails if the ice
+    law's bending stiffness or the water's foundation changes."""
+    cases = [c for c in all_cases() if c.name.startswith("floating_plate_winkler")]
+    assert len(cases) == 2
+    by_name = {r.name: r for r in run_validation(cases, tmp_path, quick=True)}
+    p = by_name["floating_plate_winkler"]
+    length = by_name["floating_plate_winkler_length"]
+    assert p.reference == pytest.approx(3024.0, rel=0.005)        # Morley, 0.940 x Hertz
+    assert length.reference == pytest.approx(0.2138, rel=0.005)
+    assert p.value / p.reference == pytest.approx(0.837, abs=0.02)
+    assert length.value / length.reference == pytest.approx(0.875, abs=0.02)
