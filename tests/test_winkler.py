@@ -36,8 +36,8 @@ def test_quick_floating_plate_records_the_bending_deficit(tmp_path):
     same finite plate with Morley elements: the peridynamic plate is too soft in bending
     (docs/water.md, "Winkler plate"), P / w0 = 0.84 and l = 0.87 of the Kirchhoff plate's. The check records that deficit: it fails if the ice
     law's bending stiffness or the water's foundation changes."""
-    cases = [c for c in all_cases() if c.name.startswith("floating_plate_winkler")]
-    assert len(cases) == 2
+    cases = list(winkler.CASES)   # not in `pdfem validate` until they pass (docs/water.md)
+    assert len(cases) == 2 and not {c.name for c in all_cases()} & {c.name for c in cases}
     by_name = {r.name: r for r in run_validation(cases, tmp_path, quick=True)}
     p = by_name["floating_plate_winkler"]
     length = by_name["floating_plate_winkler_length"]
