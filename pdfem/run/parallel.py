@@ -100,18 +100,25 @@ def reference(b) -> tuple:
     return b.gather(b.x0), b.gather(b.vol)
 
 
+def _say_split(say, name: str, how: str, owned, halo, nbrs, mb: float, ranks: int) -> None:
+    """Report a body's partition: its kind, particles and halo per rank, traffic per step."""
+    say(f"  partition of '{name}' over {ranks} ranks: {how}; particles per rank "
+        f"{int(owned.min()):,}-{int(owned.max()):,} (imbalance "
+        f"{owned.max() / owned.mean() - 1:.1e}), halo up to {int(halo.max()):,}, up to "
+        f"{int(nbrs.max())} neighbours, {mb:.3g} MB exchanged per step")
+    if ranks <= MAX_RANKS_LISTED:
+        for r in range(ranks):
+            say(f"    rank {r}: {int(owned[r]):,} particles, {int(halo[r]):,} halo, "
+                f"{int(nbrs[r])} neighbours")
+
+
 def _report_split(b, comm, say) -> None:
     """The partition of a body from the distributed set-up, as :func:`distribute` reports."""
     p = b.plan
     figures = comm.allgather((int(p.owned.sum()), int((~p.owned).sum()), len(p.recv)))
     owned, halo, nbrs = (np.array(v) for v in zip(*figures))
-    say(f"  partition of '{b.name}' over {comm.size} ranks: {b.partition_name} (distributed "
-        f"set-up); particles per rank {owned.min():,}-{owned.max():,} (imbalance "
-        f"{owned.max() / owned.mean() - 1:.1e}), halo up to {halo.max():,}, up to {nbrs.max()} "
-        f"neighbours, {halo.sum() * BYTES_PER_HALO_PARTICLE / 1e6:.3g} MB exchanged per step")
-    if comm.size <= MAX_RANKS_LISTED:
-        for r in range(comm.size):
-            say(f"    rank {r}: {owned[r]:,} particles, {halo[r]:,} halo, {nbrs[r]} neighbours")
+    _say_split(say, b.name, f"{b.partition_name} (distributed set-up)", owned, halo, nbrs,
+               halo.sum() * BYTES_PER_HALO_PARTICLE / 1e6, comm.size)
 
 
 def distribute(bodies: list, comm, say=lambda s: None) -> list:
@@ -127,14 +134,8 @@ def distribute(bodies: list, comm, say=lambda s: None) -> list:
             out.append(b)
             continue
         owner, st = choose_partition(b.x0, b.row_ptr, b.nbr, comm.size)
-        say(f"  partition of '{b.name}' over {comm.size} ranks: {st.name}; particles per rank "
-            f"{int(st.owned.min()):,}-{int(st.owned.max()):,} (imbalance {st.imbalance:.1e}), "
-            f"halo up to {int(st.halo.max()):,}, up to {int(st.neighbours.max())} neighbours, "
-            f"{st.bytes_per_step / 1e6:.3g} MB exchanged per step")
-        if comm.size <= MAX_RANKS_LISTED:
-            for r in range(comm.size):
-                say(f"    rank {r}: {int(st.owned[r]):,} particles, {int(st.halo[r]):,} halo, "
-                    f"{int(st.neighbours[r])} neighbours")
+        _say_split(say, b.name, st.name, st.owned, st.halo, st.neighbours,
+                   st.bytes_per_step / 1e6, comm.size)
         out.append(DistributedIce(b, owner, comm))
     return out
 
