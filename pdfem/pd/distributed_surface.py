@@ -18,7 +18,7 @@ import numba
 import numpy as np
 
 from pdfem.pd.chunk_kernels import FASTMATH
-from pdfem.pd.surface import _add_moments
+from pdfem.pd.surface import _add_moments, _bond_weight, _update_tensor
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -28,26 +28,9 @@ def _pass(x, row_ptr, nbr, xi_len, w0, vol, lo, hi, C, M, last, out):
     n = row_ptr.shape[0] - 1
     M[:] = 0.0
     for i in range(n):
-        xi0 = x[i, 0]
-        xi1 = x[i, 1]
-        xi2 = x[i, 2]
         for k in range(row_ptr[i], row_ptr[i + 1]):
             j = nbr[k]
-            a = x[j, 0] - xi0
-            b = x[j, 1] - xi1
-            cz = x[j, 2] - xi2
-            aa = a * a
-            bb = b * b
-            cc = cz * cz
-            ab = a * b
-            ac = a * cz
-            bc = b * cz
-            q = ((C[i, 0] + C[j, 0]) * aa + (C[i, 1] + C[j, 1]) * bb
-                 + (C[i, 2] + C[j, 2]) * cc + (C[i, 3] + C[j, 3]) * ab
-                 + (C[i, 4] + C[j, 4]) * ac + (C[i, 5] + C[j, 5]) * bc)
-            ln = xi_len[k]
-            f = min(hi, max(lo, 1.0 + 0.5 * q / (ln * ln)))
-            g = w0[k] * f
+            g, aa, bb, cc, ab, ac, bc = _bond_weight(x, i, j, C, xi_len[k], w0[k], lo, hi)
             if last:
                 out[k] = g
                 continue
@@ -56,15 +39,7 @@ def _pass(x, row_ptr, nbr, xi_len, w0, vol, lo, hi, C, M, last, out):
     if last:
         return
     for i in range(n):
-        m = M[i, 0] + M[i, 1] + M[i, 2]
-        if m > 0.0:
-            s7 = 7.5 / m
-            C[i, 0] -= s7 * M[i, 0] - 2.5
-            C[i, 1] -= s7 * M[i, 1] - 2.5
-            C[i, 2] -= s7 * M[i, 2] - 2.5
-            C[i, 3] -= 2.0 * s7 * M[i, 3]
-            C[i, 4] -= 2.0 * s7 * M[i, 4]
-            C[i, 5] -= 2.0 * s7 * M[i, 5]
+        _update_tensor(C, M, i)
 
 
 def distributed_surface_weights(x, row_ptr, nbr, xi_len, weight, vol, exchange,

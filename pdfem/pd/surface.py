@@ -59,6 +59,40 @@ def _add_moments(M, p, g, aa, bb, cc, ab, ac, bc):
     M[p, 5] += g * bc
 
 
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _bond_weight(x, i, j, C, ln, w0, lo, hi):
+    """The corrected weight of bond (i, j) from the tensors C (reference length ``ln``, weight
+    ``w0``, factor clipped to [lo, hi]) and the bond's second-moment products."""
+    a = x[j, 0] - x[i, 0]
+    b = x[j, 1] - x[i, 1]
+    cz = x[j, 2] - x[i, 2]
+    aa = a * a
+    bb = b * b
+    cc = cz * cz
+    ab = a * b
+    ac = a * cz
+    bc = b * cz
+    q = ((C[i, 0] + C[j, 0]) * aa + (C[i, 1] + C[j, 1]) * bb
+         + (C[i, 2] + C[j, 2]) * cc + (C[i, 3] + C[j, 3]) * ab
+         + (C[i, 4] + C[j, 4]) * ac + (C[i, 5] + C[j, 5]) * bc)
+    f = min(hi, max(lo, 1.0 + 0.5 * q / (ln * ln)))
+    return w0 * f, aa, bb, cc, ab, ac, bc
+
+
+@numba.njit(cache=True, fastmath=FASTMATH, inline="always")
+def _update_tensor(C, M, i):
+    """One fixed-point update of particle i's tensor C from its moments M."""
+    m = M[i, 0] + M[i, 1] + M[i, 2]
+    if m > 0.0:
+        s7 = 7.5 / m  # (5/2) * 3 / m
+        C[i, 0] -= s7 * M[i, 0] - 2.5
+        C[i, 1] -= s7 * M[i, 1] - 2.5
+        C[i, 2] -= s7 * M[i, 2] - 2.5
+        C[i, 3] -= 2.0 * s7 * M[i, 3]
+        C[i, 4] -= 2.0 * s7 * M[i, 4]
+        C[i, 5] -= 2.0 * s7 * M[i, 5]
+
+
 @numba.njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _corrected(x, row_ptr, nbr, xi_len, w0, vol, iterations, lo, hi, cb, ov_ptr, out):
     """The fixed-point iteration, as a race-free chunked pair loop (:mod:`pdfem.pd.workspace`):
@@ -78,26 +112,10 @@ def _corrected(x, row_ptr, nbr, xi_len, w0, vol, iterations, lo, hi, cb, ov_ptr,
             M[r0:r1] = 0.0
             ov[base:ov_ptr[c + 1]] = 0.0
             for i in range(r0, r1):
-                xi0 = x[i, 0]
-                xi1 = x[i, 1]
-                xi2 = x[i, 2]
                 for k in range(row_ptr[i], row_ptr[i + 1]):
                     j = nbr[k]
-                    a = x[j, 0] - xi0
-                    b = x[j, 1] - xi1
-                    cz = x[j, 2] - xi2
-                    aa = a * a
-                    bb = b * b
-                    cc = cz * cz
-                    ab = a * b
-                    ac = a * cz
-                    bc = b * cz
-                    q = ((C[i, 0] + C[j, 0]) * aa + (C[i, 1] + C[j, 1]) * bb
-                         + (C[i, 2] + C[j, 2]) * cc + (C[i, 3] + C[j, 3]) * ab
-                         + (C[i, 4] + C[j, 4]) * ac + (C[i, 5] + C[j, 5]) * bc)
-                    ln = xi_len[k]
-                    f = min(hi, max(lo, 1.0 + 0.5 * q / (ln * ln)))
-                    g = w0[k] * f
+                    g, aa, bb, cc, ab, ac, bc = _bond_weight(x, i, j, C, xi_len[k], w0[k], lo,
+                                                             hi)
                     if last:  # w0[k] is read for the last time here, so out may be w0
                         out[k] = g
                         continue
@@ -118,15 +136,7 @@ def _corrected(x, row_ptr, nbr, xi_len, w0, vol, iterations, lo, hi, cb, ov_ptr,
                     for col in range(6):
                         M[p, col] += ov[ov_ptr[c] + p - s, col]
             for i in range(r0, r1):
-                m = M[i, 0] + M[i, 1] + M[i, 2]
-                if m > 0.0:
-                    s7 = 7.5 / m  # (5/2) * 3 / m
-                    C[i, 0] -= s7 * M[i, 0] - 2.5
-                    C[i, 1] -= s7 * M[i, 1] - 2.5
-                    C[i, 2] -= s7 * M[i, 2] - 2.5
-                    C[i, 3] -= 2.0 * s7 * M[i, 3]
-                    C[i, 4] -= 2.0 * s7 * M[i, 4]
-                    C[i, 5] -= 2.0 * s7 * M[i, 5]
+                _update_tensor(C, M, i)
 
 
 def surface_corrected_weights(
