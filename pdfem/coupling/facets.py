@@ -80,28 +80,64 @@ def pseudo_normals(points: np.ndarray, topo: FacetTopology):
         (T, 3) face normals (right-hand rule = outward), (E, 3) edge pseudo-normals (the mean
         of the two faces' normals; the face's own on a boundary edge) and (Ns, 3) vertex
         pseudo-normals (incident face normals weighted by the face's angle at the vertex).
+
+    Raises
+    ------
+    ValueError
+        If a facet has zero area.
     """
-    tri = topo.triangles
-    x = points[tri]                                   # (T, 3 nodes, 3)
-    n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
-    area2 = np.linalg.norm(n, axis=1)
-    if np.any(area2 <= 0.0):
-        raise ValueError(f"{int((area2 <= 0).sum())} contact facets have zero area")
-    face = n / area2[:, None]
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    face = np.empty((len(topo.triangles), 3))
     edge = np.zeros((topo.n_edges, 3))
-    np.add.at(edge, topo.tri_edges.ravel(), np.repeat(face, 3, axis=0))
-    edge /= np.linalg.norm(edge, axis=1)[:, None]
-    vertex = np.zeros((len(points), 3))
-    for k in range(3):
-        a = x[:, (k + 1) % 3] - x[:, k]
-        b = x[:, (k + 2) % 3] - x[:, k]
-        cos = np.einsum("ij,ij->i", a, b) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
-        angle = np.arccos(np.clip(cos, -1.0, 1.0))
-        np.add.at(vertex, tri[:, k], angle[:, None] * face)
-    norm = np.linalg.norm(vertex, axis=1)
-    used = norm > 0.0
-    vertex[used] /= norm[used, None]
+    vertex = np.zeros((len(pts), 3))
+    degenerate = _pseudo_normals(pts, topo.triangles, topo.tri_edges, face, edge, vertex)
+    if degenerate:
+        raise ValueError(f"{degenerate} contact facets have zero area")
     return face, edge, vertex
+
+
+@numba.njit(cache=True)
+def _pseudo_normals(pts, tri, tri_edges, face, edge, vertex):
+    """Fill ``face``, ``edge`` (zeroed) and ``vertex`` (zeroed) as :func:`pseudo_normals`
+    describes; returns the number of zero-area facets (their normals are left zero). Runs
+    every coupling step on every contact surface, so it is one pass without temporaries."""
+    degenerate = 0
+    for t in range(tri.shape[0]):
+        a, b, c = tri[t, 0], tri[t, 1], tri[t, 2]
+        u0, u1, u2 = pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1], pts[b, 2] - pts[a, 2]
+        w0, w1, w2 = pts[c, 0] - pts[a, 0], pts[c, 1] - pts[a, 1], pts[c, 2] - pts[a, 2]
+        nx = u1 * w2 - u2 * w1
+        ny = u2 * w0 - u0 * w2
+        nz = u0 * w1 - u1 * w0
+        area2 = np.sqrt(nx * nx + ny * ny + nz * nz)
+        if area2 <= 0.0:
+            degenerate += 1
+            face[t, :] = 0.0
+            continue
+        face[t, 0], face[t, 1], face[t, 2] = nx / area2, ny / area2, nz / area2
+        for k in range(3):
+            e = tri_edges[t, k]
+            edge[e, 0] += face[t, 0]
+            edge[e, 1] += face[t, 1]
+            edge[e, 2] += face[t, 2]
+            # the face's angle at its k-th corner weighs its normal in the vertex's
+            node, q, r = tri[t, k], tri[t, (k + 1) % 3], tri[t, (k + 2) % 3]
+            q0, q1, q2 = pts[q, 0] - pts[node, 0], pts[q, 1] - pts[node, 1], pts[q, 2] - pts[node, 2]
+            r0, r1, r2 = pts[r, 0] - pts[node, 0], pts[r, 1] - pts[node, 1], pts[r, 2] - pts[node, 2]
+            cos = ((q0 * r0 + q1 * r1 + q2 * r2)
+                   / (np.sqrt(q0 * q0 + q1 * q1 + q2 * q2) * np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)))
+            angle = np.arccos(min(1.0, max(-1.0, cos)))
+            vertex[node, 0] += angle * face[t, 0]
+            vertex[node, 1] += angle * face[t, 1]
+            vertex[node, 2] += angle * face[t, 2]
+    for rows in (edge, vertex):
+        for i in range(rows.shape[0]):
+            norm = np.sqrt(rows[i, 0] ** 2 + rows[i, 1] ** 2 + rows[i, 2] ** 2)
+            if norm > 0.0:
+                rows[i, 0] /= norm
+                rows[i, 1] /= norm
+                rows[i, 2] /= norm
+    return degenerate
 
 
 @numba.njit(cache=True, inline="always")
