@@ -164,7 +164,7 @@ def _check_csv_against_file(csv: Path, h5: Path) -> int:
         for j, name in enumerate(header[1:], start=1):
             path, unit = name.split(" [")
             group, key = path.rsplit("/", 1)
-            assert group.split("/")[0] in ("loads", "contacts", "monitors")
+            assert group.split("/")[0] in ("loads", "contacts", "monitors", "shaft", "motions")
             assert unit.rstrip("]") == post.UNITS[key.rsplit("_", 1)[0] if key[-2:] in
                                                   ("_x", "_y", "_z") else key]
             if key in f[group]:
@@ -189,6 +189,28 @@ def test_csv_round_trips(coupled, synthetic, tmp_path, capsys):
     assert post.write_csv(post.load_results(synthetic["path"]), csv)[-1] \
         == "monitors/probe/von_mises [Pa]"
     assert _check_csv_against_file(csv, synthetic["path"]) == 1 + 7 + 4
+
+
+def test_csv_holds_shaft_loads_and_ship_motions():
+    """A propeller's shaft history and a free ship's motions are CSV columns too, with their
+    units (N m for torques, m for positions, rad for angles)."""
+    t = np.array([1e-3, 2e-3, 3e-3])
+    results = {"histories": {
+        "shaft/prop": {"time": t, "ice_torque": np.array([1.0, 2.0, 3.0]),
+                       "ice_force": np.arange(9.0).reshape(3, 3)},
+        "shaft/prop.blade1": {"time": t, "spindle_torque": np.array([0.1, 0.2, 0.3])},
+        "motions/hull": {"time": t, "position": np.ones((3, 3)), "rotation": np.zeros((3, 3))},
+        "energy": {"time": t, "kinetic": np.zeros(3)}}}
+    names, table = post.history_table(results)
+    assert names == ["time [s]", "shaft/prop/ice_force_x [N]", "shaft/prop/ice_force_y [N]",
+                     "shaft/prop/ice_force_z [N]", "shaft/prop/ice_torque [N m]",
+                     "shaft/prop.blade1/spindle_torque [N m]", "motions/hull/position_x [m]",
+                     "motions/hull/position_y [m]", "motions/hull/position_z [m]",
+                     "motions/hull/rotation_x [rad]", "motions/hull/rotation_y [rad]",
+                     "motions/hull/rotation_z [rad]"]
+    np.testing.assert_array_equal(table[:, 0], t)
+    np.testing.assert_array_equal(table[:, 4], [1.0, 2.0, 3.0])
+    np.testing.assert_array_equal(table[:, 3], [2.0, 5.0, 8.0])
 
 
 def test_plots_are_written(coupled, tmp_path, capsys):

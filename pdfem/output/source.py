@@ -48,7 +48,8 @@ UNITS: dict[str, str] = {
     "thrust": "N", "ice_force": "N", "force_blade": "N", "shaft_power": "W", "shaft_work": "J",
     "ice_work": "J", "energy_change": "J", "shaft_angular_impulse": "N m s",
     "ice_angular_impulse": "N m s", "angular_momentum_change": "kg m^2/s", "max_von_mises": "Pa",
-    "max_von_mises_location": "m", "root_moment": "N m",
+    "max_von_mises_location": "m", "root_moment": "N m", "stress": "Pa",
+    "attached_impulse": "N s", "attached_work": "J", "external_impulse": "N s",
 }
 """Unit of each field or history key that pdfem writes."""
 

@@ -1,4 +1,5 @@
-"""The per-step histories of a results file (loads, contact pairs, monitors) as one CSV table.
+"""The per-step histories of a results file (loads, contact pairs, monitors, shaft loads, ship
+motions) as one CSV table.
 
 :func:`history_table` puts the histories side by side on the union of their step times;
 :func:`write_csv` writes that table with a header of column names and units.
@@ -10,14 +11,11 @@ import os
 
 import numpy as np
 
+from pdfem.output.source import UNITS
 from pdfem.post.groups import AXES
 
-LOAD_PREFIXES = ("loads/", "contacts/", "monitors/")
+LOAD_PREFIXES = ("loads/", "contacts/", "monitors/", "shaft/", "motions/")
 """History groups written at every coupling step (the CSV columns)."""
-
-UNITS = {"force": "N", "moment": "N m", "contacts": "-", "applied": "N", "u": "m", "von_mises": "Pa",
-         "area": "m^2", "stress": "Pa"}
-"""Unit of each per-step history key (``-``: a count)."""
 
 
 def _columns_of(group: str, key: str, a: np.ndarray) -> list[tuple[str, np.ndarray]]:
@@ -43,7 +41,8 @@ def history_table(results: dict) -> tuple[list[str], np.ndarray]:
     -------
     names : list of str
         ``"time [s]"`` then one name per column, ``<group>/<key>[_x|_y|_z] [<unit>]``, e.g.
-        ``loads/panel/force_x [N]``; groups in the order loads, contacts, monitors.
+        ``loads/panel/force_x [N]``; groups in the order loads, contacts, monitors, shaft
+        loads (:mod:`pdfem.fem.shaft_loads`), ship motions.
     table : numpy.ndarray
         (K, len(names)) values; rows are the union of the groups' step times (the same
         steps in a file from :func:`pdfem.run.driver.run_case`), NaN where a group has no row.
