@@ -84,3 +84,33 @@ def test_group_loads_are_the_steady_means_of_the_patch_histories():
         np.testing.assert_allclose(g[name]["force"], f, rtol=1e-12)
         assert g[name]["resistance"] == pytest.approx(-f[0], rel=1e-12)
     assert sum(v["resistance"] for v in g.values()) == pytest.approx(8.0, rel=1e-12)
+
+
+def test_icebreaking_entries_measure_a_constructed_run(tmp_path):
+    """The two ``pdfem validate`` entries of the tiny case on a constructed run: the steady
+    mean of a resistance history against Lindqvist (1989) at zero speed (R_c + R_b + R_s of
+    the hand computation above: 11.2759 + 3.40278 + 1.50093 = 16.1796 N), and the share of the
+    channel's particles (|y| < B/2 = 0.15 m, x from the sheet's edge 0.76 m to the stem's end
+    position less the entrance length) more than one thickness (0.03 m) below the sheet's
+    bottom (-0.027 m)."""
+    from pathlib import Path
+    from pdfem.validation.case import Outcome
+    from pdfem.validation.cases import icebreaking
+    case = load_validation_case("icebreaker_tiny.toml")
+    assert icebreaking.resistance_reference(case) == pytest.approx(16.1796, rel=1e-4)
+    assert icebreaking.lindqvist_figures(case)["total"] == pytest.approx(36.9590, rel=1e-4)
+    t = np.linspace(0.0, 1.2, 25)
+    r = np.where(t > 0.13, 12.0, 0.0)
+    force = np.stack([-r, np.zeros_like(r), r], axis=1)
+    # the stem (x = 0.75 m on the hull) has moved 0.025 + 0.5 (1.2 - 0.1) = 0.575 m (the path):
+    # at 1.325 m; the entrance is
+    # 0.15 / tan 30 deg = 0.2598 m, so the channel reaches x = 1.065 m
+    x0 = np.array([[0.8, 0.0, -0.01], [1.0, 0.1, -0.01], [1.06, -0.14, -0.02],
+                   [1.07, 0.0, -0.01], [0.9, 0.16, -0.01], [0.7, 0.0, -0.01]])
+    u = np.zeros((2, len(x0), 3))
+    u[-1, :, 2] = [-0.2, -0.05, -0.01, -0.2, -0.2, -0.2]   # 1st and 2nd under, 3rd near the top
+    data = {"time": t[[0, -1]], "histories": {"loads/hull": {"time": t, "force": force}},
+            "ice": {"sheet": {"x0": x0, "u": u}}}
+    outcome = Outcome(case, data, Path(tmp_path), 0.0)
+    assert icebreaking.mean_resistance(outcome) == pytest.approx(12.0, rel=1e-12)
+    assert icebreaking.submerged_fraction(outcome) == pytest.approx(2.0 / 3.0, rel=1e-12)

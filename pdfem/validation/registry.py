@@ -30,6 +30,7 @@ MODULES: tuple[str, ...] = (
     "spinning",            # spinning_bar*.toml: radial stress, flapwise frequency (Southwell)
     "shaft_energy",        # shaft_energy.toml: shaft + ice work and angular impulse balances
     "milling",             # propeller_milling_tiny.toml: impulse balance, torque spectrum at Z n
+    "icebreaking",         # icebreaker_tiny.toml: resistance vs Lindqvist, pieces under the hull
 )
 """The case modules, in the order of the report."""
 
