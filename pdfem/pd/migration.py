@@ -46,8 +46,9 @@ def _particle_columns(body, owner: np.ndarray) -> tuple[list, list]:
         floats += [("rate_theta", r.theta), ("rate_factors", r.factors)]
     ints = [("gid", body.gid), ("owner", owner), ("nofail", body.nofail),
             ("fixed", body.fixed), ("member", member)]
-    return ([(k, v.reshape(n, -1).astype(np.float64)) for k, v in floats if v is not None],
-            [(k, v.reshape(n, -1).astype(np.int64)) for k, v in ints])
+    col = lambda v: v if v.ndim == 2 else v[:, None]  # noqa: E731 (also for n = 0)
+    return ([(k, col(v).astype(np.float64)) for k, v in floats if v is not None],
+            [(k, col(v).astype(np.int64)) for k, v in ints])
 
 
 def _bond_columns(body) -> tuple[np.ndarray, np.ndarray]:
@@ -196,8 +197,9 @@ def halo_lists(row_ptr: np.ndarray, nbr: np.ndarray, owned: np.ndarray,
     a = np.concatenate([i_of[owned[i_of] & ~owned[j_of]], j_of[owned[j_of] & ~owned[i_of]]])
     q = np.concatenate([owner[j_of[owned[i_of] & ~owned[j_of]]],
                         owner[i_of[owned[j_of] & ~owned[i_of]]]])
-    key = np.unique(q * len(owned) + a)
-    send = {int(r): key[key // len(owned) == r] % len(owned) for r in np.unique(q)}
+    n = max(len(owned), 1)
+    key = np.unique(q * n + a)
+    send = {int(r): key[key // n == r] % n for r in np.unique(q)}
     halo = np.flatnonzero(~owned)
     recv = {int(r): halo[owner[halo] == r] for r in np.unique(owner[halo])}
     return send, recv
