@@ -51,15 +51,15 @@ def _particle_columns(body, owner: np.ndarray) -> tuple[list, list]:
             [(k, col(v).astype(np.int64)) for k, v in ints])
 
 
-def _bond_columns(body) -> tuple[np.ndarray, np.ndarray]:
-    """Per-bond state as one float64 (P, k) and one int64 (P, 2) (global i, j) matrix."""
-    i_of = np.repeat(np.arange(body.n), np.diff(body.row_ptr))
-    ints = np.stack([body.gid[i_of], body.gid[body.nbr]], axis=1).astype(np.int64)
-    cols = [body.xi_len[:, None], body.weight.astype(np.float64)[:, None]]
+def _bond_columns(body, i_of: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The state of the bonds ``rows`` as one float64 (k, c) and one int64 (k, 2) (global i,
+    j) matrix; ``i_of`` the lower end of every local bond."""
+    ints = np.stack([body.gid[i_of[rows]], body.gid[body.nbr[rows]]], axis=1).astype(np.int64)
+    cols = [body.xi_len[rows, None], body.weight[rows].astype(np.float64)[:, None]]
     if body.rest is not None:
-        cols.append(body.rest.astype(np.float64)[:, None])
+        cols.append(body.rest[rows].astype(np.float64)[:, None])
     if body.shear is not None:
-        cols.append(body.shear.slip.astype(np.float64))
+        cols.append(body.shear.slip[rows].astype(np.float64))
     return np.concatenate(cols, axis=1), ints
 
 
@@ -87,13 +87,17 @@ def _send_all(comm, parts: dict, width_f: int, width_i: int) -> tuple[np.ndarray
 
 def _by_rank(rows: np.ndarray, dest: np.ndarray, floats: np.ndarray, ints: np.ndarray) -> dict:
     """``{q: (floats[rows to q], ints[rows to q])}`` for the (row, dest) pairs given."""
-    order = np.lexsort((rows, dest))
+    order = np.argsort(dest, kind="stable")
     rows, dest = rows[order], dest[order]
-    out = {}
-    for q in np.unique(dest):
-        sel = rows[dest == q]
-        out[int(q)] = (floats[sel], ints[sel])
-    return out
+    bounds = np.flatnonzero(np.diff(dest)) + 1
+    return {int(d[0]): (floats[r], ints[r]) for r, d in zip(np.split(rows, bounds),
+                                                            np.split(dest, bounds)) if len(d)}
+
+
+def _unique(keys: np.ndarray) -> np.ndarray:
+    """Sorted unique int64 ``keys`` (by sorting: faster than numpy's hashing here)."""
+    keys = np.sort(keys)
+    return keys[np.concatenate([[True], keys[1:] != keys[:-1]])] if len(keys) else keys
 
 
 def migrate(body, owned: np.ndarray, owner: np.ndarray, comm):
@@ -125,19 +129,20 @@ def migrate(body, owned: np.ndarray, owner: np.ndarray, comm):
     i_of = np.repeat(np.arange(body.n), np.diff(body.row_ptr))
     j_of = body.nbr.astype(np.int64)
     own = np.flatnonzero(owned)
-    a = np.concatenate([own, i_of[owned[i_of]], j_of[owned[j_of]]])
-    q = np.concatenate([owner[own], owner[j_of[owned[i_of]]], owner[i_of[owned[j_of]]]])
-    key = np.unique(a * comm.size + q)
-    pf, pi = _send_all(comm, _by_rank(key // comm.size, key % comm.size, pf, pi),
-                       pf.shape[1], pi.shape[1])
+    split = owner[i_of] != owner[j_of]  # bonds whose ends' new owners differ
+    fi, fj = split & owned[i_of], split & owned[j_of]
+    key = _unique(np.concatenate([i_of[fi] * comm.size + owner[j_of[fi]],
+                                  j_of[fj] * comm.size + owner[i_of[fj]]]))
+    a = np.concatenate([own, key // comm.size])
+    q = np.concatenate([owner[own], key % comm.size])
+    pf, pi = _send_all(comm, _by_rank(a, q, pf, pi), pf.shape[1], pi.shape[1])
     # bonds: from the owner of the lower end, to the new owners of both ends
-    bf, bi = _bond_columns(body)
     counted = np.flatnonzero(owned[i_of])
-    rows = np.concatenate([counted, counted])
-    dest = np.concatenate([owner[i_of[counted]], owner[j_of[counted]]])
-    key = np.unique(rows * comm.size + dest)
-    bf, bi = _send_all(comm, _by_rank(key // comm.size, key % comm.size, bf, bi),
-                       bf.shape[1], bi.shape[1])
+    bf, bi = _bond_columns(body, i_of, counted)
+    other = np.flatnonzero(split[counted])
+    rows = np.concatenate([np.arange(len(counted)), other])
+    dest = np.concatenate([owner[i_of[counted]], owner[j_of[counted[other]]]])
+    bf, bi = _send_all(comm, _by_rank(rows, dest, bf, bi), bf.shape[1], bi.shape[1])
     return _assemble(body, fcols, icols, pf, pi, bf, bi, comm.rank)
 
 
@@ -155,7 +160,9 @@ def _assemble(body, fcols, icols, pf, pi, bf, bi, rank: int):
     for name, v in icols:
         fields[name] = pi[:, c:c + v.shape[1]]
         c += v.shape[1]
-    order = np.lexsort((bi[:, 1], bi[:, 0]))
+    big = int(gid[-1]) + 1 if n else 1  # (i, j) as one key i * big + j while it fits
+    order = (np.argsort(bi[:, 0] * big + bi[:, 1]) if big < 3_000_000_000
+             else np.lexsort((bi[:, 1], bi[:, 0])))
     bf, bi = bf[order], bi[order]
     li, lj = np.searchsorted(gid, bi[:, 0]), np.searchsorted(gid, bi[:, 1])
     row_ptr = np.concatenate([[0], np.cumsum(np.bincount(li, minlength=n))]).astype(np.int64)
@@ -198,7 +205,7 @@ def halo_lists(row_ptr: np.ndarray, nbr: np.ndarray, owned: np.ndarray,
     q = np.concatenate([owner[j_of[owned[i_of] & ~owned[j_of]]],
                         owner[i_of[owned[j_of] & ~owned[i_of]]]])
     n = max(len(owned), 1)
-    key = np.unique(q * n + a)
+    key = _unique(q * n + a)
     send = {int(r): key[key // n == r] % n for r in np.unique(q)}
     halo = np.flatnonzero(~owned)
     recv = {int(r): halo[owner[halo] == r] for r in np.unique(owner[halo])}
