@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import numba
 import numpy as np
 
 from pdfem.pd.crushed_shear import CrushedShear
@@ -85,19 +86,37 @@ def _send_all(comm, parts: dict, width_f: int, width_i: int) -> tuple[np.ndarray
     return np.concatenate(fl), np.concatenate(it)
 
 
-def _by_rank(rows: np.ndarray, dest: np.ndarray, floats: np.ndarray, ints: np.ndarray) -> dict:
-    """``{q: (floats[rows to q], ints[rows to q])}`` for the (row, dest) pairs given."""
-    order = np.argsort(dest, kind="stable")
-    rows, dest = rows[order], dest[order]
-    bounds = np.flatnonzero(np.diff(dest)) + 1
-    return {int(d[0]): (floats[r], ints[r]) for r, d in zip(np.split(rows, bounds),
-                                                            np.split(dest, bounds)) if len(d)}
+def _destinations(dest: np.ndarray, size: int) -> np.ndarray:
+    """The ranks that occur in ``dest`` (ascending; a count per rank, no sort)."""
+    return np.flatnonzero(np.bincount(dest, minlength=size))
 
 
-def _unique(keys: np.ndarray) -> np.ndarray:
-    """Sorted unique int64 ``keys`` (by sorting: faster than numpy's hashing here)."""
-    keys = np.sort(keys)
-    return keys[np.concatenate([[True], keys[1:] != keys[:-1]])] if len(keys) else keys
+@numba.njit(cache=True)
+def _local_numbers(gid, query):
+    """Position of each of ``query`` in the ascending unique ``gid`` (every query is in it),
+    by an open-addressing hash table (one or two probes instead of a binary search)."""
+    n = gid.shape[0]
+    bits = 1
+    while (1 << bits) < 2 * n:
+        bits += 1
+    mask = (1 << bits) - 1
+    keys = np.full(mask + 1, -1, dtype=np.int64)
+    vals = np.empty(mask + 1, dtype=np.int64)
+    mult = np.uint64(11400714819323198485)  # Fibonacci hashing
+    shift = np.uint64(64 - bits)
+    for k in range(n):
+        h = np.int64((np.uint64(gid[k]) * mult) >> shift)
+        while keys[h] != -1:
+            h = (h + 1) & mask
+        keys[h] = gid[k]
+        vals[h] = k
+    out = np.empty(query.shape[0], dtype=np.int32)
+    for k in range(query.shape[0]):
+        h = np.int64((np.uint64(query[k]) * mult) >> shift)
+        while keys[h] != query[k]:
+            h = (h + 1) & mask
+        out[k] = vals[h]
+    return out
 
 
 def migrate(body, owned: np.ndarray, owner: np.ndarray, comm):
@@ -125,24 +144,32 @@ def migrate(body, owned: np.ndarray, owner: np.ndarray, comm):
     fcols, icols = _particle_columns(body, owner)
     pf = np.concatenate([v for _, v in fcols], axis=1)
     pi = np.concatenate([v for _, v in icols], axis=1)
+    i_of = np.repeat(np.arange(body.n, dtype=np.int32), np.diff(body.row_ptr))
+    oi, oj = owner[i_of], owner[body.nbr]
+    counted = owned[i_of]  # bonds whose lower end this rank owns
     # particles: to the new owner, and to the new owners of their partners (as halo)
-    i_of = np.repeat(np.arange(body.n), np.diff(body.row_ptr))
-    j_of = body.nbr.astype(np.int64)
-    own = np.flatnonzero(owned)
-    split = owner[i_of] != owner[j_of]  # bonds whose ends' new owners differ
-    fi, fj = split & owned[i_of], split & owned[j_of]
-    key = _unique(np.concatenate([i_of[fi] * comm.size + owner[j_of[fi]],
-                                  j_of[fj] * comm.size + owner[i_of[fj]]]))
-    a = np.concatenate([own, key // comm.size])
-    q = np.concatenate([owner[own], key % comm.size])
-    pf, pi = _send_all(comm, _by_rank(a, q, pf, pi), pf.shape[1], pi.shape[1])
-    # bonds: from the owner of the lower end, to the new owners of both ends
-    counted = np.flatnonzero(owned[i_of])
-    bf, bi = _bond_columns(body, i_of, counted)
-    other = np.flatnonzero(split[counted])
-    rows = np.concatenate([np.arange(len(counted)), other])
-    dest = np.concatenate([owner[i_of[counted]], owner[j_of[counted[other]]]])
-    bf, bi = _send_all(comm, _by_rank(rows, dest, bf, bi), bf.shape[1], bi.shape[1])
+    cross = oi != oj
+    fi, fj = cross & counted, cross & owned[body.nbr]
+    parts = {}
+    for q in _destinations(np.concatenate([owner[owned], oj[fi], oi[fj]]), comm.size):
+        mark = owned & (owner == q)
+        mark[i_of[fi & (oj == q)]] = True
+        mark[body.nbr[fj & (oi == q)]] = True
+        sel = np.flatnonzero(mark & owned)
+        parts[int(q)] = (pf[sel], pi[sel])
+    del fi, fj
+    pf, pi = _send_all(comm, parts, pf.shape[1], pi.shape[1])
+    # bonds: from the owner of the lower end, to the new owners of both ends (each rank's
+    # part in the bond order, which is ascending global (i, j))
+    parts = {}
+    for q in _destinations(np.concatenate([oi[counted], oj[counted & cross]]), comm.size):
+        sel = np.flatnonzero(counted & ((oi == q) | (oj == q)))
+        parts[int(q)] = _bond_columns(body, i_of, sel)
+    width = parts[next(iter(parts))][0].shape[1] if parts else 2 + (body.rest is not None) + \
+        3 * (body.shear is not None)
+    del i_of, oi, oj, counted, cross
+    bf, bi = _send_all(comm, parts, width, 2)
+    del parts
     return _assemble(body, fcols, icols, pf, pi, bf, bi, comm.rank)
 
 
@@ -160,12 +187,16 @@ def _assemble(body, fcols, icols, pf, pi, bf, bi, rank: int):
     for name, v in icols:
         fields[name] = pi[:, c:c + v.shape[1]]
         c += v.shape[1]
+    # each sender's part is in global (i, j) order: a stable sort merges the runs
     big = int(gid[-1]) + 1 if n else 1  # (i, j) as one key i * big + j while it fits
-    order = (np.argsort(bi[:, 0] * big + bi[:, 1]) if big < 3_000_000_000
+    order = (np.argsort(bi[:, 0] * big + bi[:, 1], kind="stable") if big < 3_000_000_000
              else np.lexsort((bi[:, 1], bi[:, 0])))
-    bf, bi = bf[order], bi[order]
-    li, lj = np.searchsorted(gid, bi[:, 0]), np.searchsorted(gid, bi[:, 1])
-    row_ptr = np.concatenate([[0], np.cumsum(np.bincount(li, minlength=n))]).astype(np.int64)
+    bf, gi, gj = bf[order], bi[order, 0], bi[order, 1]
+    del order, bi
+    row_ptr = np.searchsorted(gi, np.append(gid, np.iinfo(np.int64).max)).astype(np.int64)
+    row_ptr[-1] = len(gi)
+    lj = _local_numbers(gid, gj)
+    del gi, gj
     new_owner = fields["owner"][:, 0]
     owned = new_owner == rank
     vec = lambda k: np.ascontiguousarray(fields[k])  # noqa: E731
@@ -188,7 +219,7 @@ def _assemble(body, fcols, icols, pf, pi, bf, bi, rank: int):
     local = dataclasses.replace(
         body, x0=vec("x0"), y=vec("y"), v=vec("v"), f=vec("f"), vol=sca("vol"), m=sca("m"),
         theta=sca("theta"), nofail=sca("nofail").astype(np.uint8),
-        fixed=sca("fixed").astype(bool), row_ptr=row_ptr, nbr=lj.astype(np.int32),
+        fixed=sca("fixed").astype(bool), row_ptr=row_ptr, nbr=lj,
         xi_len=np.ascontiguousarray(bf[:, 0]),
         weight=np.ascontiguousarray(bf[:, 1], dtype=np.float32), flags=None,
         constraints=constraints, rest=rest, shear=shear, rates=rates, gid=gid)
@@ -199,14 +230,16 @@ def halo_lists(row_ptr: np.ndarray, nbr: np.ndarray, owned: np.ndarray,
                owner: np.ndarray) -> tuple[dict, dict]:
     """``send``, ``recv`` of a halo plan (neighbour rank -> local indices, ascending = global
     order): what each neighbour holds of ours as halo, and our halo by owner."""
-    i_of = np.repeat(np.arange(len(owned)), np.diff(row_ptr))
-    j_of = nbr.astype(np.int64)
-    a = np.concatenate([i_of[owned[i_of] & ~owned[j_of]], j_of[owned[j_of] & ~owned[i_of]]])
-    q = np.concatenate([owner[j_of[owned[i_of] & ~owned[j_of]]],
-                        owner[i_of[owned[j_of] & ~owned[i_of]]]])
-    n = max(len(owned), 1)
-    key = _unique(q * n + a)
-    send = {int(r): key[key // n == r] % n for r in np.unique(q)}
+    n = len(owned)
+    i_of = np.repeat(np.arange(n, dtype=np.int32), np.diff(row_ptr))
+    oi, oj = owner[i_of], owner[nbr]
+    fi, fj = owned[i_of] & ~owned[nbr], owned[nbr] & ~owned[i_of]
+    send = {}
+    for q in _destinations(np.concatenate([oj[fi], oi[fj]]), int(owner.max(initial=0)) + 1):
+        mark = np.zeros(n, dtype=bool)
+        mark[i_of[fi & (oj == q)]] = True
+        mark[nbr[fj & (oi == q)]] = True
+        send[int(q)] = np.flatnonzero(mark)
     halo = np.flatnonzero(~owned)
     recv = {int(r): halo[owner[halo] == r] for r in np.unique(owner[halo])}
     return send, recv

@@ -39,10 +39,16 @@ class Rebalancing:
     rebalance_seconds = 0.0
     """Wall time (s) spent in re-partitions and migrations."""
 
+    _work: tuple[int, int] = (-1, 0)  # (layout_version, work) of the last count
+
     def work(self) -> int:
-        """This rank's work: the bond count of its owned particles."""
-        b = self.body
-        return int(bond_work(b.row_ptr, b.nbr, b.n)[self.plan.owned].sum())
+        """This rank's work: the bond count of its owned particles (counted once per layout:
+        bonds only break, they never move between particles)."""
+        if self._work[0] != self.layout_version:
+            b = self.body
+            self._work = (self.layout_version,
+                          int(bond_work(b.row_ptr, b.nbr, b.n)[self.plan.owned].sum()))
+        return self._work[1]
 
     def imbalance(self) -> float:
         """The largest rank's work over the mean work (-, 1 = balanced; collective)."""
