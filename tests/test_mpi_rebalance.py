@@ -224,3 +224,47 @@ def test_rebalance_mid_run_matches_serial(tmp_path, ranks):
     assert coupled["moved"] == "1,20,40,60" and int(coupled["layout"]) == 4
     assert float(coupled["first"]) <= 1.01 and float(coupled["last"]) <= 1.01
     assert rcb["same"] == "True" and float(rcb["imb"]) <= 1.0 + 2 * int(rcb["maxw"]) / float(rcb["mean"])
+
+
+CASE = """
+[run]
+end_time = 1e-3
+{extra}
+[[ice]]
+name = "floe"
+dx = 0.02
+shape = {{ box = {{ min = [0.0, 0.0, 0.0], max = [0.2, 0.2, 0.04] }} }}
+material = {{ fracture_energy = 3.0 }}
+"""
+
+
+@pytest.mark.parametrize("extra, field", [
+    ("rebalance_imbalance = 0.5", "run.rebalance_imbalance"),
+    ("rebalance_every = 10\noutput_per_rank = true", "run.output_per_rank"),
+    ("rebalance_imbalance = 1.2\nshort_range_contact = true", "run.short_range_contact")])
+def test_bad_rebalance_settings_are_refused(extra, field):
+    """A factor <= 1 cannot be exceeded meaningfully; per-rank output and short-range contact
+    keep rank-local particle lists that a re-partition would invalidate."""
+    from pdfem.case.loader import parse_case
+    from pdfem.errors import InputError
+
+    with pytest.raises(InputError) as err:
+        parse_case(CASE.format(extra=extra), "case.toml")
+    assert err.value.field == field and ("rebalance" in err.value.message or "> 1" in err.value.message)
+
+
+def test_rebalance_with_crushed_ice_is_refused():
+    """Crushed ice needs short-range contact, whose tables do not follow a migration."""
+    from types import SimpleNamespace
+
+    from pdfem.errors import InputError
+    from pdfem.run.balance import LoadBalance
+
+    body = SimpleNamespace(name="floe", distributed=True,
+                           failure=SimpleNamespace(broken_bonds_push=True))
+    case = SimpleNamespace(run=SimpleNamespace(rebalance_every=10, rebalance_imbalance=0.0),
+                           water=None, file="case.toml")
+    setup = SimpleNamespace(bodies=[body], coupler=None)
+    with pytest.raises(InputError) as err:
+        LoadBalance(case, setup, SimpleNamespace(size=2, rank=0))
+    assert err.value.field == "run.rebalance_every" and "crushed ice" in err.value.message
