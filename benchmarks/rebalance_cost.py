@@ -66,6 +66,7 @@ def main() -> None:
         return set(ice.plan.local[ice.plan.owned].tolist())
 
     out["step_s"] = timed(lambda: ice.step(dt))
+    out["peak_rss_before_gb"] = max(comm.allgather(_vm_hwm()))
     out["imbalance_setup"] = ice.imbalance()
     before = owned_gids()
     out["rebalance_in_place_s"] = timed(ice.rebalance)
