@@ -80,7 +80,9 @@ def _send_all(comm, parts: dict, width_f: int, width_i: int) -> tuple[np.ndarray
     got_f = comm.exchange({q: v[0] for q, v in send.items()}, recv_f)
     got_i = comm.exchange({q: v[1] for q, v in send.items()}, recv_i)
     empty = (np.zeros((0, width_f)), np.zeros((0, width_i), dtype=np.int64))
-    own = parts.get(mine, empty)
+    own = parts.pop(mine, empty)
+    parts.clear()  # what was sent is no longer needed (the caller's dict: memory)
+    del send
     fl = [got_f[p] if p != mine else own[0] for p in range(comm.size) if p in got_f or p == mine]
     it = [got_i[p] if p != mine else own[1] for p in range(comm.size) if p in got_i or p == mine]
     return np.concatenate(fl), np.concatenate(it)
@@ -144,6 +146,7 @@ def migrate(body, owned: np.ndarray, owner: np.ndarray, comm):
     fcols, icols = _particle_columns(body, owner)
     pf = np.concatenate([v for _, v in fcols], axis=1)
     pi = np.concatenate([v for _, v in icols], axis=1)
+    owner = owner.astype(np.int32)
     i_of = np.repeat(np.arange(body.n, dtype=np.int32), np.diff(body.row_ptr))
     oi, oj = owner[i_of], owner[body.nbr]
     counted = owned[i_of]  # bonds whose lower end this rank owns
@@ -177,7 +180,7 @@ def _assemble(body, fcols, icols, pf, pi, bf, bi, rank: int):
     """The new local body from the particle and bond rows that arrived."""
     order = np.argsort(pi[:, 0], kind="stable")
     pf, pi = pf[order], pi[order]
-    gid = pi[:, 0]
+    gid = np.ascontiguousarray(pi[:, 0])
     n = len(gid)
     fields, c = {}, 0
     for name, v in fcols:
@@ -191,8 +194,10 @@ def _assemble(body, fcols, icols, pf, pi, bf, bi, rank: int):
     big = int(gid[-1]) + 1 if n else 1  # (i, j) as one key i * big + j while it fits
     order = (np.argsort(bi[:, 0] * big + bi[:, 1], kind="stable") if big < 3_000_000_000
              else np.lexsort((bi[:, 1], bi[:, 0])))
-    bf, gi, gj = bf[order], bi[order, 0], bi[order, 1]
-    del order, bi
+    gi, gj = bi[order, 0], bi[order, 1]
+    del bi
+    bf = bf[order]
+    del order
     row_ptr = np.searchsorted(gi, np.append(gid, np.iinfo(np.int64).max)).astype(np.int64)
     row_ptr[-1] = len(gi)
     lj = _local_numbers(gid, gj)
