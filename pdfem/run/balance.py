@@ -44,6 +44,7 @@ class LoadBalance:
         self.bodies, self.coupler, self.say = setup.bodies, setup.coupler, say
         self.active = comm.size > 1 and any(b.distributed for b in self.bodies)
         self.size = comm.size
+        self._left: dict[str, float] = {}  # body -> imbalance right after its last re-partition
         asked = self.every > 0 or self.limit > 0.0
         if self.active and asked:
             crushing = [b.name for b in self.bodies if b.failure.broken_bonds_push]
@@ -69,11 +70,15 @@ class LoadBalance:
         moved = False
         for b in self.bodies:
             level = b.imbalance()
-            due = (self.every and step % self.every == 0) or (self.limit and level > self.limit)
+            # above the limit, unless it is what the last re-partition left (the work only
+            # changes by a migration: re-partitioning again would give the same)
+            over = self.limit and level > self.limit and level != self._left.get(b.name)
+            due = (self.every and step % self.every == 0) or over
             if due:
                 before, t0 = level, time.perf_counter()
                 b.rebalance()
                 level, moved = b.imbalance(), True
+                self._left[b.name] = level
                 self.say(f"  t = {t:.6e} s (step {step:,}): re-partitioned '{b.name}' over "
                          f"{self.size} ranks, imbalance {before:.3f} -> {level:.3f} "
                          f"({time.perf_counter() - t0:.2f} s)")
