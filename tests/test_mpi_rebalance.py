@@ -12,9 +12,11 @@ one mpiexec launch each, with one numba thread per rank:
    from the distributed set-up, squeezed between a driven and a fixed face and re-partitioned
    twice: positions, damage, crushed bonds' rest stretch and shear slip identical;
 3. a rigid plate driven into an ice plate's edge (contact, breaking) through the run's
-   pdfem.run.balance.LoadBalance (rebalance_imbalance = 1.2, rebalance_every = 20), starting
-   with one rank empty: contact force history and positions identical, re-partitions at steps
-   1, 20, 40, 60, the imbalance history at most 1.01 from step 1 on;
+   pdfem.run.balance.LoadBalance (rebalance_every = 20), starting with one rank empty or
+   overloaded: contact force history and positions identical, re-partitions at steps 20, 40,
+   60, the imbalance history above 1.3 before step 20 and at most 1.01 after; with
+   rebalance_imbalance = 1.2 instead, the badly split body is re-partitioned at the first step
+   and not again;
 4. recursive coordinate bisection (pdfem.parallel.rcb) of 3000 weighted points on a coarse
    grid (many ties) gives the same owners from two different distributions over the ranks
    (no dependence on history), balanced to within one particle's weight.
@@ -151,7 +153,7 @@ y0 = ref.x0[:, 1]
 owner = np.minimum((y0 / y0.max() * comm.size * 0.6).astype(np.int32), comm.size - 1)
 dist = DistributedIce(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
 cp, pair = coupled(dist, comm)
-run = SimpleNamespace(rebalance_every=20, rebalance_imbalance=1.2)
+run = SimpleNamespace(rebalance_every=20, rebalance_imbalance=0.0)
 setup = SimpleNamespace(bodies=[dist], coupler=cp)
 balance = LoadBalance(SimpleNamespace(run=run, water=None, file="test"), setup, comm)
 rows = Rows()
@@ -169,7 +171,22 @@ if comm.rank == 0:
     print(f"RESULT coupled ranks={comm.size} same={np.array_equal(y, ref.y) and np.array_equal(dmg, ref.damage())} "
           f"err_f={np.abs(f - f_ref).max() / np.abs(f_ref).max():.3e} fmax={np.abs(f_ref).max():.4g} "
           f"broken={int(ref.broken.sum())} moved={moved} first={rows.rows[0][1]:.4f} "
+          f"before={max(r[1] for r in rows.rows[:19]):.4f} "
           f"last={rows.rows[-1][1]:.4f} layout={dist.layout_version}")
+
+# the imbalance limit: a badly split body is re-partitioned at once, then left alone
+bad = DistributedIce(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
+limit = LoadBalance(SimpleNamespace(run=SimpleNamespace(rebalance_every=0, rebalance_imbalance=1.2),
+                                    water=None, file="test"),
+                    SimpleNamespace(bodies=[bad], coupler=Coupler([bad], [], [], 1e-6, comm=comm)),
+                    comm)
+lim = Rows()
+start = bad.imbalance()
+for step in (1, 2, 3):
+    limit.after_step(step, step * 1e-6, lim)
+if comm.rank == 0:
+    print(f"RESULT limit start={start:.4f} flags={','.join(str(int(r[2])) for r in lim.rows)} "
+          f"after={lim.rows[0][1]:.4f}")
 
 # 4. the partition depends only on the particles, not on where they are now
 rng = np.random.default_rng(1)
@@ -212,6 +229,7 @@ def test_rebalance_mid_run_matches_serial(tmp_path, ranks):
     res = {line.split()[1]: _fields(line) for line in r.stdout.splitlines()
            if line.startswith("RESULT")}
     bar, crush, coupled, rcb = res["bar"], res["crush"], res["coupled"], res["rcb"]
+    limit = res["limit"]
     for case in (bar, crush):
         assert case["same"] == "True" and float(case["err"]) == 0.0
         assert float(case["react"]) <= 1e-12 and int(case["broken"]) > 0
@@ -221,8 +239,12 @@ def test_rebalance_mid_run_matches_serial(tmp_path, ranks):
     assert int(crush["crushed"]) > 0
     assert coupled["same"] == "True" and float(coupled["err_f"]) == 0.0
     assert float(coupled["fmax"]) > 1e3 and int(coupled["broken"]) > 0
-    assert coupled["moved"] == "1,20,40,60" and int(coupled["layout"]) == 4
-    assert float(coupled["first"]) <= 1.01 and float(coupled["last"]) <= 1.01
+    assert coupled["moved"] == "20,40,60" and int(coupled["layout"]) == 3
+    # the imbalance history: high until the first re-partition (step 20), then about 1
+    assert float(coupled["first"]) > 1.3 and float(coupled["before"]) > 1.3
+    assert float(coupled["last"]) <= 1.01
+    assert float(limit["start"]) > 1.3 and limit["flags"] == "1,0,0"
+    assert float(limit["after"]) <= 1.01
     assert rcb["same"] == "True" and float(rcb["imb"]) <= 1.0 + 2 * int(rcb["maxw"]) / float(rcb["mean"])
 
 
