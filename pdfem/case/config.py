@@ -43,6 +43,8 @@ class RunConfig:
     stability_check_interval_steps: int
     energy_tolerance: float
     output_per_rank: bool
+    rebalance_every: int
+    rebalance_imbalance: float
 
 
 @dataclass(frozen=True)
@@ -256,7 +258,8 @@ def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:
         checkpoint_interval_minutes=r.checkpoint_interval_minutes,
         stability_check_interval_steps=r.stability_check_interval_steps,
         energy_tolerance=r.energy_tolerance,
-        output_per_rank=r.output_per_rank)
+        output_per_rank=r.output_per_rank, rebalance_every=r.rebalance_every,
+        rebalance_imbalance=r.rebalance_imbalance)
     ice = tuple(_ice(s, f"ice[{k}]") for k, s in enumerate(data.ice))
     structures = tuple(_structure(s, f"structure[{k}]", data.water, run.gravity)
                        for k, s in enumerate(data.structure))

@@ -61,10 +61,34 @@ class RunSection(Section):
         False, description="On several MPI ranks, each rank writes its own ice particles to "
                            "`results.rank<R>.h5` instead of sending them to rank 0 (for very large "
                            "runs). Default: false.")
+    rebalance_every: Annotated[int, Whole(0, "(0 = never)")] = Field(
+        0, description="On several MPI ranks, re-partition each split ice body every so many "
+                       "coupling steps (recursive coordinate bisection of the current positions, "
+                       "weighted by bond counts; particles and bonds move between ranks); 0 = "
+                       "never. Not with output_per_rank, short-range contact, crushed ice or "
+                       "[water]. Default: 0.")
+    rebalance_imbalance: Annotated[float, Number(ge=0.0)] = Field(
+        0.0, description="On several MPI ranks, re-partition a split ice body when its largest "
+                         "rank's work (bonds of its particles) exceeds the mean by this factor "
+                         "(-), checked every coupling step, e.g. 1.2; 0 = never; else > 1. "
+                         "Default: 0.")
 
     @model_validator(mode="after")
     def _interval_within_run(self) -> "RunSection":
         if self.output_interval is not None and self.output_interval > self.end_time:
             raise fail(f"longer than the run (end_time = {self.end_time:g} s); choose an interval "
                        "<= end_time", self.output_interval, key="output_interval")
+        if 0.0 < self.rebalance_imbalance <= 1.0:
+            raise fail("the largest over the mean work is at least 1; choose 0 (never) or a "
+                       "factor > 1, e.g. 1.2", self.rebalance_imbalance, key="rebalance_imbalance")
+        if self.output_per_rank and (self.rebalance_every or self.rebalance_imbalance):
+            raise fail("re-partitioning moves particles between ranks, which output_per_rank "
+                       "does not follow (each rank's file keeps the particles it had at the "
+                       "start); set output_per_rank = false or rebalance_every = 0 and "
+                       "rebalance_imbalance = 0", True, key="output_per_rank")
+        if self.short_range_contact and (self.rebalance_every or self.rebalance_imbalance):
+            raise fail("short-range contact keeps rank-local particle tables that a "
+                       "re-partition would invalidate; set short_range_contact = false or "
+                       "rebalance_every = 0 and rebalance_imbalance = 0", True,
+                       key="short_range_contact")
         return self

@@ -138,11 +138,9 @@ class Coupler:
         self.ice_substeps = int(ice_substeps)
         self.structure_substeps = int(structure_substeps)
         self.forces = list(forces)
-        self.comm = comm
-        self.time = 0.0
+        self.comm, self.time = comm, 0.0
         self._pairs_of = {id(b): [p for p in self.pairs if p.body is b] for b in self.bodies}
-        self._mass = {id(b): b.material.density * b.vol for b in self.bodies}  # kg
-        self._ids = {id(b): _global_numbers(b) for b in self.bodies}
+        self.particles_moved()
         # N s, contact impulses on each structure's surface nodes in the current coupling step
         self._impulse = {id(s): np.zeros((len(s.surface_points()), 3)) for s in self.structures}
         # J, work of the contact loads on each structure (as it moves under them)
@@ -150,6 +148,11 @@ class Coupler:
         self.contact_work_on_ice = 0.0  # J
         # per structure: contact loads per facet of its surface (pressure, load patches)
         self.facet_loads = {id(s): FacetLoads(s) for s in self.structures}
+
+    def particles_moved(self) -> None:
+        """Per-particle masses (kg) and global numbers of the bodies' local particles, anew."""
+        self._mass = {id(b): b.material.density * b.vol for b in self.bodies}
+        self._ids = {id(b): _global_numbers(b) for b in self.bodies}
 
     @property
     def contact_dissipated(self) -> float:

@@ -6,8 +6,9 @@ distributed set-up (:mod:`pdfem.pd.distributed_setup`, :meth:`DistributedIce.fro
 rank builds only its part; the same arrays). Either way a rank holds only its *local* part:
 the particles it owns (:mod:`pdfem.parallel.partition`) and their bond partners owned
 elsewhere (the halo), in global order, and every bond with at least one owned end, in the
-global bond order. Bonds only break, so this pattern is fixed at set-up. One
-velocity-Verlet step on a rank:
+global bond order. Bonds only break, so this pattern is fixed until the body is re-partitioned
+(:mod:`pdfem.pd.rebalance`: particles and bonds move to new owners, ``layout_version``
+increments). One velocity-Verlet step on a rank:
 
 1. half kick and position update of its particles (halo values are overwritten next);
 2. exchange: every rank sends the positions of the particles its neighbours hold as halo;
@@ -38,6 +39,7 @@ from pdfem.pd.crushed_shear import shear_energy_args
 from pdfem.pd.distributed_state import DistributedCheckpoint
 from pdfem.pd.distributed_surface import halo_exchange
 from pdfem.pd.distributed_timestep import split_stable_time_step
+from pdfem.pd.rebalance import Rebalancing
 
 
 @dataclasses.dataclass
@@ -89,7 +91,7 @@ def halo_plan(owner: np.ndarray, row_ptr: np.ndarray, nbr: np.ndarray, rank: int
     return HaloPlan(local, owned, pairs, send, recv)
 
 
-class DistributedIce(DistributedCheckpoint):
+class DistributedIce(DistributedCheckpoint, Rebalancing):
     """This rank's part of an ice body, advanced in step with the other ranks.
 
     It implements the ice-body interface of :class:`pdfem.pd.ice_interface.IceParticles`, as

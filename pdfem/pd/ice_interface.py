@@ -28,6 +28,7 @@ class IceParticles(Protocol):
     f: np.ndarray       # (n, 3) force density, N/m^3 (particle forces add into it)
     vol: np.ndarray     # (n,) volumes, m^3
     gravity: np.ndarray  # (3,) uniform body acceleration of the kick, m/s^2
+    layout_version: int  # incremented when particles move between ranks (local indices change)
 
     @property
     def owned(self) -> np.ndarray:
@@ -85,6 +86,14 @@ class IceParticles(Protocol):
         """:meth:`frame_fields` of the owned particles, in :meth:`owned_reference` order."""
         ...
 
+    def imbalance(self) -> float:
+        """Largest rank's work over the mean (1 for a whole body; collective under MPI)."""
+        ...
+
+    def rebalance(self) -> None:
+        """Re-partition over the ranks and move particles (nothing for a whole body)."""
+        ...
+
 
 class WholeBody:
     """:class:`IceParticles` for a body held whole by one rank: every particle is owned, sums
@@ -92,6 +101,14 @@ class WholeBody:
     ``displacement()`` and ``damage()`` of the class it is mixed into."""
 
     distributed = False
+    layout_version = 0  # never changes: a whole body's particles stay on its rank
+
+    def imbalance(self) -> float:
+        """1: one rank holds the whole body."""
+        return 1.0
+
+    def rebalance(self) -> None:
+        """Nothing to move: one rank holds the whole body."""
 
     @property
     def owned(self) -> np.ndarray:

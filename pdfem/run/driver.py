@@ -180,7 +180,7 @@ def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart
     bar = Progress(case.run.end_time, enabled=False if quiet else progress,
                    start_time=(state.first - 1) * setup.dt, start_step=state.first - 1)
     try:
-        done = run_loop(case, setup, outputs, monitor, state, comm, bar, ckpt_path)
+        done = run_loop(case, setup, outputs, monitor, state, comm, bar, ckpt_path, say)
     finally:  # -- 3. finish
         wall = bar.finish()
         outputs.close()

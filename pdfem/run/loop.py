@@ -5,7 +5,8 @@ coupling step it advances the coupler, writes the step's history rows and checks
 a blow-up (:class:`pdfem.run.blowup.BlowupMonitor`), and every check interval and every frame
 the energy balance (energy created stops the run); every ``output_interval`` it writes a frame; every ``checkpoint_interval_steps`` steps or
 ``checkpoint_interval_minutes`` of wall time it writes a checkpoint
-(:func:`pdfem.run.checkpoint.write_checkpoint`).
+(:func:`pdfem.run.checkpoint.write_checkpoint`). Under MPI it measures the load balance of the
+split ice bodies every step and re-partitions them when due (:class:`pdfem.run.balance.LoadBalance`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from pdfem.errors import InstabilityError
+from pdfem.run.balance import LoadBalance
 from pdfem.run.checkpoint import DriverState, write_checkpoint
 
 
@@ -41,8 +43,9 @@ class LoopResult:
 
 
 def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
-             ckpt_path: Path) -> LoopResult:
-    """Take the steps ``state.first`` .. ``setup.nsteps`` (see the module docstring).
+             ckpt_path: Path, say=lambda s: None) -> LoopResult:
+    """Take the steps ``state.first`` .. ``setup.nsteps`` (see the module docstring); ``say``
+    reports re-partitions.
 
     Raises
     ------
@@ -58,6 +61,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
     t = step * dt
     last_frame = t
     energy = None
+    balance = LoadBalance(case, setup, comm, say)
     try:
         for step in range(state.first, setup.nsteps + 1):
             t = step * dt
@@ -67,6 +71,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
                 monitor.check_motion(t, step, force=True)
                 raise InstabilityError(f"at t = {t:.6e} s (step {step:,}): {exc}") from None
             outputs.step(t)
+            balance.after_step(step, t, outputs.writer)
             monitor.check_motion(t, step)
             frame = t >= next_out * (1 - 1e-9) or step == setup.nsteps
             if monitor.due(step) and not frame:  # the balance every check interval

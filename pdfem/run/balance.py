@@ -1,0 +1,88 @@
+"""When the run re-partitions its split ice bodies, and the imbalance history it writes.
+
+Under MPI every coupling step :class:`LoadBalance` asks each ice body for its imbalance (the
+largest rank's work over the mean, :meth:`pdfem.pd.rebalance.Rebalancing.imbalance`) and
+re-partitions it (:meth:`~pdfem.pd.rebalance.Rebalancing.rebalance`) every
+``run.rebalance_every`` coupling steps, or when the imbalance exceeds
+``run.rebalance_imbalance``. It writes the history ``parallel/<body>`` (``imbalance``: of the
+partition the next step runs with, -; ``rebalanced``: 1 at the steps that re-partitioned) and
+reports each re-partition. After one, the coupler rebuilds its per-particle tables
+(:meth:`pdfem.coupling.coupler.Coupler.particles_moved`). A serial run writes nothing.
+"""
+
+from __future__ import annotations
+
+import time
+
+from pdfem.errors import InputError
+
+
+class LoadBalance:
+    """The load balance of a run's ice bodies (see the module docstring).
+
+    Parameters
+    ----------
+    case
+        The validated case (``run.rebalance_every``, ``run.rebalance_imbalance``).
+    setup
+        The built run (:class:`pdfem.run.build.Setup`: ``bodies``, ``coupler``, ``forces``).
+    comm
+        The communicator.
+    say
+        Function taking one line of the run's report.
+
+    Raises
+    ------
+    InputError
+        Re-partitioning asked for with particle forces that keep rank-local tables
+        (short-range contact, implied by crushed ice; water).
+    """
+
+    def __init__(self, case, setup, comm, say=lambda s: None) -> None:
+        run = case.run
+        self.every, self.limit = int(run.rebalance_every), float(run.rebalance_imbalance)
+        self.bodies, self.coupler, self.say = setup.bodies, setup.coupler, say
+        self.active = comm.size > 1 and any(b.distributed for b in self.bodies)
+        self.size = comm.size
+        self._left: dict[str, float] = {}  # body -> imbalance right after its last re-partition
+        asked = self.every > 0 or self.limit > 0.0
+        if self.active and asked:
+            crushing = [b.name for b in self.bodies if b.failure.broken_bonds_push]
+            if crushing or case.water is not None:
+                why = (f"ice body '{crushing[0]}' has crushed ice, which needs short-range "
+                       "contact" if crushing else "[water] is given")
+                raise InputError(case.file, "run.rebalance_every", f"re-partitioning split "
+                                 f"ice bodies is not supported when {why} (their per-particle "
+                                 "tables are not moved between ranks); set rebalance_every = 0 "
+                                 "and rebalance_imbalance = 0")
+        if self.active:
+            levels = ", ".join(f"'{b.name}' {b.imbalance():.3f}" for b in self.bodies)
+            when = " and ".join(w for w in ((f"every {self.every:,} steps" if self.every else ""),
+                                            (f"above {self.limit:g}" if self.limit else "")) if w)
+            say(f"  load balance (largest rank's bond work / mean): {levels}; re-partition "
+                f"{when or 'never (run.rebalance_every, run.rebalance_imbalance)'}")
+
+    def after_step(self, step: int, t: float, writer) -> None:
+        """Measure, re-partition where due, write the history rows of step ``step`` ending at
+        ``t`` (s) with ``writer`` (collective)."""
+        if not self.active:
+            return
+        moved = False
+        for b in self.bodies:
+            level = b.imbalance()
+            # above the limit, unless it is what the last re-partition left (the work only
+            # changes by a migration: re-partitioning again would give the same)
+            over = self.limit and level > self.limit and level != self._left.get(b.name)
+            due = (self.every and step % self.every == 0) or over
+            if due:
+                before, t0 = level, time.perf_counter()
+                b.rebalance()
+                level, moved = b.imbalance(), True
+                self._left[b.name] = level
+                self.say(f"  t = {t:.6e} s (step {step:,}): re-partitioned '{b.name}' over "
+                         f"{self.size} ranks, imbalance {before:.3f} -> {level:.3f} "
+                         f"({time.perf_counter() - t0:.2f} s)")
+            writer.append_history(f"parallel/{b.name}", t,
+                                  {"imbalance": level, "rebalanced": float(bool(due))})
+        if moved:
+            self.coupler.particles_moved()
