@@ -44,7 +44,7 @@ SERIAL_SHARE = 1.0 - BOND_SHARE - PARTICLE_SHARE
 
 def projection(refine: int, ranks: int) -> dict:
     """Speed-up and efficiency on ``ranks`` ranks of the sheet refined ``refine`` times."""
-    counts = tuple(c * refine if k < 2 else c * refine for k, c in enumerate(COUNTS))
+    counts = tuple(c * refine for c in COUNTS)
     n = math.prod(counts)
     one = model_row(counts, 1)
     row = model_row(counts, ranks)
