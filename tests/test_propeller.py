@@ -132,6 +132,9 @@ def test_ur_i3_torque_formula():
     fb = 23.0 * 10.0**0.7 * 0.125**0.3 * 1.5**1.4 * 2.0 * 1e3
     ff = 250.0 * 0.125 * 4.0 * 1e3
     assert milling.ur_i3_blade_forces(2.0, 0.6, 0.5, 4, 5.0, 1.5, 1.0) == pytest.approx((fb, ff), rel=1e-12)
+    # blade stress in the rule's units: M_BL = (0.75 - 0.3) 1 m 218 kN = 98.1 kN m at the root
+    # r = 0.3 m of c = 0.5 m, t = 0.1 m: sigma_st = 1.6 98.1 / (100 0.5 0.1^2) = 313.92 MPa
+    assert milling.ur_i3_blade_stress(218e3, 0.3, 1.0, 0.5, 0.1) == pytest.approx(313.92e6, rel=1e-12)
 
 
 def test_tiny_milling_impulse_balance(tmp_path):

@@ -190,11 +190,30 @@ def ur_i3_blade_forces(diameter: float, hub_diameter: float, ear: float, blades:
     return 1e3 * fb, 1e3 * ff
 
 
+def ur_i3_blade_stress(force: float, radius: float, tip_radius: float, chord: float,
+                       thickness: float, c1: float = 1.6) -> float:
+    """Blade stress (Pa) at the cylindrical root section of radius ``radius`` (m, r/R < 0.5), IACS
+    UR I3 (the blade strength section, same rule as :func:`ur_i3_ice_torque`)::
+
+        sigma_st = C1 M_BL / (100 c t^2)   MPa,   M_BL = (0.75 - r/R) R F   kN m
+
+    with F the larger of the blade forces F_b, F_f (kN), c and t the section's chord and
+    maximum thickness (m), C1 the ratio of the actual stress to the beam stress (1.6 when not
+    known). 100 c t^2 is the section modulus 0.1 c t^2 of a blade section in the units of the
+    rule; here in SI: sigma_st = C1 (0.75 - r/R) R F / (0.1 c t^2) with F in N."""
+    moment = (0.75 - radius / tip_radius) * tip_radius * force
+    return c1 * moment / (0.1 * chord * thickness**2)
+
+
 def rule_comparison(case: Case, data: dict, polar_class: str = "PC7") -> dict[str, float]:
     """Peak simulated ice torque (N m) and blade forces along the shaft (N; backward = -x, aft,
     forward = +x, the largest over the blades of the ``loads/<structure>.blade<k>_surface``
     force), the UR I3 Q_max, F_b and F_f for the case's propeller at ``polar_class`` and the
-    ratios. Reported, not asserted."""
+    ratios; and the blades' root bending: the peak bending part of the root moment (N m, the
+    ``root_moment`` of ``shaft/<structure>.blade<k>`` without the spindle component), its beam
+    stress by the rule's section modulus (Pa) and the peak von Mises of the blades (Pa) against
+    the UR I3 blade stress at the root (hub radius) under the larger design force. Reported,
+    not asserted."""
     from pdfem.models import _propeller_sections as sec
 
     s = case.structures[0]
@@ -210,9 +229,20 @@ def rule_comparison(case: Case, data: dict, polar_class: str = "PC7") -> dict[st
     axial = np.concatenate([data["histories"][f"loads/{s.name}.blade{k}_surface"]["force"][:, 0]
                             for k in range(1, p["blades"] + 1)])
     backward, forward = float(max(-axial.min(), 0.0)), float(max(axial.max(), 0.0))
+    r, c, t = p["hub_diameter"] / 2, float(sec.chord(p["hub_diameter"] / 2, p)), \
+        float(sec.thickness(p["hub_diameter"] / 2, p))
+    stress = ur_i3_blade_stress(max(fb, ff), r, R, c, t)
+    blades = [data["histories"][f"shaft/{s.name}.blade{k}"] for k in range(1, p["blades"] + 1)]
+    moment = max(float(np.linalg.norm(b["root_moment"][:, 1:], axis=1).max()) for b in blades)
+    beam = 1.6 * moment / (0.1 * c * t**2)     # the rule's beam stress of the simulated moment
+    von_mises = max(float(b["max_von_mises"].max()) for b in blades)
     return {"peak_torque": peak, "ur_i3_qmax": rule, "ratio": peak / rule,
             "peak_backward_force": backward, "ur_i3_fb": fb, "backward_ratio": backward / fb,
-            "peak_forward_force": forward, "ur_i3_ff": ff, "forward_ratio": forward / ff}
+            "peak_forward_force": forward, "ur_i3_ff": ff, "forward_ratio": forward / ff,
+            "peak_root_moment": moment, "ur_i3_root_moment": (0.75 - r / R) * R * max(fb, ff),
+            "peak_root_beam_stress": beam, "peak_von_mises": von_mises,
+            "ur_i3_blade_stress": stress, "stress_ratio": beam / stress,
+            "von_mises_ratio": von_mises / stress}
 
 
 def spectrum_plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
