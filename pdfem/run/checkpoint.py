@@ -55,10 +55,11 @@ FORMAT = 2
 CHECKPOINT_NAME = "checkpoint.h5"
 """File name of the checkpoint (the manifest) in the output directory."""
 
-KILL_BEFORE_MANIFEST = "PDFEM_TEST_KILL_BEFORE_MANIFEST"
-"""Environment variable for tests: a step number; at that step's checkpoint, once every rank
-has written its part file, rank 0 kills itself (SIGKILL) before writing the manifest, as a
-crash mid-write would."""
+
+def before_manifest(generation: int) -> None:
+    """Called on every rank once all part files of checkpoint ``generation`` are on disk and
+    before rank 0 writes the manifest that makes them valid: a run that dies here must restart
+    from the previous checkpoint (tests replace this hook to raise, as a crash would)."""
 
 
 @dataclass
@@ -149,11 +150,10 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         mine = write_part_file(part_path(path, gen, comm.rank), gen, comm.rank, bodies,
                                coupler.forces)
         sizes = comm.gather(mine)  # every part is on disk before the manifest names it
+        before_manifest(gen)
     coupler_state = coupler.checkpoint_state()  # collective under MPI
     if rank != 0:
         return None
-    if sizes is not None and os.environ.get(KILL_BEFORE_MANIFEST) == str(gen):
-        os.kill(os.getpid(), 9)
     tmp = path.with_name(path.name + ".tmp")
     with h5py.File(tmp, "w") as f:
         f.attrs["format"] = FORMAT
@@ -182,7 +182,7 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         os.fsync(fh.fileno())
     os.replace(tmp, path)
     _fsync_dir(path.parent)
-    remove_other_generations(path, None if sizes is None else gen)
+    remove_other_generations(path, gen, 0 if sizes is None else len(sizes))
     return path
 
 

@@ -77,13 +77,14 @@ def write_part_file(path: Path, generation: int, rank: int, bodies: list, forces
     return path.stat().st_size
 
 
-def remove_other_generations(manifest: Path, keep: int | None) -> None:
-    """Delete the part files (and left-over temporaries) beside ``manifest`` of every
-    generation but ``keep`` (all of them for ``None``: a serial checkpoint)."""
+def remove_other_generations(manifest: Path, keep: int, parts: int) -> None:
+    """Delete the part files (and left-over temporaries) beside ``manifest`` but those of
+    ranks 0 .. ``parts`` - 1 of generation ``keep`` (all of them for ``parts`` = 0: a serial
+    checkpoint); a run killed earlier may have left some of any generation."""
     for p in manifest.parent.iterdir():
         m = _PART.match(p.name)
-        if m and m["stem"] == manifest.stem and (keep is None or int(m["gen"]) != keep
-                                                 or p.name.endswith(".tmp")):
+        if m and m["stem"] == manifest.stem and (int(m["gen"]) != keep or p.name.endswith(".tmp")
+                                                 or int(m["rank"]) >= parts):
             p.unlink(missing_ok=True)
 
 
