@@ -2,11 +2,11 @@
 part files and the manifest leaves the previous checkpoint usable.
 
 Reference: the uninterrupted 3-rank run of the same case (the seed's rigid cylinder breaking an
-ice plate, as in tests/test_mpi_run.py; checkpoints every 120 of its 242 steps). One
+ice plate, as in tests/test_mpi_run.py; checkpoints every 60 of its 121 steps). One
 ``mpiexec -n 3`` launch runs it, then the same case again with the checkpoint hook
-(:func:`pdfem.run.checkpoint.before_manifest`) raising at step 240, once every rank's part file
+(:func:`pdfem.run.checkpoint.before_manifest`) raising at step 120, once every rank's part file
 of that generation is on disk and before rank 0 writes the manifest, as a crash mid-write would.
-That run's directory, copied three times, is restarted from its step-120 checkpoint on all 3
+That run's directory, copied three times, is restarted from its step-60 checkpoint on all 3
 ranks (every frame and history equal to the reference bit for bit), and at the same time on 2
 ranks (ranks 0-1) and on 1 rank (rank 2), which agree with it to round-off: ice displacements
 to 1e-10 of their largest, identical damage. One numba thread per process (the pair loops'
@@ -32,9 +32,9 @@ from pdfem.run.checkpoint import CHECKPOINT_NAME, case_hash, read_checkpoint
 
 CASE = """
 [run]
-end_time = 1.2e-3
-output_interval = 4.0e-4
-checkpoint_interval_steps = 120
+end_time = 6.0e-4
+output_interval = 2.0e-4
+checkpoint_interval_steps = 60
 checkpoint_interval_minutes = 0
 energy_tolerance = 0.1
 [[ice]]
@@ -68,7 +68,7 @@ SCRIPT = textwrap.dedent('''
         pass
 
     def crash(generation):
-        if generation == 240:
+        if generation == 120:
             raise Crash()
 
     checkpoint.before_manifest = crash
@@ -108,23 +108,21 @@ def test_three_rank_checkpoint_restarts_on_three_two_and_one_rank(tmp_path):
                         str(tmp_path)], capture_output=True, text=True, timeout=600, env=env)
     assert r.returncode == 0, r.stderr[-3000:]
     lines = dict(line.split(" ", 1) for line in r.stdout.splitlines() if " " in line)
-    # the crash left the step-120 manifest with its parts and the unnamed step-240 parts
-    assert lines["LEFT"] == str(["checkpoint.g120.rank0.h5", "checkpoint.g120.rank1.h5",
-                                 "checkpoint.g120.rank2.h5", "checkpoint.g240.rank0.h5",
-                                 "checkpoint.g240.rank1.h5", "checkpoint.g240.rank2.h5",
-                                 "checkpoint.h5"]), lines["LEFT"]
+    # the crash left the step-60 manifest with its parts and the unnamed step-120 parts
+    assert lines["LEFT"] == str(sorted([f"checkpoint.g{g}.rank{r}.h5" for g in (60, 120)
+                                        for r in range(3)] + ["checkpoint.h5"]))
     with h5py.File(tmp_path / "killed" / CHECKPOINT_NAME, "r") as f:
-        assert int(f["driver"].attrs["step"]) == 120 and int(f.attrs["parts"]) == 3
-    # each restart's step-240 checkpoint replaced the older generation (serial: one file)
-    assert lines["AFTER3"] == str([f"checkpoint.g240.rank{r}.h5" for r in range(3)]
+        assert int(f["driver"].attrs["step"]) == 60 and int(f.attrs["parts"]) == 3
+    # each restart's step-120 checkpoint replaced the older generation (serial: one file)
+    assert lines["AFTER3"] == str([f"checkpoint.g120.rank{r}.h5" for r in range(3)]
                                   + ["checkpoint.h5"])
-    assert lines["AFTER2"] == str([f"checkpoint.g240.rank{r}.h5" for r in range(2)]
+    assert lines["AFTER2"] == str([f"checkpoint.g120.rank{r}.h5" for r in range(2)]
                                   + ["checkpoint.h5"])
     assert lines["AFTER1"] == str(["checkpoint.h5"])
     ref = read_results(tmp_path / "ref" / "results.h5")
     u = ref["ice"]["plate"]["u"]
     assert ref["ice"]["plate"]["damage"][-1].max() > 0  # bonds broke: broken flags matter
-    assert len(ref["time"]) == 4
+    assert len(ref["time"]) == 4  # frames at 0, 0.2, 0.4, 0.6 ms: two after the restart
     same = read_results(tmp_path / "k3" / "results.h5")
     np.testing.assert_array_equal(same["time"], ref["time"])
     for k in ("u", "v", "damage"):
