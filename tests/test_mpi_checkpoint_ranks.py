@@ -169,3 +169,65 @@ def test_old_format_and_missing_part_are_refused(tmp_path):
     (tmp_path / "checkpoint.g8.rank0.h5").write_bytes(b"0123456789")
     with pytest.raises(InputError, match=r"checkpoint\.g8\.rank1\.h5 \(rank 1 of 2\) is missing"):
         read_checkpoint(new, "x = 1\n", "case.toml")
+
+
+def test_per_rank_xdmf_opens_the_whole_run(tmp_path):
+    """The main XDMF file of a run with per-rank ice files shows, per frame, one spatial
+    collection of every rank's grid; each DataItem names a dataset of its rank's file whose
+    shape is the one declared and whose values are the frame written there (read back through
+    the XDMF references with h5py, independently of the writer). Per-rank output is the default
+    above 2 M particles on several ranks, and on request."""
+    import xml.etree.ElementTree as ET
+
+    from pdfem.output import ResultsWriter, rank_file
+    from pdfem.output.ranks import PER_RANK_PARTICLES, per_rank_output, rank_grid_files
+
+    assert PER_RANK_PARTICLES == 2_000_000
+    assert per_rank_output(False, 4, 2_000_001) and not per_rank_output(False, 4, 2_000_000)
+    assert per_rank_output(True, 2, 10) and not per_rank_output(True, 1, 10 ** 9)
+    main = tmp_path / "results.h5"
+    rng = np.random.default_rng(3)
+    parts = [np.array([0, 2, 5]), np.array([1, 3, 4, 6])]
+    writers = [ResultsWriter(rank_file(main, r), "", {"rank": r}) for r in range(2)]
+    for w, idx in zip(writers, parts):
+        w.add_ice_body("sheet", rng.random((len(idx), 3)), np.full(len(idx), 1e-3), index=idx)
+    top = ResultsWriter(main, "", {"ice_per_rank": 2})
+    top.add_rank_ice_body("sheet", rank_grid_files(main, [len(p) for p in parts]), True)
+    written = []
+    for t in (0.0, 1e-3):
+        frame = [{"u": rng.random((len(p), 3)), "v": rng.random((len(p), 3)),
+                  "damage": rng.random(len(p))} for p in parts]
+        for w, fields in zip(writers, frame):
+            w.write_frame(t, {"sheet": fields})
+        top.write_frame(t, {})
+        written.append(frame)
+    for w in (*writers, top):
+        w.close()
+    root = ET.parse(main.with_suffix(".xdmf")).getroot()
+    temporal = root.find("Domain/Grid")
+    assert temporal.get("CollectionType") == "Temporal"
+    frames = temporal.findall("Grid")
+    assert [f.get("CollectionType") for f in frames] == ["Spatial", "Spatial"]
+    for index, frame in enumerate(frames):
+        grids = frame.findall("Grid")
+        assert len(grids) == 2
+        for r, grid in enumerate(grids):
+            for item in grid.iter("DataItem"):  # topology, geometry and fields: all resolve
+                name, path = item.text.split(":")
+                with h5py.File(tmp_path / name, "r") as f:
+                    shape = f[path].shape
+                assert shape == tuple(int(d) for d in item.get("Dimensions").split())
+            for attr in grid.findall("Attribute"):
+                item = attr.find("DataItem")
+                name, path = item.text.split(":")
+                assert name == f"results.rank{r}.h5"
+                with h5py.File(tmp_path / name, "r") as f:
+                    a = f[path][()]
+                dims = tuple(int(d) for d in item.get("Dimensions").split())
+                assert a.shape == dims
+                key = attr.get("Name")
+                want = parts[r] * 0 + 1e-3 if key == "volume" else written[index][r][key]
+                np.testing.assert_array_equal(a, want)
+    merged = read_results(main)
+    assert merged["ice"]["sheet"]["u"].shape == (2, 7, 3)
+    np.testing.assert_array_equal(merged["ice"]["sheet"]["u"][1, parts[1]], written[1][1]["u"])
