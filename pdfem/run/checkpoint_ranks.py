@@ -155,18 +155,31 @@ def restore_force(parts: list[Path], i: int, force) -> None:
                 g = f[f"forces/{i}"]
                 if not state:
                     state.update(_scalars(g))
-                hit, pos = locate(layout.gid, g[f"gid_{k}"][()])
-                found[pos[hit]] += 1
-                for key, ds in g.items():
-                    if key.endswith(f"_{k}") and key != f"gid_{k}":
-                        a = ds[()]
-                        out = state.setdefault(key, np.full((len(layout.gid),) + a.shape[1:],
-                                                            np.nan, dtype=np.float64))
-                        out[pos[hit]] = a[hit]
+                _pick_force(g, k, layout.gid, found, state)
         if np.any(found[layout.owned] != 1):
             raise ValueError(f"particle force {i}: the checkpoint's parts do not hold every "
                              f"particle of ice body '{b.name}' once")
     force.restore_state(state)
+
+
+def _pick_force(g: h5py.Group, k: int, local: np.ndarray, found: np.ndarray,
+                state: dict) -> None:
+    """Put the rows of a part's force group for body ``k`` whose global numbers are among
+    ``local`` into ``state`` (arrays in local order), chunk by chunk."""
+    keys = [key for key in g if key.rsplit("_", 1)[-1] == str(k) and key != f"gid_{k}"]
+    for key in keys:
+        state.setdefault(key, np.full((len(local),) + g[key].shape[1:], np.nan))
+    n = g[f"gid_{k}"].shape[0]
+    for a in range(0, n, CHUNK):
+        hit, pos = locate(local, _rows(g[f"gid_{k}"], a, min(a + CHUNK, n)))
+        rows = np.flatnonzero(hit)
+        if not len(rows):
+            continue
+        lo, hi = rows[0], rows[-1] + 1
+        where = pos[lo:hi][hit[lo:hi]]
+        found[where] += 1
+        for key in keys:
+            state[key][where] = _rows(g[key], a + lo, a + hi)[hit[lo:hi]]
 
 
 def has_force_state(parts: list[Path], i: int) -> bool:
