@@ -2,14 +2,15 @@
 part files and the manifest leaves the previous checkpoint usable.
 
 Reference: the uninterrupted 3-rank run of the same case (the seed's rigid cylinder breaking an
-ice plate, as in tests/test_mpi_run.py; checkpoints every 60 of its 121 steps). One
+ice plate, as in tests/test_mpi_run.py, here floating in water with drag and added mass, whose
+per-particle counters the checkpoint carries; checkpoints every 60 of its 121 steps). One
 ``mpiexec -n 3`` launch runs it, then the same case again with the checkpoint hook
 (:func:`pdfem.run.checkpoint.before_manifest`) raising at step 120, once every rank's part file
 of that generation is on disk and before rank 0 writes the manifest, as a crash mid-write would.
 That run's directory, copied three times, is restarted from its step-60 checkpoint on all 3
 ranks (every frame and history equal to the reference bit for bit), and at the same time on 2
 ranks (ranks 0-1) and on 1 rank (rank 2), which agree with it to round-off: ice displacements
-to 1e-10 of their largest, identical damage. One numba thread per process (the pair loops'
+to 1e-10 of their largest, identical damage, the water's drag loss to 1e-10. One numba thread per process (the pair loops'
 chunks then do not depend on the machine). The format checks run without MPI.
 """
 
@@ -37,6 +38,11 @@ output_interval = 2.0e-4
 checkpoint_interval_steps = 60
 checkpoint_interval_minutes = 0
 energy_tolerance = 0.1
+[water]
+level = 0.0351
+linear_drag = 2.0
+drag_coefficient = 1.0
+added_mass = 0.5
 [[ice]]
 name = "plate"
 dx = 0.02
@@ -122,6 +128,7 @@ def test_three_rank_checkpoint_restarts_on_three_two_and_one_rank(tmp_path):
     ref = read_results(tmp_path / "ref" / "results.h5")
     u = ref["ice"]["plate"]["u"]
     assert ref["ice"]["plate"]["damage"][-1].max() > 0  # bonds broke: broken flags matter
+    assert ref["histories"]["energy"]["water_drag_dissipated"][-1] > 0  # water state matters
     assert len(ref["time"]) == 4  # frames at 0, 0.2, 0.4, 0.6 ms: two after the restart
     same = read_results(tmp_path / "k3" / "results.h5")
     np.testing.assert_array_equal(same["time"], ref["time"])
@@ -136,6 +143,9 @@ def test_three_rank_checkpoint_restarts_on_three_two_and_one_rank(tmp_path):
         np.testing.assert_allclose(got["ice"]["plate"]["u"], u, rtol=0,
                                    atol=1e-10 * np.abs(u).max())
         np.testing.assert_array_equal(got["ice"]["plate"]["damage"], ref["ice"]["plate"]["damage"])
+        drag = ref["histories"]["energy"]["water_drag_dissipated"]
+        np.testing.assert_allclose(got["histories"]["energy"]["water_drag_dissipated"], drag,
+                                   rtol=1e-10, atol=0)
         force = ref["histories"]["loads/cylinder"]["force"]
         np.testing.assert_allclose(got["histories"]["loads/cylinder"]["force"], force, rtol=0,
                                    atol=1e-10 * np.abs(force).max())
