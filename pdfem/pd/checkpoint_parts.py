@@ -22,6 +22,9 @@ PARTICLE_KEYS = ("y", "v", "f", "theta", "rate_theta", "rate_factors")
 BOND_KEYS = ("broken", "rest", "slip")
 """Per-bond state arrays of a body (those of them the body has)."""
 
+BOND_BLOCK = 1 << 15
+"""Listed bonds matched at a time (each expands to its first end's row, ~100 entries)."""
+
 SCALAR_KEYS = ("time", "external_work", "fracture_dissipated")
 """Scalar state of a body: the time (s, the same in every part) and each rank's part of the
 two energy counters (J)."""
@@ -96,24 +99,21 @@ class PartPicker:
     layout
         The rank's :class:`Layout` of the body.
     template
-        The local body's own ``checkpoint_state()`` (shapes, dtypes, which keys it has).
+        The local body's own ``checkpoint_state()`` (a copy): its arrays are filled in place
+        and returned by :meth:`state` (bonds start fresh: ``broken`` 0, ``rest`` NaN, ``slip``
+        0), so a restore needs no second copy of the local state.
     """
 
     def __init__(self, layout: Layout, template: dict) -> None:
         self.layout = layout
-        n, p = len(layout.gid), len(layout.nbr)
-        self.arrays = {k: np.empty_like(template[k]) for k in PARTICLE_KEYS if k in template}
-        self.found = np.zeros(n, dtype=np.int64)
-        self.bonds = {"broken": np.zeros(p, dtype=np.uint8)}
-        if "rest" in template:
-            self.bonds["rest"] = np.full(p, np.nan, dtype=np.float32)
-        if "slip" in template:
-            self.bonds["slip"] = np.zeros((p, 3), dtype=np.float32)
-        i, j = layout.bond_ends()
-        keys = i * np.int64(layout.n_global) + j
-        self._order = np.argsort(keys, kind="stable")
-        self._keys = keys[self._order]
-        self._owned_gid = layout.gid[layout.owned]
+        self.arrays = {k: template[k] for k in PARTICLE_KEYS if k in template}
+        self.found = np.zeros(len(layout.gid), dtype=np.int64)
+        self.bonds = {k: template[k] for k in BOND_KEYS if k in template}
+        self.bonds["broken"][:] = 0
+        if "rest" in self.bonds:
+            self.bonds["rest"][:] = np.nan
+        if "slip" in self.bonds:
+            self.bonds["slip"][:] = 0
         self.unmatched = 0  # bonds of owned rows in the parts that are not local bonds
 
     def wanted(self, gid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -130,17 +130,34 @@ class PartPicker:
             a[where] = values[k][hit]
 
     def take_bonds(self, values: dict) -> None:
-        """Put a chunk of a part's listed bonds (``bond_i``, ``bond_j``, states) in place."""
-        keys = values["bond_i"] * np.int64(self.layout.n_global) + values["bond_j"]
-        pos = np.minimum(np.searchsorted(self._keys, keys), max(len(self._keys) - 1, 0))
-        hit = self._keys[pos] == keys if len(self._keys) else np.zeros(len(keys), bool)
-        mine = np.isin(values["bond_i"], self._owned_gid, assume_unique=False)
-        self.unmatched += int(np.count_nonzero(mine & ~hit))
-        where = self._order[pos[hit]]
-        for k, a in self.bonds.items():
-            if k not in values:
-                raise ValueError(f"'{k}' is missing from a part of the checkpoint")
-            a[where] = values[k][hit]
+        """Put a chunk of a part's listed bonds (``bond_i``, ``bond_j``, states) in place: each
+        is looked for in the local row of its first end (no bond-sized temporary)."""
+        for a in range(0, len(values["bond_i"]), BOND_BLOCK):
+            block = {k: v[a:a + BOND_BLOCK] for k, v in values.items()}
+            hit, where = self._find_bonds(block["bond_i"], block["bond_j"])
+            for k, arr in self.bonds.items():
+                if k not in block:
+                    raise ValueError(f"'{k}' is missing from a part of the checkpoint")
+                arr[where] = block[k][hit]
+
+    def _find_bonds(self, bi: np.ndarray, bj: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(hit, local bond number of the hits) of bonds named by their ends' global numbers;
+        counts in :attr:`unmatched` the bonds of owned rows that are not local bonds."""
+        lay = self.layout
+        hit_i, li = locate(lay.gid, bi)
+        hit_j, lj = locate(lay.gid, bj)
+        start = lay.row_ptr[li]
+        length = np.where(hit_i & hit_j, lay.row_ptr[li + 1] - start, 0)
+        owner = np.repeat(np.arange(len(bi)), length)
+        edge = np.repeat(start - np.cumsum(length) + length, length) + np.arange(length.sum())
+        match = np.asarray(lay.nbr)[edge] == lj[owner]
+        hit = np.zeros(len(bi), dtype=bool)
+        where = np.zeros(len(bi), dtype=np.int64)
+        hit[owner[match]] = True
+        where[owner[match]] = edge[match]
+        owned_row = hit_i & lay.owned[li]
+        self.unmatched += int(np.count_nonzero(owned_row & ~hit))
+        return hit, where[hit]
 
     def state(self, scalars: dict, name: str) -> dict:
         """The local state for the local body's ``restore_state`` (scalars given).
