@@ -84,9 +84,11 @@ def owned_part(layout: Layout, state: dict) -> tuple[dict, dict, dict]:
         keep |= layout.counted & ~np.isnan(state["rest"])
     if "slip" in state:
         keep |= layout.counted & np.any(state["slip"] != 0, axis=1)
-    i, j = layout.bond_ends()
-    bonds = {"bond_i": i[keep], "bond_j": j[keep]}
-    bonds.update({k: np.asarray(state[k])[keep] for k in BOND_KEYS if k in state})
+    edges = np.flatnonzero(keep)
+    rows = np.searchsorted(layout.row_ptr, edges, side="right") - 1
+    bonds = {"bond_i": layout.gid[rows],
+             "bond_j": layout.gid[np.asarray(layout.nbr[edges], dtype=np.int64)]}
+    bonds.update({k: np.asarray(state[k])[edges] for k in BOND_KEYS if k in state})
     return particles, bonds, {k: float(state[k]) for k in SCALAR_KEYS}
 
 
