@@ -164,8 +164,9 @@ def test_killed_mpi_run_restarts_bit_identical(case_dir):
     """On 2 MPI ranks (short-range contact across the ranks included): SIGKILL of the whole
     job after a checkpoint, then ``mpiexec -n 2 pdfem
     run --restart``: every frame and history equals the uninterrupted 2-rank run bit for bit.
-    The same checkpoint restarted on 1 rank agrees with it to round-off (1e-10): the checkpoint
-    holds the whole state in global order, whatever the rank count that wrote it."""
+    The same checkpoint restarted on 1 rank agrees with it to round-off (1e-10): the ranks'
+    checkpoint parts name their particles and bonds by global numbers, so any rank count reads
+    them."""
     mpi = [_mpiexec(), "-n", "2", *_command(), "run", str(case_dir / "case.toml")]
     ref = case_dir / "mpi_ref"
     r = subprocess.run([*mpi, "--out", str(ref), "--quiet"], capture_output=True, text=True,

@@ -47,9 +47,11 @@ class ParticleForce(ABC):
 
     def checkpoint_state(self) -> dict:
         """Counters this force keeps between steps (energy taken out, positions at its last
-        evaluation), for a checkpoint: per-particle arrays in global order on rank 0 (``None``
-        elsewhere; collective under MPI). Default: nothing (a force without memory)."""
+        evaluation), for a checkpoint: per body ``k`` of its bodies, arrays ``<key>_<k>`` over
+        this rank's owned particles with their global numbers ``gid_<k>`` (not collective;
+        :mod:`pdfem.run.checkpoint_ranks`). Default: nothing (a force without memory)."""
         return {}
 
     def restore_state(self, state: dict) -> None:
-        """Put a state from :meth:`checkpoint_state` back, exactly. Default: nothing."""
+        """Put a state from :meth:`checkpoint_state` back, exactly: its ``<key>_<k>`` arrays
+        come in body ``k``'s local particle order. Default: nothing."""

@@ -129,31 +129,33 @@ class Water(ParticleForce):
         """Per body ``k`` (in order) the drag loss ``dissipated_<k>`` and the water's kinetic
         energy ``water_kinetic_<k>`` per particle (J), the drag and added-mass forces at the
         last evaluation ``drag_prev_<k>``, ``am_prev_<k>`` (N/m^3) and the positions then
-        ``y_prev_<k>`` (m), in global particle order on rank 0 (``None`` elsewhere; collective
-        under MPI), so that a restart continues the energy history bit for bit."""
+        ``y_prev_<k>`` (m), over this rank's owned particles, whose global numbers are
+        ``gid_<k>`` (not collective), so that a restart on any number of ranks continues the
+        energy history (bit for bit on as many)."""
         out: dict = {}
         for k, (b, s) in enumerate(zip(self.bodies, self._state)):
+            own = np.asarray(b.owned, dtype=bool)
+            out[f"gid_{k}"] = b.owned_reference()[0]
             for key in self._SAVED:
                 values = getattr(s, key)
-                out[f"{key}_{k}"] = b.gather(b.y if values is None else values)
-        return None if any(v is None for v in out.values()) else out
+                out[f"{key}_{k}"] = (b.y if values is None else values)[own]
+        return out
 
     def restore_state(self, state: dict) -> None:
-        """Put a state from :meth:`checkpoint_state` back into the owned particles (a
-        checkpoint from any number of ranks: the arrays are in global order)."""
+        """Put a state from :meth:`checkpoint_state` back into the owned particles: per body
+        ``k`` the arrays ``<key>_<k>`` in the body's local particle order (the checkpoint's
+        parts picked by :mod:`pdfem.run.checkpoint_ranks`)."""
         for k, (b, s) in enumerate(zip(self.bodies, self._state)):
-            ids = b.owned_reference()[0]
             own = np.asarray(b.owned, dtype=bool)
             if s.y_prev is None:
                 s.y_prev = b.y.copy()
             for key in self._SAVED:
                 saved = np.asarray(state[f"{key}_{k}"], dtype=np.float64)
                 target = getattr(s, key)
-                if len(saved) != len(b.global_body.x0):
-                    raise ValueError(f"water on ice body '{b.name}': {key} has {len(saved)} "
-                                     f"entries in the checkpoint, the body "
-                                     f"{len(b.global_body.x0)}")
-                target[own] = saved[ids]
+                if saved.shape != target.shape:
+                    raise ValueError(f"water on ice body '{b.name}': {key} has shape "
+                                     f"{saved.shape} in the checkpoint, {target.shape} here")
+                target[own] = saved[own]
 
     def submerged_volumes(self) -> list[float]:
         """Submerged volume of each body (m^3, over all ranks): sum of vol * phi."""

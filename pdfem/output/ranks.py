@@ -1,8 +1,13 @@
-"""Per-rank ice files of an MPI run (``run.output_per_rank``) and their merge into one result.
+"""Per-rank ice files of an MPI run and their merge into one result.
 
-Each rank writes the ice particles it owns to ``results.rank<R>.h5`` beside ``results.h5``
-(with ``/ice/<body>/index``, the global particle numbers); ``results.h5`` then holds the
-structures and histories, and its ``/meta`` attribute ``ice_per_rank`` the number of ranks.
+An MPI run writes its ice per rank when ``run.output_per_rank`` is set or, by default, when
+its ice bodies have more than :data:`PER_RANK_PARTICLES` particles in total
+(:func:`per_rank_output`): gathering every frame to rank 0 would need the whole body's fields
+in one process. Each rank writes the ice particles it owns to ``results.rank<R>.h5`` beside
+``results.h5`` (with ``/ice/<body>/index``, the global particle numbers); ``results.h5`` holds the
+structures and histories, and its ``/meta`` attribute ``ice_per_rank`` the number of ranks;
+its XDMF file shows the ice of every rank file as one spatial collection per frame
+(:class:`pdfem.output.xdmf.RankIceGrid`), so ParaView opens the whole run from it.
 :func:`pdfem.output.reader.read_results` puts the parts back together in global order.
 """
 
@@ -12,6 +17,24 @@ import os
 from pathlib import Path
 
 import numpy as np
+
+
+PER_RANK_PARTICLES = 2_000_000
+"""Total ice particles above which an MPI run writes its ice per rank by default: 2 M particles
+make 48 MB per frame of ``u`` and ``v`` (float64) plus the gather's copies on rank 0."""
+
+
+def per_rank_output(requested: bool, ranks: int, particles: int) -> bool:
+    """Whether a run on ``ranks`` ranks with ``particles`` ice particles in total writes its
+    ice per rank: ``requested`` (``run.output_per_rank``) or more than
+    :data:`PER_RANK_PARTICLES` particles, and more than one rank."""
+    return ranks > 1 and (bool(requested) or particles > PER_RANK_PARTICLES)
+
+
+def rank_grid_files(path: str | os.PathLike, counts: list[int]) -> list[tuple[str, int]]:
+    """``(per-rank file name, particles in it)`` of every rank beside a results file, for
+    :meth:`pdfem.output.writer.ResultsWriter.add_rank_ice_body`."""
+    return [(rank_file(path, r).name, int(n)) for r, n in enumerate(counts)]
 
 
 def rank_file(path: str | os.PathLike, rank: int) -> Path:

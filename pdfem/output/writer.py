@@ -97,6 +97,7 @@ class ResultsWriter:
         self.xdmf_path = self.path.with_suffix(".xdmf")
         self._h5name = self.path.name
         self._grids: dict[str, xdmf.XdmfGrid] = {}
+        self._rank_grids: list[xdmf.RankIceGrid] = []  # ice in per-rank files (XDMF only)
         self._xdmf = xdmf.XdmfFile(self.xdmf_path, self._h5name, expected_frames)
         self._histories: dict[str, History] = {}
         self._frames = 0
@@ -170,6 +171,25 @@ class ResultsWriter:
             self._h5name, f"ice/{name}", path, n, volume is not None,
             FrameSeries(f, path, {"Node": n}, ((), (3,)), REQUIRED_ICE_FIELDS))
 
+    def add_rank_ice_body(self, name: str, files: list[tuple[str, int]], volume: bool) -> None:
+        """Show an ice body that the MPI ranks write to their own files (``run.output_per_rank``)
+        in this file's XDMF: one spatial collection per frame of the ranks' grids
+        (:class:`pdfem.output.xdmf.RankIceGrid`). Nothing is stored in the HDF5 file.
+
+        Parameters
+        ----------
+        name
+            Body name.
+        files
+            ``(per-rank file name relative to this file, particles in it)`` of every rank.
+        volume
+            Whether the per-rank files hold the particle volumes.
+        """
+        if self._frames:
+            raise ValueError(f"ice {name!r} added after the first frame; add all bodies first")
+        self._rank_grids.append(xdmf.RankIceGrid(f"ice/{name}", f"/ice/{name}", list(files),
+                                                 volume))
+
     def add_structure(self, name: str, points: np.ndarray, cells: np.ndarray,
                       cell_type: str) -> None:
         """Register a structure (elastic mesh or rigid surface) and store its mesh.
@@ -232,7 +252,8 @@ class ResultsWriter:
         self._last_time = float(kept[-1])
         self._resumed = True
         self._sync()
-        self._xdmf.grids = [g for g in self._grids.values() if g.series.fields is not None]
+        self._xdmf.grids = [g for g in self._grids.values() if g.series.fields is not None
+                            ] + self._rank_grids
         self._xdmf.set_times(kept)
 
     def history_rows(self) -> dict[str, int]:
@@ -286,7 +307,7 @@ class ResultsWriter:
             self._grids[k].series.append(index, arrays)
         self._sync(time)
         if index == 0:
-            self._xdmf.grids = list(self._grids.values())
+            self._xdmf.grids = list(self._grids.values()) + self._rank_grids
         self._xdmf.add_frame(time)
         return index
 

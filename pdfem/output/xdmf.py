@@ -6,7 +6,9 @@ its elements (Tetrahedron, Hexahedron, Triangle, Quadrilateral, Tetrahedron_10 o
 Hexahedron_20) and geometry ``points``;
 one attribute per field (Scalar or Vector, centred on the nodes or, for fields such as
 ``von_mises``, on the cells). The HDF5 file is named relative to the XDMF file, so the two
-can be moved together. Each attribute references a per-frame dataset
+can be moved together. An ice body that an MPI run wrote in per-rank files is one spatial
+collection per frame of the ranks' grids, each naming its own file (:class:`RankIceGrid`).
+Each attribute references a per-frame dataset
 ``/xdmf/ice/<body>/<field>/<frame>``: an HDF5 virtual dataset that maps frame F of the
 (F, N, ...) dataset (no copy, :func:`create_view`). meshio's ``TimeSeriesReader`` cannot
 read XDMF hyperslabs; it and VTK's ``vtkXdmfReader`` (ParaView's XDMF reader) both read
@@ -161,7 +163,7 @@ class XdmfGrid:
 
 
 def ice_grid(h5name: str, name: str, body: str, n: int, volume: bool,
-             series: FrameSeries) -> XdmfGrid:
+             series: FrameSeries | None) -> XdmfGrid:
     """The grid of an ice body at HDF5 path ``body``: ``n`` particles at ``x0``, and its
     ``volume`` shown in every frame if it has one."""
     constant = "" if not volume else attribute(
@@ -175,6 +177,53 @@ def structure_grid(h5name: str, name: str, body: str, cell_type: str, nn: int, n
     """The grid of a structure at HDF5 path ``body``: ``ne`` elements over ``nn`` nodes."""
     return XdmfGrid(name, cell_topology(h5name, f"{body}/cells", cell_type, ne),
                     geometry(h5name, f"{body}/points", nn), "", series)
+
+
+RANK_ICE_FIELDS = {"u": (3,), "v": (3,), "damage": ()}
+"""Fields of an ice body in the per-rank files of an MPI run (m, m/s, -) and their shapes."""
+
+
+class RankIceGrid:
+    """An ice body written in per-rank files (``run.output_per_rank``), shown in the main
+    XDMF file as one spatial collection per frame of the ranks' uniform grids, each referencing
+    its own file's reference positions, vertices and per-frame views: ParaView opens the whole
+    run from the one file.
+
+    Parameters
+    ----------
+    name
+        Grid name, e.g. ``"ice/sheet"``.
+    body
+        HDF5 path of the body in the per-rank files, ``/ice/<name>``.
+    files
+        ``(file name relative to the XDMF file, particles in it)`` of every rank, in order.
+    volume
+        Whether the files hold the particle volumes (shown in every frame).
+    """
+
+    def __init__(self, name: str, body: str, files: list[tuple[str, int]], volume: bool) -> None:
+        self.name, self.body, self.files, self.volume = name, body, files, volume
+
+    def head(self) -> str:
+        """The opening tag of the body's temporal collection."""
+        return (f'    <Grid Name={quoteattr(self.name)} GridType="Collection" '
+                'CollectionType="Temporal">')
+
+    def frame_xml(self, h5name: str, index: int, time: float) -> str:
+        """The spatial collection of frame ``index`` at ``time`` (s); ``h5name`` is unused (each
+        rank's grid names its own file)."""
+        parts = [f'<Grid Name={quoteattr(self.name)} GridType="Collection" '
+                 f'CollectionType="Spatial"><Time Value="{float(time)!r}"/>']
+        for r, (h5, n) in enumerate(self.files):
+            grid = ice_grid(h5, f"{self.name}.rank{r}", self.body, n, self.volume, None)
+            parts += [f'<Grid Name={quoteattr(grid.name)} GridType="Uniform">',
+                      grid.topology_xml, grid.geometry_xml, grid.constant_xml]
+            for k, shape in RANK_ICE_FIELDS.items():
+                parts.append(attribute(k, shape, "Node", data_item(
+                    h5, view_path(self.body, k, index), (n,) + shape)))
+            parts.append("</Grid>")
+        parts.append("</Grid>")
+        return "\n      " + "\n      ".join(parts)
 
 
 HEAD = '<?xml version="1.0" encoding="utf-8"?>\n<Xdmf Version="3.0">\n  <Domain>\n'

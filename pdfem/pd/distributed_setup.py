@@ -131,8 +131,8 @@ def local_pairs(x: np.ndarray, owned: np.ndarray, delta: float):
 
 
 def local_plan(gid, owned, owner, row_ptr, nbr, rank: int) -> HaloPlan:
-    """The :class:`~pdfem.pd.distributed.HaloPlan` of the local particles (``pairs`` None: the
-    global bond numbers are found when a checkpoint needs them)."""
+    """The :class:`~pdfem.pd.distributed.HaloPlan` of the local particles (``pairs`` None: no
+    global bond numbers; checkpoints name bonds by their ends, :mod:`pdfem.pd.checkpoint_parts`)."""
     recv, send = {}, {}
     for q in np.unique(owner[~owned]):
         q = int(q)

@@ -1,34 +1,37 @@
-"""Checkpoints of a run: everything needed to continue it, written atomically.
+"""Checkpoints of a run: everything needed to continue it, written so a kill never spoils one.
 
-A checkpoint is one HDF5 file (``<out>/checkpoint.h5``, replaced each time) holding, at the end
-of a coupling step:
+The checkpoint file ``<out>/checkpoint.h5`` (the *manifest*, replaced each time) holds, at the
+end of a coupling step:
 
 - ``/driver`` attrs: the clock and output counters (:class:`DriverState`: step, time, coupling
   step and substep counts, next output time, frames written, broken bonds, the initial energy
   of the energy balance) and, in ``/driver/history_rows``, the rows of every results history;
-- ``/ice/<body>``: the state of each ice body, in global particle and bond order whatever the
-  number of MPI ranks: datasets ``y`` (m), ``v`` (m/s), ``f`` (N/m^3), ``broken`` (uint8 per
-  bond), ``theta``; attrs ``time`` (s), ``external_work`` (J, the work of the velocity
-  constraints) and, from a run on several ranks, ``external_work_ranks`` (each rank's part);
 - ``/structure/<name>``: the ``checkpoint_state()`` of each structure (elastic: u, v, a, v_half, f_ext,
   f_damp, time, surface_forces; rigid: time, time_carry, surface_forces; ship: c, q, v, L,
   time, thrust and surge work, surface_forces);
 - ``/coupler``: :meth:`pdfem.coupling.coupler.Coupler.checkpoint_state` (time, pending contact loads,
-  contact work counters, last pair loads);
-- ``/forces/<i>``: the ``checkpoint_state()`` of the coupler's particle forces that keep one
-  (water: drag loss and water kinetic energy per particle, J, in global order);
+  contact work counters, last pair loads; per-rank counters as totals and ``<key>_ranks``);
+- ``/bodies`` attrs: each ice body's particle count;
 - root attrs ``format``, ``pdfem_version``, ``case_sha256`` (SHA-256 of the case text: a
-  checkpoint refuses to restart another case).
+  checkpoint refuses to restart another case), ``generation`` (the step) and ``parts``.
 
-A run on several ranks gathers the state to rank 0, which writes the file; counters that each
-rank keeps for its own particles are stored as totals and per rank (``<key>_ranks``). A restart
-on as many ranks continues bit for bit; on another rank count (or serially) it continues with
-the totals on rank 0, which changes only the rounding of those counters' sums.
+The ice and the particle forces' per-particle state (water) are stored in *parts*, one per rank
+that wrote them (:mod:`pdfem.run.checkpoint_ranks`: owned particles and non-fresh bonds under
+their global numbers). A serial run (``parts`` = 0) keeps its one part inside the manifest. A
+run on K ranks has every rank write ``checkpoint.g<step>.rank<R>.h5``; rank 0 then writes the
+manifest, naming the K files with their sizes (``/parts`` dataset), LAST: written to
+``checkpoint.h5.tmp``, fsync'ed, moved over the old one with ``os.replace``; only then are the
+previous generation's part files deleted. A run killed at any moment therefore leaves a valid
+set: the previous manifest with its parts, or the new one with its parts.
 
-Scalars are attributes, arrays datasets, all float64 except ``broken``. The file is written to
-``<name>.tmp``, fsync'ed, then moved over the old one with ``os.replace``: a run killed at any
-moment leaves the previous or the new checkpoint whole, never a mix. Restoring sets every array
-bit for bit, so a restarted run continues exactly as the uninterrupted one would.
+A restart on N ranks from a checkpoint of M ranks (or serial <-> parallel): every rank reads the
+manifest, then from every part only the particles and bonds it holds, so no rank holds a global
+array. Counters each rank keeps for its own particles continue bit for bit on as many ranks; on
+another count rank 0 takes their totals, which changes only the rounding of their sums.
+
+Scalars are attributes, arrays datasets. Restoring sets every array bit for bit, so a restart on
+as many ranks continues exactly as the uninterrupted run would. :data:`FORMAT` 2 (per-rank
+parts); a checkpoint of format 1 (pdfem before per-rank parts) is refused (exit 2).
 """
 
 from __future__ import annotations
@@ -43,12 +46,20 @@ import numpy as np
 
 from pdfem import __version__
 from pdfem.errors import InputError
+from pdfem.run.checkpoint_ranks import (has_force_state, part_path, remove_other_generations,
+                                        restore_force, restore_ice, write_part, write_part_file)
 
-FORMAT = 1
+FORMAT = 2
 """Checkpoint format version; a checkpoint of another version is refused."""
 
 CHECKPOINT_NAME = "checkpoint.h5"
-"""File name of the checkpoint in the output directory."""
+"""File name of the checkpoint (the manifest) in the output directory."""
+
+
+def before_manifest(generation: int) -> None:
+    """Called on every rank once all part files of checkpoint ``generation`` are on disk and
+    before rank 0 writes the manifest that makes them valid: a run that dies here must restart
+    from the previous checkpoint (tests replace this hook to raise, as a crash would)."""
 
 
 @dataclass
@@ -69,14 +80,15 @@ class DriverState:
 
 @dataclass
 class Checkpoint:
-    """A checkpoint read back: the driver counters and the state of every part."""
+    """A checkpoint's manifest read back: the driver counters, the shared state and the part
+    files holding the ice (read by :func:`restore`, each rank its own particles)."""
 
     path: Path
     driver: DriverState
-    ice: dict[str, dict]
+    bodies: dict[str, int]
     structures: dict[str, dict]
     coupler: dict
-    forces: dict = field(default_factory=dict)
+    parts: list[Path] = field(default_factory=list)
 
 
 def case_hash(text: str) -> str:
@@ -98,18 +110,23 @@ def _get(group: h5py.Group) -> dict:
     return out
 
 
+def _split_comm(bodies: list):
+    """The communicator of the ice bodies split over ranks (``None`` when none is)."""
+    return next((b.comm for b in bodies if b.distributed), None)
+
+
 def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverState, bodies: list,
                      structures: list, coupler, rank: int = 0) -> Path | None:
-    """Write a checkpoint atomically (temporary file, fsync, ``os.replace``).
+    """Write a checkpoint so that a kill at any moment leaves the previous or the new one whole.
 
-    With ice bodies split over MPI ranks every rank calls this: each body's and the coupler's
-    ``checkpoint_state()`` gathers the whole state (in global particle and bond order, the same
-    file a serial run writes) on rank 0, which writes the file.
+    Every rank calls this. With ice bodies split over K > 1 ranks each rank writes its part file
+    (generation ``driver.step``), then rank 0 the manifest naming them, then removes the older
+    generation; serially (or with no split body) rank 0 writes the manifest with its one part.
 
     Parameters
     ----------
     path
-        The checkpoint file (replaced).
+        The checkpoint file (the manifest; replaced).
     case_text
         The case's TOML text (its hash is stored).
     driver
@@ -117,26 +134,37 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
     bodies, structures
         The ice bodies and the structures (with ``checkpoint_state()``).
     coupler
-        The :class:`pdfem.coupling.coupler.Coupler`.
+        The :class:`pdfem.coupling.coupler.Coupler` (its ``forces`` with ``checkpoint_state()``).
     rank
-        This process's MPI rank (only rank 0 writes).
+        This process's MPI rank (rank 0 writes the manifest).
 
     Returns
     -------
     Path or None
         ``path`` (``None`` on ranks other than 0).
     """
-    ice = [(b.name, b.checkpoint_state()) for b in bodies]  # collective under MPI
+    path, gen = Path(path), int(driver.step)
+    comm = _split_comm(bodies)
+    sizes = None
+    if comm is not None and comm.size > 1:
+        mine = write_part_file(part_path(path, gen, comm.rank), gen, comm.rank, bodies,
+                               coupler.forces)
+        sizes = comm.gather(mine)  # every part is on disk before the manifest names it
+        before_manifest(gen)
     coupler_state = coupler.checkpoint_state()  # collective under MPI
-    forces = [f.checkpoint_state() for f in coupler.forces]  # collective under MPI
     if rank != 0:
         return None
-    path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
     with h5py.File(tmp, "w") as f:
         f.attrs["format"] = FORMAT
         f.attrs["pdfem_version"] = __version__
         f.attrs["case_sha256"] = case_hash(case_text)
+        f.attrs["generation"] = gen
+        f.attrs["parts"] = 0 if sizes is None else len(sizes)
+        if sizes is None:
+            write_part(f, bodies, coupler.forces)
+        else:
+            f.create_dataset("part_sizes", data=np.array(sizes, dtype=np.int64))
         d = f.create_group("driver")
         values = asdict(driver)
         rows = values.pop("history_rows")
@@ -144,22 +172,37 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         h = d.create_group("history_rows")
         for k, n in rows.items():
             h.attrs[k] = int(n)
-        for name, state in ice:
-            _put(f.create_group(f"ice/{name}"), state)
+        g = f.create_group("bodies")
+        for b in bodies:
+            g.attrs[b.name] = int(b.global_n if b.distributed else b.n)
         for s in structures:
             _put(f.create_group(f"structure/{s.name}"), s.checkpoint_state())
         _put(f.create_group("coupler"), coupler_state)
-        for i, state in enumerate(forces):
-            if state:
-                _put(f.create_group(f"forces/{i}"), state)
     with open(tmp, "rb+") as fh:
         os.fsync(fh.fileno())
     os.replace(tmp, path)
+    _fsync_dir(path.parent)
+    remove_other_generations(path, gen, 0 if sizes is None else len(sizes))
     return path
 
 
+def _fsync_dir(folder: Path) -> None:
+    """Make a rename in ``folder`` durable (where the platform allows it)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
 def read_checkpoint(path: str | os.PathLike, case_text: str, case_file: str) -> Checkpoint:
-    """Read a checkpoint and check that it belongs to the case.
+    """Read a checkpoint's manifest, check that it belongs to the case and that its part files
+    are there whole (the ice itself is read by :func:`restore`).
 
     Parameters
     ----------
@@ -173,7 +216,8 @@ def read_checkpoint(path: str | os.PathLike, case_text: str, case_file: str) -> 
     Raises
     ------
     InputError
-        If the file is missing, not a pdfem checkpoint, of another format, or of another case.
+        If the file is missing, not a pdfem checkpoint, of another format, of another case, or
+        one of its part files is missing or of another size than the manifest records.
     """
     p = Path(path)
     where = "--restart"
@@ -189,7 +233,9 @@ def read_checkpoint(path: str | os.PathLike, case_text: str, case_file: str) -> 
         fmt = int(f.attrs.get("format", -1))
         if fmt != FORMAT:
             raise InputError(str(p), where, f"checkpoint format {fmt} is not the format "
-                             f"{FORMAT} this pdfem {__version__} reads")
+                             f"{FORMAT} this pdfem {__version__} reads (format 1, one file "
+                             "gathered on rank 0, came before per-rank parts): continue it with "
+                             "the pdfem version that wrote it, or start the run again")
         stored = f.attrs["case_sha256"]
         stored = stored.decode() if isinstance(stored, bytes) else str(stored)
         if stored != case_hash(case_text):
@@ -202,15 +248,25 @@ def read_checkpoint(path: str | os.PathLike, case_text: str, case_file: str) -> 
                              int(d["ice_substeps"]), int(d["structure_substeps"]),
                              float(d["next_output"]), int(d["frames"]), int(d["broken"]),
                              float(d["initial_energy"]), rows)
-        ice = {k: _get(g) for k, g in f.get("ice", {}).items()}
+        bodies = {k: int(v) for k, v in f["bodies"].attrs.items()}
         structures = {k: _get(g) for k, g in f.get("structure", {}).items()}
         coupler = _get(f["coupler"])
-        forces = {int(k): _get(g) for k, g in f.get("forces", {}).items()}
-    return Checkpoint(p, driver, ice, structures, coupler, forces)
+        gen, n_parts = int(f.attrs["generation"]), int(f.attrs["parts"])
+        sizes = f["part_sizes"][()] if n_parts else []
+    parts = [part_path(p, gen, r) for r in range(n_parts)] or [p]
+    for r, size in enumerate(sizes):
+        q = parts[r]
+        if not q.is_file() or q.stat().st_size != int(size):
+            raise InputError(str(p), where, f"its part file {q.name} (rank {r} of {n_parts}) is "
+                             f"{'missing' if not q.is_file() else 'not the size it recorded'}; "
+                             "keep the checkpoint.g<step>.rank<R>.h5 files the manifest names "
+                             "beside it")
+    return Checkpoint(p, driver, bodies, structures, coupler, parts)
 
 
 def restore(checkpoint: Checkpoint, bodies: list, structures: list, coupler) -> None:
-    """Put the state of a checkpoint into freshly built bodies, structures and coupler.
+    """Put the state of a checkpoint into freshly built bodies, structures and coupler; every
+    rank takes its own particles and bonds from the parts (collective under MPI).
 
     Raises
     ------
@@ -218,19 +274,25 @@ def restore(checkpoint: Checkpoint, bodies: list, structures: list, coupler) -> 
         If the bodies or structures do not match the checkpoint's (names or sizes).
     """
     names = sorted(b.name for b in bodies), sorted(s.name for s in structures)
-    if names != (sorted(checkpoint.ice), sorted(checkpoint.structures)):
+    if names != (sorted(checkpoint.bodies), sorted(checkpoint.structures)):
         raise InputError(str(checkpoint.path), "--restart",
-                         f"the checkpoint holds ice {sorted(checkpoint.ice)} and structures "
+                         f"the checkpoint holds ice {sorted(checkpoint.bodies)} and structures "
                          f"{sorted(checkpoint.structures)}, the case {names[0]} and {names[1]}")
+    comm = _split_comm(bodies)
+    rank, size = (0, 1) if comm is None else (comm.rank, comm.size)
     try:
         for b in bodies:
-            b.restore_state(checkpoint.ice[b.name])
+            n = b.global_n if b.distributed else b.n
+            if n != checkpoint.bodies[b.name]:
+                raise ValueError(f"ice body '{b.name}' has {checkpoint.bodies[b.name]} particles "
+                                 f"in the checkpoint, {n} in the case")
+            restore_ice(checkpoint.parts, b, rank, size)
         for s in structures:
             s.restore_state(checkpoint.structures[s.name])
         coupler.restore_state(checkpoint.coupler)
         for i, force in enumerate(coupler.forces):
-            if i in checkpoint.forces:
-                force.restore_state(checkpoint.forces[i])
+            if has_force_state(checkpoint.parts, i):
+                restore_force(checkpoint.parts, i, force)
     except (KeyError, ValueError) as exc:
         raise InputError(str(checkpoint.path), "--restart",
                          f"the checkpoint does not fit the case's bodies: {exc}") from None

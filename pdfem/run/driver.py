@@ -156,7 +156,7 @@ def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart
     meta = {"title": case.run.title, "ranks": comm.size, "time_step": setup.dt,
             "ice_substeps": setup.n_ice, "structure_substeps": setup.n_st,
             "pd_loop": case.run.pd_loop}
-    writer, ice_writer = open_outputs(case, out, comm, meta, ckpt is not None)
+    writer, ice_writer = open_outputs(case, out, comm, meta, ckpt is not None, setup.particles)
     per_rank = ice_writer is not writer
     energy = EnergyBalance(setup.bodies, setup.structures, setup.forces, setup.coupler)
     outputs = Outputs(writer, ice_writer, sources(setup, per_rank), energy)

@@ -16,6 +16,7 @@ from pathlib import Path
 from pdfem.coupling.facet_loads import FacetLoadSource
 from pdfem.errors import InputError
 from pdfem.output import ResultsWriter, rank_file
+from pdfem.output.ranks import per_rank_output, rank_grid_files
 from pdfem.output.source import Rows, Source
 
 
@@ -29,6 +30,9 @@ class NoOutput:
         self.path = path
 
     def add_ice_body(self, name, x0, volume=None, *, index=None) -> None:
+        """Nothing."""
+
+    def add_rank_ice_body(self, name, files, volume) -> None:
         """Nothing."""
 
     def add_structure(self, name, points, cells, cell_type) -> None:
@@ -240,6 +244,8 @@ class Outputs:
                 if self.per_rank:
                     index, x0, vol = b.owned_reference()
                     self.ice_writer.add_ice_body(b.name, x0, vol, index=index)
+                    counts = rank_grid_files(self.writer.path, b.comm.allgather(len(index)))
+                    self.writer.add_rank_ice_body(b.name, counts, vol is not None)
                 else:
                     self.ice_writer.add_ice_body(b.name, *setup.reference[b.name])
         except ValueError as exc:  # only when appending: the file holds other particles
@@ -297,10 +303,12 @@ class Outputs:
         self.ice_writer.close()
 
 
-def open_outputs(case, out: Path, comm, meta: dict, append: bool) -> tuple:
-    """``(writer, ice_writer)`` of a run on this rank (see :class:`Outputs`)."""
+def open_outputs(case, out: Path, comm, meta: dict, append: bool, particles: int = 0) -> tuple:
+    """``(writer, ice_writer)`` of a run on this rank (see :class:`Outputs`); the ice goes per
+    rank with ``run.output_per_rank`` or above ``particles``
+    :data:`~pdfem.output.ranks.PER_RANK_PARTICLES` in total."""
     path = out / "results.h5"
-    per_rank = case.run.output_per_rank and comm.size > 1
+    per_rank = per_rank_output(case.run.output_per_rank, comm.size, particles)
     if per_rank:
         meta = dict(meta, ice_per_rank=comm.size)
     frames = int(case.run.end_time / case.run.output_interval) + 2
