@@ -306,9 +306,11 @@ class Outputs:
 def open_outputs(case, out: Path, comm, meta: dict, append: bool, particles: int = 0) -> tuple:
     """``(writer, ice_writer)`` of a run on this rank (see :class:`Outputs`); the ice goes per
     rank with ``run.output_per_rank`` or above ``particles``
-    :data:`~pdfem.output.ranks.PER_RANK_PARTICLES` in total."""
+    :data:`~pdfem.output.ranks.PER_RANK_PARTICLES` in total, unless the run re-partitions."""
     path = out / "results.h5"
-    per_rank = per_rank_output(case.run.output_per_rank, comm.size, particles)
+    # a re-partitioning run moves particles between ranks: its ice is gathered whatever its size
+    moves = bool(case.run.rebalance_every or case.run.rebalance_imbalance)
+    per_rank = per_rank_output(case.run.output_per_rank, comm.size, 0 if moves else particles)
     if per_rank:
         meta = dict(meta, ice_per_rank=comm.size)
     frames = int(case.run.end_time / case.run.output_interval) + 2
