@@ -70,7 +70,7 @@ def run(bodies, comm, steps, dt, owner=None):
     active, energy, cross = [], [], 0
     for _ in range(steps):
         c.step()
-        active.append(sr.n_active)
+        active.append(sr.total_pairs())
         if owner is not None:  # pairs whose particles belong to different ranks
             pairs = np.concatenate([sr._pair[k * sr._cap:k * sr._cap + n]
                                     for k, n in enumerate(sr._counts)])

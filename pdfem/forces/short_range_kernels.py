@@ -4,7 +4,9 @@ The particles are entered into a cell hash (:mod:`pdfem.geometry.cell_hash`): cl
 the dense grid padded) cell coordinates, a packed cell key and a bucket per particle
 (:func:`cells`; the bucket is the cell id in the grid folded to ``fold`` cells), then
 counting-sorted by bucket (:func:`pdfem.geometry.cell_hash.counting_sort`) and gathered in that
-order (:func:`gather`). :func:`find_dense` and :func:`find_folded` find the interacting pairs
+order (:func:`gather`); or, for a rank's particles under MPI, sorted by any stable sort and
+indexed by a sparse table of the occupied buckets (:func:`sparse_table`, :func:`first_at`), so
+the table is sized from the particles, not from the grid. :func:`find_dense` and :func:`find_folded` find the interacting pairs
 per chunk of sorted positions (the physics of a pair: :func:`interact`); :func:`sum_pairs` adds
 them up in chunk order (bit-identical for any chunk or thread count).
 """
@@ -35,6 +37,40 @@ def bucket_of(ix, iy, iz, fold):
     if iz >= fold[2]:
         iz %= fold[2]
     return cell_id(ix, iy, iz, fold[1], fold[2])
+
+
+@numba.njit(cache=True, inline="always")
+def first_at(start, ub, b):
+    """First sorted position of a particle in bucket ``b`` or later: ``start[b]`` of a full
+    table (``ub`` empty), or of a sparse one, where ``ub`` lists the occupied buckets
+    (ascending) and ``start[t]`` is the first position of bucket ``ub[t]`` (binary search)."""
+    n = ub.shape[0]
+    if n == 0:
+        return start[b]
+    lo = 0
+    hi = n
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if ub[mid] < b:
+            lo = mid + 1
+        else:
+            hi = mid
+    return start[lo]
+
+
+@numba.njit(cache=True)
+def sparse_table(sorted_buckets, ub, start):
+    """The sparse table of :func:`first_at` for buckets sorted ascending: the occupied buckets
+    into ``ub``, their first positions into ``start`` (plus the end); returns their number."""
+    n = sorted_buckets.shape[0]
+    m = 0
+    for s in range(n):
+        if s == 0 or sorted_buckets[s] != sorted_buckets[s - 1]:
+            ub[m] = sorted_buckets[s]
+            start[m] = s
+            m += 1
+    start[m] = n
+    return m
 
 
 @numba.njit(cache=True)
@@ -98,14 +134,15 @@ def interact(i, j, px, py, pz, d2, x0, vol, stiff, rad, body, dist_factor, rad_f
 
 
 @twin(fastmath=False)
-def find_dense(ys, buckets, start, perm, x0, vol, stiff, rad, body, h, fold, dist_factor,
+def find_dense(ys, buckets, start, ub, perm, x0, vol, stiff, rad, body, h, fold, dist_factor,
                rad_factor, chunk_ptr, cap, pair, val, counts):
     """Pairs on a dense grid padded by one empty cell on every side, per chunk of sorted
     positions, into the chunk's slots ``[c*cap, (c+1)*cap)``.
 
     The forward half stencil of a particle's cell is five contiguous runs of sorted positions:
     the own cell after the particle and the cell +z; the three cells +y; and the three columns
-    of three cells +x. The runs' bounds are looked up once per cell.
+    of three cells +x. The runs' bounds are looked up once per cell, in the full table
+    ``start`` or in a sparse one (``ub`` not empty, :func:`first_at`).
     """
     h2 = h * h
     nz = fold[2]
@@ -121,12 +158,12 @@ def find_dense(ys, buckets, start, perm, x0, vol, stiff, rad, body, h, fold, dis
             ba = buckets[a]
             if ba != last:  # a new cell
                 last = ba
-                run_hi[0] = start[ba + 2]
+                run_hi[0] = first_at(start, ub, ba + 2)
                 for run in range(1, HALF_STENCIL_COLUMNS + 1):
                     ox, oy = forward_column(run)
                     b = ba + ox * nyz + oy * nz
-                    run_lo[run] = start[b - 1]
-                    run_hi[run] = start[b + 2]
+                    run_lo[run] = first_at(start, ub, b - 1)
+                    run_hi[run] = first_at(start, ub, b + 2)
             run_lo[0] = a + 1
             yax = ys[a, 0]
             yay = ys[a, 1]
@@ -146,8 +183,8 @@ def find_dense(ys, buckets, start, perm, x0, vol, stiff, rad, body, h, fold, dis
 
 
 @twin(fastmath=False)
-def find_folded(ys, ijks, keys, buckets, start, perm, x0, vol, stiff, rad, body, h, dims, fold,
-                dist_factor, rad_factor, chunk_ptr, cap, pair, val, counts):
+def find_folded(ys, ijks, keys, buckets, start, ub, perm, x0, vol, stiff, rad, body, h, dims,
+                fold, dist_factor, rad_factor, chunk_ptr, cap, pair, val, counts):
     """:func:`find_dense` for a folded grid: buckets hold several cells, told apart by key.
 
     Each particle scans the buckets of its 27 neighbour cells that come at or after its own
@@ -192,10 +229,10 @@ def find_folded(ys, ijks, keys, buckets, start, perm, x0, vol, stiff, rad, body,
             for t in range(n_nb):
                 b = nb_bucket[t]
                 kb = nb_key[t]
-                q0 = start[b]
+                q0 = first_at(start, ub, b)
                 if b == ba:
                     q0 = a + 1
-                for q in range(q0, start[b + 1]):
+                for q in range(q0, first_at(start, ub, b + 1)):
                     if keys[q] != kb:
                         continue
                     px = ys[q, 0] - yax
@@ -265,3 +302,41 @@ def counted_pairs(counts, cap, pair, val, counted):
                 n += 1
                 energy += val[t, 3]
     return n, energy
+
+
+@numba.njit(cache=True)
+def box_and_drift(y, y_ref):
+    """Bounding box of the points ``y`` (+inf, -inf for none), whether they are all finite, and
+    the largest squared distance (m^2) of a point from its place in ``y_ref`` (same shape)."""
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    finite = True
+    drift = 0.0
+    for i in range(y.shape[0]):
+        d2 = 0.0
+        for k in range(3):
+            v = y[i, k]
+            if not math.isfinite(v):
+                finite = False
+            if v < lo[k]:
+                lo[k] = v
+            if v > hi[k]:
+                hi[k] = v
+            e = v - y_ref[i, k]
+            d2 += e * e
+        if d2 > drift:
+            drift = d2
+    return lo, hi, finite, drift
+
+
+@numba.njit(cache=True)
+def in_box(y, lo, hi):
+    """Indices (int64) of the points of ``y`` inside the box [lo, hi] (bounds included)."""
+    out = np.empty(y.shape[0], dtype=np.int64)
+    n = 0
+    for i in range(y.shape[0]):
+        if (lo[0] <= y[i, 0] <= hi[0] and lo[1] <= y[i, 1] <= hi[1]
+                and lo[2] <= y[i, 2] <= hi[2]):
+            out[n] = i
+            n += 1
+    return out[:n]
