@@ -34,7 +34,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pdfem.forces.short_range_kernels import NOT_FINITE, box_and_drift, in_box
+from pdfem.forces.short_range_kernels import NOT_FINITE, in_box, load_owned
+from pdfem.geometry.cell_hash import bounding_box
 
 #: the Verlet skin s over the cut-off h (see the module text for the choice)
 SKIN_FRACTION = 0.3
@@ -83,7 +84,6 @@ class ContactHalo:
         self._limit2 = (0.5 * self.skin) ** 2
         self._seen: list | None = None
         self._stale = True
-        self._y_ref = np.empty((0, 3))
         self.refreshes = 0
         self.n_ghosts = 0
         self.neighbours: list[int] = []
@@ -106,6 +106,7 @@ class ContactHalo:
     def _take_owned(self) -> None:
         """The owned particles' local indices, global numbers and constants."""
         self._seen = self._plans()
+        self._stale = True
         self.own = [np.flatnonzero(b.owned) for b in self.bodies]
         rec = []
         for k, (b, o) in enumerate(zip(self.bodies, self.own)):
@@ -118,7 +119,6 @@ class ContactHalo:
             r[:, 10] = k
             rec.append(r)
         self._own_rec = np.concatenate(rec)
-        self._y_ref = np.empty((0, 3))
 
     def positions(self) -> np.ndarray:
         """(n_own, 3) current positions of the owned particles, m."""
@@ -130,29 +130,38 @@ class ContactHalo:
     def update(self) -> tuple[np.ndarray, np.ndarray]:
         """Bring the local positions up to date (refreshing the ghosts when due); returns the
         global box (lo, hi) of all particles, m. Collective."""
-        changed = self._owned_changed()
-        if changed:
+        if self._owned_changed():
             self._take_owned()
-        y_own = self.positions()
-        fresh = len(self._y_ref) != len(y_own)
-        lo, hi, finite, drift = box_and_drift(y_own, y_own if fresh else self._y_ref)
-        due = changed or fresh or self._stale
-        row = np.concatenate([lo, hi, [drift, 0.0 if finite else 1.0, 1.0 if due else 0.0]])
+        box = np.array([[np.inf] * 3, [-np.inf] * 3])
+        due = self._stale
+        if due:  # no local arrays for these owned particles yet
+            y_own = self.positions()
+            finite, drift = True, 0.0
+            if len(y_own):
+                lo, hi, finite = bounding_box(y_own)
+                box = np.array([lo, hi])
+        else:  # owned positions straight into the local array
+            finite, drift, k = True, 0.0, 0
+            for b, o in zip(self.bodies, self.own):
+                ok, drift = load_owned(b.y, o, self.own_pos[k:k + len(o)], self.y, self._y_ref,
+                                       box, drift)
+                finite = finite and ok
+                k += len(o)
+        row = np.concatenate([box[0], box[1], [drift, 0.0 if finite else 1.0, float(due)]])
         table = np.array(self.comm.allgather(row))
         if table[:, 7].any():
             raise FloatingPointError(NOT_FINITE)
         if table[:, 8].any() or table[:, 6].max() > self._limit2:
-            self._refresh(y_own, table)
+            self._refresh(self.positions(), table)
         else:
-            self._move(y_own)
+            self._move()
         return table[:, :3].min(axis=0), table[:, 3:6].max(axis=0)
 
-    def _move(self, y_own: np.ndarray) -> None:
+    def _move(self) -> None:
         """Between refreshes: the ghosts' positions from their owners (point to point)."""
-        sends = {q: np.ascontiguousarray(y_own[i]) for q, i in self._send.items()}
+        sends = {q: self.y[p] for q, p in self._send.items()}
         recvs = {q: ((n, 3), np.float64) for q, n in self._recv.items()}
         got = self.comm.exchange(sends, recvs) if (sends or recvs) else {}
-        self.y[self.own_pos] = y_own
         if got:
             self.y[self._ghost_pos] = np.concatenate([got[q] for q in sorted(got)])
 
@@ -204,6 +213,7 @@ class ContactHalo:
         self.owned[self.own_pos] = True
         self.n_ghosts = self.m - n_own
         self.neighbours = sorted(set(self._send) | set(self._recv))
-        self._y_ref = y_own.copy()
+        self._send = {q: self.own_pos[i] for q, i in self._send.items()}  # local positions
+        self._y_ref = self.y.copy()
         self._stale = False
         self.refreshes += 1

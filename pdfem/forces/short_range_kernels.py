@@ -305,28 +305,45 @@ def counted_pairs(counts, cap, pair, val, counted):
 
 
 @numba.njit(cache=True)
-def box_and_drift(y, y_ref):
-    """Bounding box of the points ``y`` (+inf, -inf for none), whether they are all finite, and
-    the largest squared distance (m^2) of a point from its place in ``y_ref`` (same shape)."""
-    lo = np.full(3, np.inf)
-    hi = np.full(3, -np.inf)
+def load_owned(y_body, idx, pos, y, y_ref, box, drift):
+    """Owned positions into the local array: ``y[pos[t]] = y_body[idx[t]]`` (m), while growing
+    the box ``box`` ((2, 3): lo, hi) and returning whether they are all finite and the largest
+    squared distance (m^2) from ``y_ref[pos[t]]``, at least ``drift``."""
     finite = True
-    drift = 0.0
-    for i in range(y.shape[0]):
+    for t in range(idx.shape[0]):
+        i = idx[t]
+        p = pos[t]
         d2 = 0.0
         for k in range(3):
-            v = y[i, k]
+            v = y_body[i, k]
+            y[p, k] = v
             if not math.isfinite(v):
                 finite = False
-            if v < lo[k]:
-                lo[k] = v
-            if v > hi[k]:
-                hi[k] = v
-            e = v - y_ref[i, k]
+            if v < box[0, k]:
+                box[0, k] = v
+            if v > box[1, k]:
+                box[1, k] = v
+            e = v - y_ref[p, k]
             d2 += e * e
         if d2 > drift:
             drift = d2
-    return lo, hi, finite, drift
+    return finite, drift
+
+
+@numba.njit(cache=True)
+def add_owned(f, idx, pos, acc, touched, nt, mark):
+    """``f[idx[t]] += acc[pos[t]]`` for the owned particles touched by the last search
+    (``touched[:nt]``; ``mark``, zeros, of the local size, is left zero)."""
+    for t in range(nt):
+        mark[touched[t]] = 1
+    for t in range(idx.shape[0]):
+        p = pos[t]
+        if mark[p]:
+            i = idx[t]
+            for k in range(3):
+                f[i, k] += acc[p, k]
+    for t in range(nt):
+        mark[touched[t]] = 0
 
 
 @numba.njit(cache=True)

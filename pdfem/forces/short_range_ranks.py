@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from pdfem.forces.short_range_halo import ContactHalo
-from pdfem.forces.short_range_kernels import NO_SHIFT, counted_pairs, sum_pairs
+from pdfem.forces.short_range_kernels import NO_SHIFT, add_owned, counted_pairs, sum_pairs
 from pdfem.geometry.cell_hash import bounding_box
 
 if TYPE_CHECKING:
@@ -108,11 +108,7 @@ class DistributedSearch:
         nt = c._n_touched
         if nt == 0:
             return
-        hit = np.zeros(h.m, dtype=np.bool_)
-        hit[c._touched[:nt]] = True
         k = 0
         for f, o in zip(fs, h.own):
-            pos = h.own_pos[k:k + len(o)]
+            add_owned(f, o, h.own_pos[k:k + len(o)], c._acc, c._touched, nt, c._mark)
             k += len(o)
-            sel = hit[pos]
-            f[o[sel]] += c._acc[pos[sel]]
