@@ -54,6 +54,7 @@ class DistributedSearch:
         self.halo = ContactHalo(bodies, contact.offsets, stiffness, radius, contact.cell_size,
                                 self.comm)
         self.n_counted = 0
+        self.grid_buckets = 0  # buckets of the serial run's grid (not allocated here)
 
     @property
     def n_ghosts(self) -> int:
@@ -71,6 +72,7 @@ class DistributedSearch:
         glo, ghi = h.update()
         m = h.m
         dims, pad, fold, nb = c._grid(glo, ghi, c.n)  # the serial run's grid
+        self.grid_buckets = nb
         if m < 2:
             return 0.0
         c._reserve(m)
