@@ -11,9 +11,10 @@ Compare runs with 1 and 2 ranks (``NUMBA_NUM_THREADS=1`` for one core per rank).
 ``--contact``: the same plate cut into two layers at mid-thickness, two ice bodies, the upper
 lowered by 0.15 dx so that the facing particles (one per column) press on each other, with
 short-range contact on (:class:`pdfem.forces.short_range.ShortRangeContact`: every particle is
-searched every step, and the interface holds n / nz interacting pairs, one per column). The JSON then
-also gives the contact's seconds per step, its pairs, ghosts per rank, halo refreshes and the
-median step (of the slowest rank per step; 20 steps), less sensitive to other jobs.
+searched every step, and the interface holds n / nz interacting pairs, one per column). The
+JSON then also gives the contact's seconds per step, its pairs, ghosts per rank, halo
+refreshes and the median step (of the slowest rank per step; 20 steps), less sensitive to
+other jobs on the machine.
 """
 
 from __future__ import annotations

@@ -189,8 +189,8 @@ class ContactHalo:
             r = self._own_rec[idx].copy()
             r[:, 1:4] = y_own[idx]
             sends[q] = r
-        got = comm.exchange(sends, {q: ((n, _COLUMNS), np.float64)
-                                    for q, n in self._recv.items()}) if (sends or self._recv) else {}
+        recvs = {q: ((n, _COLUMNS), np.float64) for q, n in self._recv.items()}
+        got = comm.exchange(sends, recvs) if (sends or recvs) else {}
         rec = self._own_rec.copy()
         rec[:, 1:4] = y_own
         rec = np.concatenate([rec] + [got[q] for q in sorted(got)])

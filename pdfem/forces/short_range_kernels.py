@@ -6,9 +6,11 @@ the dense grid padded) cell coordinates, a packed cell key and a bucket per part
 counting-sorted by bucket (:func:`pdfem.geometry.cell_hash.counting_sort`) and gathered in that
 order (:func:`gather`); or, for a rank's particles under MPI, sorted by any stable sort and
 indexed by a sparse table of the occupied buckets (:func:`sparse_table`, :func:`first_at`), so
-the table is sized from the particles, not from the grid. :func:`find_dense` and :func:`find_folded` find the interacting pairs
-per chunk of sorted positions (the physics of a pair: :func:`interact`); :func:`sum_pairs` adds
-them up in chunk order (bit-identical for any chunk or thread count).
+the table is sized from the particles, not from the grid. :func:`find_dense` and
+:func:`find_folded` find the interacting pairs per chunk of sorted positions (the physics of
+a pair: :func:`interact`); :func:`sum_pairs` adds them up in chunk order (bit-identical for any
+chunk or thread count). :func:`load_owned`, :func:`add_owned` and :func:`in_box` serve a rank's
+contact halo (:mod:`pdfem.forces.short_range_halo`).
 """
 
 from __future__ import annotations
