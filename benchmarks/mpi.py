@@ -88,12 +88,15 @@ def _contact_steps(args, comm) -> dict:
         d.start()
     sr.add_forces()
     step()  # warm-up
+    for d in dists:
+        d.exchange_seconds = 0.0
     comm.allreduce_sum(0)
     t0 = time.perf_counter()
     times = np.array([step() for _ in range(args.steps)])
     wall = time.perf_counter() - t0
     pairs = sr.total_pairs()
-    walls = comm.gather((wall, times[:, 0].sum(), sr._dist.n_ghosts, times[:, 1]))
+    walls = comm.gather((wall, times[:, 0].sum(), sr._dist.n_ghosts, times[:, 1],
+                         sum(d.exchange_seconds for d in dists)))
     return {"walls": walls, "n_particles": sum(int(d.global_n) for d in dists),
             "n_pairs": sum(int(d.global_body.nbr.shape[0]) for d in dists),
             "contact_pairs": pairs, "refreshes": sr._dist.halo.refreshes}
@@ -116,6 +119,7 @@ def main(argv=None) -> None:
             print(json.dumps({"ranks": comm.size, "threads": numba.get_num_threads(), **res,
                               "step_s": slowest, "step_median_s": float(np.median(per_step)),
                               "contact_s": max(w[1] for w in walls) / args.steps,
+                              "exchange_s": max(w[4] for w in walls) / args.steps,
                               "ghosts": [int(w[2]) for w in walls]}))
         return
     body = plate_body(args.n)
