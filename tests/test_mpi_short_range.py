@@ -130,9 +130,10 @@ if comm.rank == 0:
                           (2, 1.0, 0.05, False), (2, 15.0, None, True)],
                          ids=["1", "2", "3-fast", "2-folded", "2-fast-aligned"])
 def test_blocks_in_contact_across_ranks_match_serial(tmp_path, ranks, speed, fold, aligned):
-    """At 1 m/s the blocks move 0.07 dx in the run, less than half the contact halo's skin
-    (0.3 x 1.35 dx / 2 = 0.2 dx): one halo refresh. At 15 m/s they move 1 dx each and shatter,
-    so the halo is refreshed every ~30 steps; the forces stay the serial ones, bit for bit.
+    """At 1 m/s the blocks move 0.05 dx in the run (200 steps of 2.3e-6 s), less than half the
+    contact halo's skin (s = 0.3 x 1.35 dx = 0.4 dx): one halo refresh. At 15 m/s they move
+    0.7 dx, more than the skin, and shatter: the halo is refreshed 9 times (every ~20 steps)
+    and the forces stay the serial ones, bit for bit.
     With the partitions aligned, a rank's boxes hold about half of each block, so its particles
     and ghosts, and every table of its search, are sized from well under the whole run's n."""
     script = tmp_path / "blocks.py"
