@@ -10,12 +10,14 @@ holds part of each block). On 1, 2 and 3 ranks (and 2 on the folded grid) the po
 the damage are identical to the serial run, the pair counts per step are equal and the
 short-range potential agrees to round-off (its pairs are summed in another order). The whole
 runs, on 1 and 2 ranks: the demo case (ice sheet against the hull panel), shortened, and the
-rigid cylinder breaking an ice plate where the partition splits it. Run as
+rigid cylinder breaking an ice plate where the partition splits it. The contact halo is
+rebuilt when a body's owned set changes (load balancing) or on ``invalidate``. Run as
 ``mpiexec -n K`` subprocesses with a timeout, so a broken MPI cannot hang the suite.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import shutil
 import subprocess
@@ -26,7 +28,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pdfem.forces.short_range import ShortRangeContact
+from pdfem.geometry.shapes import Box
 from pdfem.output import read_results
+from pdfem.parallel.comm import SerialComm
+from pdfem.pd.body import IceBody
+from pdfem.pd.distributed import DistributedIce
+from pdfem.pd.materials.lps import IceMaterial
 from test_mpi_run import CYLINDER as BASE_CYLINDER
 
 
@@ -216,3 +224,27 @@ def test_cylinder_breaking_plate_on_two_ranks_matches_one(tmp_path):
     other from 1 ms on, and 1 and 2 ranks agree to 1e-10."""
     ref, _ = _one_and_two_ranks(tmp_path, CYLINDER, "plate", "cylinder")
     assert ref["histories"]["energy"]["short_range_potential"].max() > 0  # it acted
+
+
+def test_halo_is_rebuilt_when_the_owned_set_changes():
+    """The rebalancer's hook: a body whose halo plan is replaced (particles moved between
+    ranks) or a call of ``invalidate`` rebuilds the contact halo at the next call, and the
+    forces stay those of the serial search (here one 'rank' owning a block compressed to
+    0.85 dx, so nearest neighbours press: Silling & Askari's 0.9 dx threshold)."""
+    mat = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3)
+    body = IceBody.from_shape("b", Box((0, 0, 0), (0.06, 0.05, 0.04)), mat, 0.01, 0.03015)
+    body.y[:] = 0.85 * body.x0
+    ref = ShortRangeContact(body).forces()[0]
+    ice = DistributedIce(body, np.zeros(body.n, dtype=np.int64), SerialComm())
+    sr = ShortRangeContact([ice])
+    halo = sr._dist.halo
+    counts = []
+    for change in (None, None, "plan", None, "invalidate"):
+        if change == "plan":
+            ice.plan = dataclasses.replace(ice.plan, owned=ice.plan.owned.copy())
+        elif change == "invalidate":
+            sr.invalidate()
+        f = sr.forces()[0]
+        np.testing.assert_array_equal(f, ref)
+        counts.append(halo.refreshes)
+    assert np.abs(ref).max() > 0 and counts == [1, 1, 2, 2, 3]
