@@ -1,4 +1,5 @@
-"""``pdfem bench {search,step,mpi,partition,structure,output} [--n N] [--json]``: performance figures.
+"""``pdfem bench {search,step,mpi,partition,structure,output} [--n N] [--contact] [--json]``:
+performance figures.
 
 The benchmark code (the package ``pdfem.benchmarks``) is imported only when this command runs.
 """
@@ -22,6 +23,9 @@ def add_arguments(b: argparse.ArgumentParser) -> None:
                         "(the demo panel's FE cost per coupling step), output (the results writer: "
                         "frame 100 against frame 10,000, --n particles, default 200)")
     b.add_argument("--n", type=int, default=1_000_000, help="number of particles (default 1,000,000)")
+    b.add_argument("--contact", action="store_true",
+                   help="mpi only: the plate in two layers pressed together, short-range contact "
+                        "on (benchmarks/mpi.py)")
     b.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -34,7 +38,10 @@ def run(args: argparse.Namespace) -> int:
     elif args.what == "step":
         from pdfem.benchmarks.step import bench_step as fn
     elif args.what == "mpi":
-        from pdfem.benchmarks.mpi import bench_mpi as fn
+        from pdfem.benchmarks.mpi import bench_mpi
+
+        def fn(n):
+            return bench_mpi(n=n, contact=args.contact)
     elif args.what == "partition":
         from pdfem.benchmarks.partition_model import partition_model
 

@@ -60,9 +60,10 @@ with one squared distance, which is all the work an intact body costs (about 30 
 particle).
 
 Bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`) are searched by
-:class:`pdfem.forces.short_range_ranks.DistributedSearch` (ghost exchange, the serial run's
-global grid, the serial forces bit for bit). The kernels (cell hash of the particles, pair
-search, sums) are :mod:`pdfem.forces.short_range_kernels`.
+:class:`pdfem.forces.short_range_ranks.DistributedSearch`: per rank, its own particles and a
+contact halo kept with a Verlet skin (:mod:`pdfem.forces.short_range_halo`), on the serial
+run's cells with tables sized from the local particles; the serial forces bit for bit. The
+kernels (cell hash, pair search, sums) are :mod:`pdfem.forces.short_range_kernels`.
 
 Units: m, m^3, Pa, N/m^3 (force density), J.
 """
@@ -84,6 +85,7 @@ from pdfem.forces.short_range_kernels import (
     find_dense,
     find_folded,
     gather,
+    sparse_table,
     sum_pairs,
 )
 from pdfem.forces.short_range_ranks import DistributedSearch
@@ -103,28 +105,12 @@ _INITIAL_CAPACITY = 1024  # pair slots per chunk before the first growth
 
 
 def short_range_constant(K: float, delta: float, factor: float = 15.0) -> float:
-    """Silling & Askari's short-range constant per unit length, k = factor * c / delta (N/m^7).
-
-    Parameters
-    ----------
-    K
-        Bulk modulus (Pa).
-    delta
-        Horizon (m).
-    factor
-        c_S / c; Silling & Askari (2005) use 15.
-
-    Returns
-    -------
-    float
-        ``factor * 18 K / (pi delta^4) / delta``, with 18 K / (pi delta^4) the bond-based
-        micromodulus c (N/m^6).
-    """
+    """Silling & Askari's short-range constant per unit length, k = factor * c / delta (N/m^7):
+    ``factor * 18 K / (pi delta^4) / delta`` for the bulk modulus ``K`` (Pa) and the horizon
+    ``delta`` (m), with 18 K / (pi delta^4) the bond-based micromodulus c (N/m^6) and ``factor``
+    = c_S / c (Silling & Askari 2005: 15)."""
     return factor * 18.0 * float(K) / (math.pi * float(delta) ** 5)
 
-
-# --------------------------------------------------------------------------------------------
-# the contact object
 
 
 class ShortRangeContact(ParticleForce):
@@ -149,7 +135,8 @@ class ShortRangeContact(ParticleForce):
     Attributes
     ----------
     n_active
-        Number of interacting pairs found by the last call (over all ranks).
+        Number of interacting pairs found by the last call (under MPI: those counted on this
+        rank, the pairs whose first particle it owns; :meth:`total_pairs` sums over ranks).
     cell_size
         Side of the search cells, m (the largest critical distance).
     dense, n_buckets
@@ -174,8 +161,7 @@ class ShortRangeContact(ParticleForce):
             raise ValueError("short-range contact needs all ice bodies split over the ranks "
                              "(DistributedIce) or none")
         # the particles of all bodies, numbered body after body (whole bodies under MPI)
-        whole = [b.global_body for b in self.bodies]
-        sizes = [int(b.x0.shape[0]) for b in whole]
+        sizes = [int(b.global_n) if b.distributed else int(b.x0.shape[0]) for b in self.bodies]
         self.offsets = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
         n = int(self.offsets[-1])
         if n >= 2 ** 31 - 1:
@@ -183,34 +169,43 @@ class ShortRangeContact(ParticleForce):
         self.n = n
         self.distance_factor = float(distance_factor)
         self.radius_factor = float(radius_factor)
-        self.x0 = np.concatenate([b.x0 for b in whole]).astype(np.float64)
-        self.vol = np.concatenate([b.vol for b in whole]).astype(np.float64)
-        self.stiffness = np.concatenate([
-            np.full(s, short_range_constant(b.material.K, b.delta, stiffness_factor))
-            for b, s in zip(whole, sizes)])
-        self.radius = np.concatenate([np.full(s, 0.5 * b.dx) for b, s in zip(whole, sizes)])
-        self.body = np.concatenate([np.full(s, k, dtype=np.int32) for k, s in enumerate(sizes)])
-        dx_max = max(float(b.dx) for b in whole)
+        k_body = [short_range_constant(b.material.K, b.delta, stiffness_factor)
+                  for b in self.bodies]
+        r_body = [0.5 * float(b.dx) for b in self.bodies]
+        dx_max = max(float(b.dx) for b in self.bodies)
         # a margin of 1e-12 keeps pairs at a critical distance of exactly h from being lost to
         # the rounding of the cell coordinates
         self.cell_size = max(self.radius_factor, self.distance_factor) * dx_max * (1.0 + 1e-12)
         threads = int(numba.get_num_threads())
         C = 4 * threads if n_chunks is None else int(n_chunks)
         self._chunks_wanted = max(1, C)
-        self.n_chunks = max(1, min(C, max(n, 1)))
-        self.chunk_ptr = (np.arange(self.n_chunks + 1, dtype=np.int64) * n) // self.n_chunks
-        self._cap = _INITIAL_CAPACITY
-        self._pair = np.empty((self.n_chunks * self._cap, 2), dtype=np.int32)
-        self._val = np.empty((self.n_chunks * self._cap, 4))
-        self._counts = np.zeros(self.n_chunks, dtype=np.int64)
         self._size = -1
-        self._dist = DistributedSearch(self) if all(distributed) else None
-        self._reserve(0 if self._dist is not None else n)
-        self._n_touched = 0
+        self._no_ub = np.empty(0, dtype=np.int64)
         self._start = np.empty(1, dtype=np.int64)
+        self._n_touched = 0
         self.n_active = 0
         self.dense = True
         self.n_buckets = 0
+        self._cap = _INITIAL_CAPACITY
+        if all(distributed):  # per-rank tables only (pdfem.forces.short_range_ranks)
+            self._dist = DistributedSearch(self, k_body, r_body)
+            self._pair = np.empty((self._chunks_wanted * self._cap, 2), dtype=np.int32)
+            self._val = np.empty((self._chunks_wanted * self._cap, 4))
+            self._counts = np.zeros(1, dtype=np.int64)
+            self._reserve(0)
+            return
+        self._dist = None
+        self.x0 = np.concatenate([b.x0 for b in self.bodies]).astype(np.float64)
+        self.vol = np.concatenate([b.vol for b in self.bodies]).astype(np.float64)
+        self.stiffness = np.concatenate([np.full(s, k) for k, s in zip(k_body, sizes)])
+        self.radius = np.concatenate([np.full(s, r) for r, s in zip(r_body, sizes)])
+        self.body = np.concatenate([np.full(s, k, dtype=np.int32) for k, s in enumerate(sizes)])
+        self.n_chunks = max(1, min(C, max(n, 1)))
+        self.chunk_ptr = (np.arange(self.n_chunks + 1, dtype=np.int64) * n) // self.n_chunks
+        self._pair = np.empty((self.n_chunks * self._cap, 2), dtype=np.int32)
+        self._val = np.empty((self.n_chunks * self._cap, 4))
+        self._counts = np.zeros(self.n_chunks, dtype=np.int64)
+        self._reserve(n)
 
     energy_key = "short_range_potential"
     """Key of :meth:`potential_energy` in the energy history (:class:`ParticleForce`)."""
@@ -234,6 +229,13 @@ class ShortRangeContact(ParticleForce):
         self._acc = np.zeros((n, 3))
         self._mark = np.zeros(n, dtype=np.uint8)
         self._touched = np.empty(n, dtype=np.int32)
+        self._ub = np.empty(n, dtype=np.int64)
+        self._sstart = np.empty(n + 1, dtype=np.int64)
+
+    @staticmethod
+    def budget(n: int) -> int:
+        """Most cells (buckets) of a table for ``n`` particles."""
+        return DENSE_CELLS_PER_PARTICLE * max(n, 1024)
 
     def _positions(self) -> np.ndarray:
         if len(self.bodies) == 1:
@@ -246,7 +248,7 @@ class ShortRangeContact(ParticleForce):
         inv_h = 1.0 / self.cell_size
         dims = np.array([min(int((hi[k] - lo[k]) * inv_h) + 1, _AXIS_CELLS) for k in range(3)],
                         dtype=np.int64)
-        budget = DENSE_CELLS_PER_PARTICLE * max(n_total, 1024)
+        budget = self.budget(n_total)
         self.dense = float(np.prod(dims + 2)) <= budget
         if self.dense:  # one empty cell around the grid: the stencil needs no bounds checks
             pad = 1
@@ -262,17 +264,25 @@ class ShortRangeContact(ParticleForce):
         return dims, pad, fold, nb
 
     def _scan(self, y, lo, dims, pad, fold, nb, x0, vol, stiffness, radius, body, chunk_ptr,
-              counts, shift=NO_SHIFT):
+              counts, shift=NO_SHIFT, sparse=False):
         """Sort the particles ``y`` (with their constants) into the grid and find the
-        interacting pairs into ``self._pair``, ``self._val``, ``counts`` (per chunk)."""
+        interacting pairs into ``self._pair``, ``self._val``, ``counts`` (per chunk).
+        ``sparse``: a stable sort and a table of the occupied buckets only (else a counting
+        sort into a table of all ``nb`` buckets)."""
         n = y.shape[0]
         h = self.cell_size
-        if self._start.shape[0] != nb + 1:
-            self._start = np.empty(nb + 1, dtype=np.int64)
         ijk, key, bucket, perm = self._ijk[:n], self._key[:n], self._bucket[:n], self._perm[:n]
         ys, ijks, keys, buckets = self._ys[:n], self._ijks[:n], self._keys[:n], self._buckets[:n]
         cells(y, lo, 1.0 / h, dims, pad, fold, ijk, key, bucket, shift)
-        counting_sort(bucket, nb, self._start, perm)
+        if sparse:
+            perm[:] = np.argsort(bucket, kind="stable")
+            k = sparse_table(bucket[perm], self._ub, self._sstart)
+            start, ub = self._sstart[:k + 1], self._ub[:k]
+        else:
+            if self._start.shape[0] != nb + 1:
+                self._start = np.empty(nb + 1, dtype=np.int64)
+            counting_sort(bucket, nb, self._start, perm)
+            start, ub = self._start, self._no_ub
         gather(perm, y, ijk, key, bucket, ys, ijks, keys, buckets, not self.dense)
         n_chunks = chunk_ptr.shape[0] - 1
         if self._pair.shape[0] < n_chunks * self._cap:
@@ -281,11 +291,11 @@ class ShortRangeContact(ParticleForce):
         while True:
             par = n >= SERIAL_BELOW_PARTICLES
             if self.dense:
-                find_dense(par, ys, buckets, self._start, perm, x0, vol, stiffness, radius,
+                find_dense(par, ys, buckets, start, ub, perm, x0, vol, stiffness, radius,
                            body, h, fold, self.distance_factor, self.radius_factor, chunk_ptr,
                            self._cap, self._pair, self._val, counts)
             else:
-                find_folded(par, ys, ijks, keys, buckets, self._start, perm, x0, vol,
+                find_folded(par, ys, ijks, keys, buckets, start, ub, perm, x0, vol,
                             stiffness, radius, body, h, dims, fold, self.distance_factor,
                             self.radius_factor, chunk_ptr, self._cap, self._pair, self._val,
                             counts)
@@ -299,7 +309,9 @@ class ShortRangeContact(ParticleForce):
     def _search(self) -> float:
         """Find the interacting pairs at the current positions; returns their potential (J)."""
         if self._dist is not None:
-            return self._dist.search()
+            energy = self._dist.search()
+            self.n_active = self._dist.n_counted
+            return energy
         n = self.n
         self._n_touched = 0
         self.n_active = 0
@@ -329,7 +341,7 @@ class ShortRangeContact(ParticleForce):
         Returns
         -------
         int
-            The number of interacting pairs.
+            The number of interacting pairs (under MPI: those this rank counts).
 
         Raises
         ------
@@ -364,6 +376,22 @@ class ShortRangeContact(ParticleForce):
     def potential_energy(self) -> float:
         """Potential energy of the short-range force at the current positions, J.
 
-        ``sum over interacting pairs of 1/2 k_ij V_i V_j (r_ij - |y_j - y_i|)^2``.
+        ``sum over interacting pairs of 1/2 k_ij V_i V_j (r_ij - |y_j - y_i|)^2`` (over all
+        ranks: collective under MPI).
         """
-        return self._search()
+        energy = self._search()
+        if self._dist is None:
+            return energy
+        return float(self._dist.comm.allreduce_sum(energy))
+
+    def total_pairs(self) -> int:
+        """Interacting pairs found by the last call, over all ranks (collective under MPI)."""
+        if self._dist is None:
+            return self.n_active
+        return int(self._dist.comm.allreduce_sum(np.int64(self.n_active)))
+
+    def invalidate(self) -> None:
+        """Under MPI: rebuild the contact halo at the next call (e.g. after particles moved
+        between ranks; a change of a body's halo plan is also noticed by itself)."""
+        if self._dist is not None:
+            self._dist.halo.invalidate()

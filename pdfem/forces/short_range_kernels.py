@@ -4,9 +4,13 @@ The particles are entered into a cell hash (:mod:`pdfem.geometry.cell_hash`): cl
 the dense grid padded) cell coordinates, a packed cell key and a bucket per particle
 (:func:`cells`; the bucket is the cell id in the grid folded to ``fold`` cells), then
 counting-sorted by bucket (:func:`pdfem.geometry.cell_hash.counting_sort`) and gathered in that
-order (:func:`gather`). :func:`find_dense` and :func:`find_folded` find the interacting pairs
-per chunk of sorted positions (the physics of a pair: :func:`interact`); :func:`sum_pairs` adds
-them up in chunk order (bit-identical for any chunk or thread count).
+order (:func:`gather`); or, for a rank's particles under MPI, sorted by any stable sort and
+indexed by a sparse table of the occupied buckets (:func:`sparse_table`, :func:`first_at`), so
+the table is sized from the particles, not from the grid. :func:`find_dense` and
+:func:`find_folded` find the interacting pairs per chunk of sorted positions (the physics of
+a pair: :func:`interact`); :func:`sum_pairs` adds them up in chunk order (bit-identical for any
+chunk or thread count). :func:`load_owned`, :func:`add_owned` and :func:`in_box` serve a rank's
+contact halo (:mod:`pdfem.forces.short_range_halo`).
 """
 
 from __future__ import annotations
@@ -35,6 +39,40 @@ def bucket_of(ix, iy, iz, fold):
     if iz >= fold[2]:
         iz %= fold[2]
     return cell_id(ix, iy, iz, fold[1], fold[2])
+
+
+@numba.njit(cache=True, inline="always")
+def first_at(start, ub, b):
+    """First sorted position of a particle in bucket ``b`` or later: ``start[b]`` of a full
+    table (``ub`` empty), or of a sparse one, where ``ub`` lists the occupied buckets
+    (ascending) and ``start[t]`` is the first position of bucket ``ub[t]`` (binary search)."""
+    n = ub.shape[0]
+    if n == 0:
+        return start[b]
+    lo = 0
+    hi = n
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if ub[mid] < b:
+            lo = mid + 1
+        else:
+            hi = mid
+    return start[lo]
+
+
+@numba.njit(cache=True)
+def sparse_table(sorted_buckets, ub, start):
+    """The sparse table of :func:`first_at` for buckets sorted ascending: the occupied buckets
+    into ``ub``, their first positions into ``start`` (plus the end); returns their number."""
+    n = sorted_buckets.shape[0]
+    m = 0
+    for s in range(n):
+        if s == 0 or sorted_buckets[s] != sorted_buckets[s - 1]:
+            ub[m] = sorted_buckets[s]
+            start[m] = s
+            m += 1
+    start[m] = n
+    return m
 
 
 @numba.njit(cache=True)
@@ -98,14 +136,15 @@ def interact(i, j, px, py, pz, d2, x0, vol, stiff, rad, body, dist_factor, rad_f
 
 
 @twin(fastmath=False)
-def find_dense(ys, buckets, start, perm, x0, vol, stiff, rad, body, h, fold, dist_factor,
+def find_dense(ys, buckets, start, ub, perm, x0, vol, stiff, rad, body, h, fold, dist_factor,
                rad_factor, chunk_ptr, cap, pair, val, counts):
     """Pairs on a dense grid padded by one empty cell on every side, per chunk of sorted
     positions, into the chunk's slots ``[c*cap, (c+1)*cap)``.
 
     The forward half stencil of a particle's cell is five contiguous runs of sorted positions:
     the own cell after the particle and the cell +z; the three cells +y; and the three columns
-    of three cells +x. The runs' bounds are looked up once per cell.
+    of three cells +x. The runs' bounds are looked up once per cell, in the full table
+    ``start`` or in a sparse one (``ub`` not empty, :func:`first_at`).
     """
     h2 = h * h
     nz = fold[2]
@@ -121,12 +160,12 @@ def find_dense(ys, buckets, start, perm, x0, vol, stiff, rad, body, h, fold, dis
             ba = buckets[a]
             if ba != last:  # a new cell
                 last = ba
-                run_hi[0] = start[ba + 2]
+                run_hi[0] = first_at(start, ub, ba + 2)
                 for run in range(1, HALF_STENCIL_COLUMNS + 1):
                     ox, oy = forward_column(run)
                     b = ba + ox * nyz + oy * nz
-                    run_lo[run] = start[b - 1]
-                    run_hi[run] = start[b + 2]
+                    run_lo[run] = first_at(start, ub, b - 1)
+                    run_hi[run] = first_at(start, ub, b + 2)
             run_lo[0] = a + 1
             yax = ys[a, 0]
             yay = ys[a, 1]
@@ -146,8 +185,8 @@ def find_dense(ys, buckets, start, perm, x0, vol, stiff, rad, body, h, fold, dis
 
 
 @twin(fastmath=False)
-def find_folded(ys, ijks, keys, buckets, start, perm, x0, vol, stiff, rad, body, h, dims, fold,
-                dist_factor, rad_factor, chunk_ptr, cap, pair, val, counts):
+def find_folded(ys, ijks, keys, buckets, start, ub, perm, x0, vol, stiff, rad, body, h, dims,
+                fold, dist_factor, rad_factor, chunk_ptr, cap, pair, val, counts):
     """:func:`find_dense` for a folded grid: buckets hold several cells, told apart by key.
 
     Each particle scans the buckets of its 27 neighbour cells that come at or after its own
@@ -192,10 +231,10 @@ def find_folded(ys, ijks, keys, buckets, start, perm, x0, vol, stiff, rad, body,
             for t in range(n_nb):
                 b = nb_bucket[t]
                 kb = nb_key[t]
-                q0 = start[b]
+                q0 = first_at(start, ub, b)
                 if b == ba:
                     q0 = a + 1
-                for q in range(q0, start[b + 1]):
+                for q in range(q0, first_at(start, ub, b + 1)):
                     if keys[q] != kb:
                         continue
                     px = ys[q, 0] - yax
@@ -265,3 +304,58 @@ def counted_pairs(counts, cap, pair, val, counted):
                 n += 1
                 energy += val[t, 3]
     return n, energy
+
+
+@numba.njit(cache=True)
+def load_owned(y_body, idx, pos, y, y_ref, box, drift):
+    """Owned positions into the local array: ``y[pos[t]] = y_body[idx[t]]`` (m), while growing
+    the box ``box`` ((2, 3): lo, hi) and returning whether they are all finite and the largest
+    squared distance (m^2) from ``y_ref[pos[t]]``, at least ``drift``."""
+    finite = True
+    for t in range(idx.shape[0]):
+        i = idx[t]
+        p = pos[t]
+        d2 = 0.0
+        for k in range(3):
+            v = y_body[i, k]
+            y[p, k] = v
+            if not math.isfinite(v):
+                finite = False
+            if v < box[0, k]:
+                box[0, k] = v
+            if v > box[1, k]:
+                box[1, k] = v
+            e = v - y_ref[p, k]
+            d2 += e * e
+        if d2 > drift:
+            drift = d2
+    return finite, drift
+
+
+@numba.njit(cache=True)
+def add_owned(f, idx, pos, acc, touched, nt, mark):
+    """``f[idx[t]] += acc[pos[t]]`` for the owned particles touched by the last search
+    (``touched[:nt]``; ``mark``, zeros, of the local size, is left zero)."""
+    for t in range(nt):
+        mark[touched[t]] = 1
+    for t in range(idx.shape[0]):
+        p = pos[t]
+        if mark[p]:
+            i = idx[t]
+            for k in range(3):
+                f[i, k] += acc[p, k]
+    for t in range(nt):
+        mark[touched[t]] = 0
+
+
+@numba.njit(cache=True)
+def in_box(y, lo, hi):
+    """Indices (int64) of the points of ``y`` inside the box [lo, hi] (bounds included)."""
+    out = np.empty(y.shape[0], dtype=np.int64)
+    n = 0
+    for i in range(y.shape[0]):
+        if (lo[0] <= y[i, 0] <= hi[0] and lo[1] <= y[i, 1] <= hi[1]
+                and lo[2] <= y[i, 2] <= hi[2]):
+            out[n] = i
+            n += 1
+    return out[:n]

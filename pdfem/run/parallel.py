@@ -23,6 +23,7 @@ from pdfem.parallel.comm import SerialComm
 from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.coupler import ContactPair, Coupler
 from pdfem.forces.short_range import ShortRangeContact
+from pdfem.forces.short_range_kernels import in_box, sparse_table
 from pdfem.run.build_structures import build_all
 from pdfem.fem.rigid import RigidBody
 from pdfem.pd.body import IceBody
@@ -31,8 +32,6 @@ from pdfem.geometry.shapes import Box, Cylinder, Sphere
 from pdfem.pd.distributed import DistributedIce
 from pdfem.pd.distributed_setup import distributed_body, distributed_ice
 from pdfem.parallel.partition import BYTES_PER_HALO_PARTICLE, choose_partition
-from pdfem.pd.failure import failure_law
-from pdfem.run.build_ice import ice_material
 
 
 MAX_RANKS_LISTED = 16
@@ -61,22 +60,14 @@ def splits_bodies(case) -> bool:
     distributed set-up (:mod:`pdfem.pd.distributed_setup`: no rank holds a whole body).
 
     The global set-up (every rank builds each whole body, then keeps its part) stays for what
-    the distributed one does not support yet: short-range contact (on, or implied by a crushing
-    failure law), whose tables are global (issue 17, item 4); water, whose restart check reads
-    the whole body; the full-family PD loop; shapes not in :data:`SPLIT_SHAPES`."""
-    if case.run.short_range_contact or case.water is not None or case.run.pd_loop != "pairs":
+    the distributed one does not support yet: water, whose restart check reads the whole body;
+    the full-family PD loop; shapes not in :data:`SPLIT_SHAPES`. Short-range contact (on, or
+    implied by a crushing failure law) needs no whole body: each rank searches its own
+    particles and a contact halo (:mod:`pdfem.forces.short_range_halo`), and a crushing law's
+    bond state (rest lengths, shear springs) is per bond, built for the local bonds."""
+    if case.water is not None or case.run.pd_loop != "pairs":
         return False
-    for cfg in case.ice:
-        if not isinstance(cfg.shape, SPLIT_SHAPES):
-            return False
-        try:  # only the law's kind matters here (depth 1 m for a flexural strength)
-            law = failure_law(cfg.material.failure, ice_material(cfg.material, cfg.dx, 1.0),
-                              cfg.horizon)
-        except ValueError:
-            return False  # bad input: the builder reports it, naming the field
-        if law.broken_bonds_push:
-            return False
-    return True
+    return all(isinstance(cfg.shape, SPLIT_SHAPES) for cfg in case.ice)
 
 
 def setup_comm(case, comm):
@@ -161,6 +152,10 @@ def warm_up() -> None:
     c.start()
     for _ in range(2):
         c.step()
+    lone = np.zeros((2, 3))  # the refresh's and the sparse table's kernels too
+    in_box(lone, lone[0], lone[1])
+    sparse_table(np.zeros(2, dtype=np.int64), np.empty(2, dtype=np.int64),
+                 np.empty(3, dtype=np.int64))
     ice.kinetic_energy()
     ice.strain_energy()
     ice.gather(ice.damage())
