@@ -20,6 +20,11 @@ drag), w0 the prescribed push. The characteristic length is the l of the best le
 ``w(r) = A kei(r / l)`` to the deflection of the plate's middle rows (mean over the layers,
 both sides of the load) for r between l_0 / 2 and 2.5 l_0 (l_0 = (D / k)^(1/4) of the case
 input); the reference is the same fit to the Morley plate's deflection along its centre line.
+
+The entries are not registered in ``pdfem validate``: a lattice sheet a few particles thick is
+softer than Kirchhoff's plate (docs/water.md, "Winkler plate"). :func:`lattice_plate` solves the
+case's plate as the orthotropic Kirchhoff plate with the lattice sheet's own plate moduli
+(:mod:`pdfem.pd.plate_moduli`), which says how much of a run's deficit the moduli explain.
 """
 
 from __future__ import annotations
