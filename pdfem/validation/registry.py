@@ -26,6 +26,7 @@ MODULES: tuple[str, ...] = (
     "edge_crushing",       # ice_edge_crushing.toml: crushing regime against a rigid wall
     "bending",             # ice_beam_bending_*.toml: flexural strength, 3- and 4-point, dx, dx/2
     "floating",            # floating_draught.toml, floating_heave.toml: draught, heave period
+    "winkler",             # floating_plate_winkler.toml: P / w0 and l of a plate on water
     "ship",                # ship_rest.toml, ship_heave.toml, ship_pitch.toml: drift, periods
     "spinning",            # spinning_bar*.toml: radial stress, flapwise frequency (Southwell)
     "shaft_energy",        # shaft_energy.toml: shaft + ice work and angular impulse balances
