@@ -20,9 +20,12 @@ from pdfem.validation.case import case_path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-LONG = {"icebreaking_resistance", "icebreaking_pieces_under_hull"}
-"""Cases whose ``--quick`` run alone takes minutes (the towed icebreaker: 27,000 steps); their
-measures are checked on a constructed run in tests/test_icebreaking.py."""
+LONG = {"icebreaking_resistance", "icebreaking_pieces_under_hull", "floating_plate_winkler",
+        "floating_plate_winkler_length"}
+"""Cases whose ``--quick`` run alone takes minutes (the towed icebreaker: 27,000 steps; the
+Winkler plate: 48,600 particles, nothing smaller passes); their measures are checked in
+tests/test_icebreaking.py (a constructed run) and tests/test_winkler.py (the coarse plate
+against its lattice plate)."""
 
 
 def test_quick_validation_passes(capfd):
