@@ -19,7 +19,10 @@ one mpiexec launch each, with one numba thread per rank:
    and not again;
 4. recursive coordinate bisection (pdfem.parallel.rcb) of 3000 weighted points on a coarse
    grid (many ties) gives the same owners from two different distributions over the ranks
-   (no dependence on history), balanced to within one particle's weight.
+   (no dependence on history), balanced to within one particle's weight;
+5. short-range contact across a crack: a bar cut through, its halves thrown at each other at
+   15 m/s each, re-partitioned every 20 steps while its faces press: positions identical to the
+   serial run, the same number of contact pairs every step (up to 48), three re-partitions.
 
 Run as subprocesses with a timeout, so a broken MPI cannot hang the suite.
 """
@@ -188,6 +191,40 @@ if comm.rank == 0:
           f"before={max(r[1] for r in rows.rows[:19]):.4f} "
           f"last={rows.rows[-1][1]:.4f} layout={dist.layout_version}")
 
+# 5. short-range contact across a crack: a bar cut through at its middle, its halves thrown
+# at each other, re-partitioned every 20 steps while the faces press (the contact's halo follows)
+from pdfem.forces.short_range import ShortRangeContact
+
+def halves(b):
+    b.cut_crack((12 * dx, 0, 0), (1, 0, 0), (11 * dx, -1, -1), (13 * dx, 1, 1))
+    b.v[:, 0] = np.where(b.x0[:, 0] < 12 * dx, 15.0, -15.0)
+    return b
+
+ref5 = halves(IceBody.from_shape("bar", bar, mat, dx, 3.015 * dx))
+x5 = ref5.x0[:, 0]
+owner5 = np.minimum((x5 / x5.max() * comm.size * 0.7).astype(np.int32), comm.size - 1)
+dist5 = DistributedIce(halves(IceBody.from_shape("bar", bar, mat, dx, 3.015 * dx)), owner5, comm)
+src_ref, src = ShortRangeContact([ref5]), ShortRangeContact([dist5])
+dt = 0.8 * ref5.stable_time_step()
+cp5_ref = Coupler([ref5], [], [], dt, forces=[src_ref])
+cp5 = Coupler([dist5], [], [], dt, forces=[src], comm=comm)
+cp5_ref.start(); cp5.start()
+balance = LoadBalance(SimpleNamespace(run=SimpleNamespace(rebalance_every=20, rebalance_imbalance=0.0),
+                                      water=None, file="test"),
+                      SimpleNamespace(bodies=[dist5], coupler=cp5), comm)
+rows, pairs = Rows(), []
+for step in range(1, 61):
+    cp5_ref.step()
+    cp5.step()
+    balance.after_step(step, step * dt, rows)
+    pairs.append((src_ref.total_pairs(), src.total_pairs()))
+y = dist5.gather(dist5.body.y)
+if comm.rank == 0:
+    p = np.array(pairs)
+    print(f"RESULT contact ranks={comm.size} same={np.array_equal(y, ref5.y)} "
+          f"pairs={int(p[:, 0].max())} agree={np.array_equal(p[:, 0], p[:, 1])} "
+          f"moved={sum(int(r[2]) for r in rows.rows)} layout={dist5.layout_version}")
+
 # the imbalance limit: a badly split body is re-partitioned at once, then left alone
 bad = DistributedIce(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
 limit = LoadBalance(SimpleNamespace(run=SimpleNamespace(rebalance_every=0, rebalance_imbalance=1.2),
@@ -252,6 +289,9 @@ def test_rebalance_mid_run_matches_serial(tmp_path, ranks):
     assert float(bar["imb0"]) > 1.4  # the bad split
     assert int(crush["crushed"]) > 0
     assert coupled["same"] == "True" and float(coupled["err_f"]) == 0.0
+    contact = res["contact"]
+    assert contact["same"] == "True" and contact["agree"] == "True"
+    assert int(contact["pairs"]) > 0 and int(contact["moved"]) == 3
     assert float(coupled["fmax"]) > 1e3 and int(coupled["broken"]) > 0
     assert coupled["moved"] == "20,40,60" and int(coupled["layout"]) == 3
     # the imbalance history: high until the first re-partition (step 20), then about 1
@@ -276,11 +316,10 @@ material = {{ fracture_energy = 3.0 }}
 
 @pytest.mark.parametrize("extra, field", [
     ("rebalance_imbalance = 0.5", "run.rebalance_imbalance"),
-    ("rebalance_every = 10\noutput_per_rank = true", "run.output_per_rank"),
-    ("rebalance_imbalance = 1.2\nshort_range_contact = true", "run.short_range_contact")])
+    ("rebalance_every = 10\noutput_per_rank = true", "run.output_per_rank")])
 def test_bad_rebalance_settings_are_refused(extra, field):
-    """A factor <= 1 cannot be exceeded meaningfully; per-rank output and short-range contact
-    keep rank-local particle lists that a re-partition would invalidate."""
+    """A factor <= 1 cannot be exceeded meaningfully; per-rank output keeps each rank's particles
+    of the start, which a re-partition would change."""
     from pdfem.case.loader import parse_case
     from pdfem.errors import InputError
 
@@ -289,18 +328,18 @@ def test_bad_rebalance_settings_are_refused(extra, field):
     assert err.value.field == field and ("rebalance" in err.value.message or "> 1" in err.value.message)
 
 
-def test_rebalance_with_crushed_ice_is_refused():
-    """Crushed ice needs short-range contact, whose tables do not follow a migration."""
+def test_rebalance_with_water_is_refused():
+    """The water's per-particle state (drag loss, water kinetic energy) does not follow a
+    migration: re-partitioning with [water] is refused, naming the field."""
     from types import SimpleNamespace
 
     from pdfem.errors import InputError
     from pdfem.run.balance import LoadBalance
 
-    body = SimpleNamespace(name="floe", distributed=True,
-                           failure=SimpleNamespace(broken_bonds_push=True))
+    body = SimpleNamespace(name="floe", distributed=True)
     case = SimpleNamespace(run=SimpleNamespace(rebalance_every=10, rebalance_imbalance=0.0),
-                           water=None, file="case.toml")
+                           water=SimpleNamespace(density=1025.0), file="case.toml")
     setup = SimpleNamespace(bodies=[body], coupler=None)
     with pytest.raises(InputError) as err:
         LoadBalance(case, setup, SimpleNamespace(size=2, rank=0))
-    assert err.value.field == "run.rebalance_every" and "crushed ice" in err.value.message
+    assert err.value.field == "run.rebalance_every" and "[water]" in err.value.message

@@ -65,8 +65,7 @@ class RunSection(Section):
         0, description="On several MPI ranks, re-partition each split ice body every so many "
                        "coupling steps (recursive coordinate bisection of the current positions, "
                        "weighted by bond counts; particles and bonds move between ranks); 0 = "
-                       "never. Not with output_per_rank, short-range contact, crushed ice or "
-                       "[water]. Default: 0.")
+                       "never. Not with output_per_rank or [water]. Default: 0.")
     rebalance_imbalance: Annotated[float, Number(ge=0.0)] = Field(
         0.0, description="On several MPI ranks, re-partition a split ice body when its largest "
                          "rank's work (bonds of its particles) exceeds the mean by this factor "
@@ -86,9 +85,4 @@ class RunSection(Section):
                        "does not follow (each rank's file keeps the particles it had at the "
                        "start); set output_per_rank = false or rebalance_every = 0 and "
                        "rebalance_imbalance = 0", True, key="output_per_rank")
-        if self.short_range_contact and (self.rebalance_every or self.rebalance_imbalance):
-            raise fail("short-range contact keeps rank-local particle tables that a "
-                       "re-partition would invalidate; set short_range_contact = false or "
-                       "rebalance_every = 0 and rebalance_imbalance = 0", True,
-                       key="short_range_contact")
         return self

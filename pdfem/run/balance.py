@@ -34,8 +34,9 @@ class LoadBalance:
     Raises
     ------
     InputError
-        Re-partitioning asked for with particle forces that keep rank-local tables
-        (short-range contact, implied by crushed ice; water).
+        Re-partitioning asked for with water (its per-particle state stays on the ranks;
+        short-range contact follows a re-partition: it rebuilds its halo when a body's halo
+        plan changes, :mod:`pdfem.forces.short_range_halo`).
     """
 
     def __init__(self, case, setup, comm, say=lambda s: None) -> None:
@@ -46,15 +47,11 @@ class LoadBalance:
         self.size = comm.size
         self._left: dict[str, float] = {}  # body -> imbalance right after its last re-partition
         asked = self.every > 0 or self.limit > 0.0
-        if self.active and asked:
-            crushing = [b.name for b in self.bodies if b.failure.broken_bonds_push]
-            if crushing or case.water is not None:
-                why = (f"ice body '{crushing[0]}' has crushed ice, which needs short-range "
-                       "contact" if crushing else "[water] is given")
-                raise InputError(case.file, "run.rebalance_every", f"re-partitioning split "
-                                 f"ice bodies is not supported when {why} (their per-particle "
-                                 "tables are not moved between ranks); set rebalance_every = 0 "
-                                 "and rebalance_imbalance = 0")
+        if self.active and asked and case.water is not None:
+            raise InputError(case.file, "run.rebalance_every", "re-partitioning split ice "
+                             "bodies is not supported when [water] is given (the water's "
+                             "per-particle state is not moved between ranks); set "
+                             "rebalance_every = 0 and rebalance_imbalance = 0")
         if self.active:
             levels = ", ".join(f"'{b.name}' {b.imbalance():.3f}" for b in self.bodies)
             when = " and ".join(w for w in ((f"every {self.every:,} steps" if self.every else ""),
