@@ -22,7 +22,11 @@ one mpiexec launch each, with one numba thread per rank:
    (no dependence on history), balanced to within one particle's weight;
 5. short-range contact across a crack: a bar cut through, its halves thrown at each other at
    15 m/s each, re-partitioned every 20 steps while its faces press: positions identical to the
-   serial run, the same number of contact pairs every step (up to 48), three re-partitions.
+   serial run, the same number of contact pairs every step (up to 48), three re-partitions;
+6. water: a plate floating too deep rises against linear drag, badly split, re-partitioned
+   every 20 steps: positions identical to the serial run, the drag's dissipated energy and the
+   water's potential energy equal to 1e-12 (the per-particle counters move with the
+   particles).
 
 Run as subprocesses with a timeout, so a broken MPI cannot hang the suite.
 """
@@ -225,6 +229,37 @@ if comm.rank == 0:
           f"pairs={int(p[:, 0].max())} agree={np.array_equal(p[:, 0], p[:, 1])} "
           f"moved={sum(int(r[2]) for r in rows.rows)} layout={dist5.layout_version}")
 
+# 6. water: a plate floating too deep rises under buoyancy against linear drag, badly split and
+# re-partitioned every 20 steps; the water's per-particle drag counters move with the particles
+from pdfem.forces.water import Water
+
+def water(body):
+    return Water([body], density=1025.0, level=0.025, g=9.81, linear_drag=50.0)
+
+ref6 = IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2)
+dist6 = DistributedIce(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
+w_ref, w = water(ref6), water(dist6)
+dt6 = 0.8 * ref6.stable_time_step()
+cp6_ref = Coupler([ref6], [], [], dt6, forces=[w_ref])
+cp6 = Coupler([dist6], [], [], dt6, forces=[w], comm=comm)
+cp6_ref.start(); cp6.start()
+balance = LoadBalance(SimpleNamespace(run=SimpleNamespace(rebalance_every=20, rebalance_imbalance=0.0),
+                                      water=None, file="test"),
+                      SimpleNamespace(bodies=[dist6], coupler=cp6), comm)
+rows = Rows()
+for step in range(1, 61):
+    cp6_ref.step()
+    cp6.step()
+    balance.after_step(step, step * dt6, rows)
+y = dist6.gather(dist6.body.y)
+lost, lost_ref = w.dissipated(), w_ref.dissipated()
+pot, pot_ref = w.potential_energy(), w_ref.potential_energy()
+if comm.rank == 0:
+    print(f"RESULT water ranks={comm.size} same={np.array_equal(y, ref6.y)} "
+          f"lost={lost:.6e} lost_err={abs(lost - lost_ref) / lost_ref:.3e} "
+          f"pot_err={abs(pot - pot_ref) / abs(pot_ref):.3e} "
+          f"moved={sum(int(r[2]) for r in rows.rows)} layout={dist6.layout_version}")
+
 # the imbalance limit: a badly split body is re-partitioned at once, then left alone
 bad = DistributedIce(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
 limit = LoadBalance(SimpleNamespace(run=SimpleNamespace(rebalance_every=0, rebalance_imbalance=1.2),
@@ -289,6 +324,9 @@ def test_rebalance_mid_run_matches_serial(tmp_path, ranks):
     assert float(bar["imb0"]) > 1.4  # the bad split
     assert int(crush["crushed"]) > 0
     assert coupled["same"] == "True" and float(coupled["err_f"]) == 0.0
+    water = res["water"]
+    assert water["same"] == "True" and int(water["moved"]) == 3 and float(water["lost"]) > 0
+    assert float(water["lost_err"]) <= 1e-12 and float(water["pot_err"]) <= 1e-12
     contact = res["contact"]
     assert contact["same"] == "True" and contact["agree"] == "True"
     assert int(contact["pairs"]) > 0 and int(contact["moved"]) == 3
@@ -326,20 +364,3 @@ def test_bad_rebalance_settings_are_refused(extra, field):
     with pytest.raises(InputError) as err:
         parse_case(CASE.format(extra=extra), "case.toml")
     assert err.value.field == field and ("rebalance" in err.value.message or "> 1" in err.value.message)
-
-
-def test_rebalance_with_water_is_refused():
-    """The water's per-particle state (drag loss, water kinetic energy) does not follow a
-    migration: re-partitioning with [water] is refused, naming the field."""
-    from types import SimpleNamespace
-
-    from pdfem.errors import InputError
-    from pdfem.run.balance import LoadBalance
-
-    body = SimpleNamespace(name="floe", distributed=True)
-    case = SimpleNamespace(run=SimpleNamespace(rebalance_every=10, rebalance_imbalance=0.0),
-                           water=SimpleNamespace(density=1025.0), file="case.toml")
-    setup = SimpleNamespace(bodies=[body], coupler=None)
-    with pytest.raises(InputError) as err:
-        LoadBalance(case, setup, SimpleNamespace(size=2, rank=0))
-    assert err.value.field == "run.rebalance_every" and "[water]" in err.value.message

@@ -65,7 +65,7 @@ class RunSection(Section):
         0, description="On several MPI ranks, re-partition each split ice body every so many "
                        "coupling steps (recursive coordinate bisection of the current positions, "
                        "weighted by bond counts; particles and bonds move between ranks); 0 = "
-                       "never. Not with output_per_rank or [water]. Default: 0.")
+                       "never. Not with output_per_rank. Default: 0.")
     rebalance_imbalance: Annotated[float, Number(ge=0.0)] = Field(
         0.0, description="On several MPI ranks, re-partition a split ice body when its largest "
                          "rank's work (bonds of its particles) exceeds the mean by this factor "

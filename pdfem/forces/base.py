@@ -52,6 +52,16 @@ class ParticleForce(ABC):
         :mod:`pdfem.run.checkpoint_ranks`). Default: nothing (a force without memory)."""
         return {}
 
+    def moving_state(self, body) -> dict:
+        """The per-particle arrays this force keeps for ``body`` ((n_local, k) or (n_local,)
+        float64, by name), handed to a re-partition that moves them with the particles
+        (:meth:`pdfem.pd.ice_interface.IceParticles.rebalance`). Default: none."""
+        return {}
+
+    def moved_state(self, body, state: dict) -> None:
+        """Take back :meth:`moving_state`'s arrays for ``body`` after a re-partition, in its
+        new local particle order ((n_new, k) each). Default: nothing."""
+
     def restore_state(self, state: dict) -> None:
         """Put a state from :meth:`checkpoint_state` back, exactly: its ``<key>_<k>`` arrays
         come in body ``k``'s local particle order. Default: nothing."""

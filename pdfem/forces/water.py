@@ -141,6 +141,23 @@ class Water(ParticleForce):
                 out[f"{key}_{k}"] = (b.y if values is None else values)[own]
         return out
 
+    def moving_state(self, body) -> dict:
+        """The counters kept between steps (:attr:`_SAVED`) of ``body``'s local particles."""
+        s = self._state[self._index(body)]
+        return {key: (body.y if getattr(s, key) is None else getattr(s, key))
+                for key in self._SAVED}
+
+    def moved_state(self, body, state: dict) -> None:
+        """The counters of ``body``'s particles after a re-partition, in its new local order."""
+        k = self._index(body)
+        s = self._state[k] = _BodyWater(body)
+        s.y_prev = body.y.copy()
+        for key in self._SAVED:
+            getattr(s, key)[:] = state[key].reshape(getattr(s, key).shape)
+
+    def _index(self, body) -> int:
+        return next(k for k, b in enumerate(self.bodies) if b is body)
+
     def restore_state(self, state: dict) -> None:
         """Put a state from :meth:`checkpoint_state` back into the owned particles: per body
         ``k`` the arrays ``<key>_<k>`` in the body's local particle order (the checkpoint's

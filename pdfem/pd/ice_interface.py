@@ -90,8 +90,10 @@ class IceParticles(Protocol):
         """Largest rank's work over the mean (1 for a whole body; collective under MPI)."""
         ...
 
-    def rebalance(self) -> None:
-        """Re-partition over the ranks and move particles (nothing for a whole body)."""
+    def rebalance(self, carry: dict[str, np.ndarray] | None = None) -> dict[str, np.ndarray]:
+        """Re-partition over the ranks and move particles (nothing for a whole body); ``carry``
+        holds other per-particle arrays ((n_local, k) float64, e.g. a particle force's state)
+        that move with the particles: returned in the new local order."""
         ...
 
 
@@ -107,8 +109,9 @@ class WholeBody:
         """1: one rank holds the whole body."""
         return 1.0
 
-    def rebalance(self) -> None:
-        """Nothing to move: one rank holds the whole body."""
+    def rebalance(self, carry: dict[str, np.ndarray] | None = None) -> dict[str, np.ndarray]:
+        """Nothing to move: one rank holds the whole body (``carry`` comes back as it is)."""
+        return dict(carry or {})
 
     @property
     def owned(self) -> np.ndarray:

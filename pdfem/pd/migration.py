@@ -33,15 +33,17 @@ import numpy as np
 from pdfem.pd.crushed_shear import CrushedShear
 
 
-def _particle_columns(body, owner: np.ndarray) -> tuple[list, list]:
+def _particle_columns(body, owner: np.ndarray, carry: dict) -> tuple[list, list]:
     """The per-particle state of ``body`` as (name, float64 (n, k)) and (name, int64 (n, k))
-    columns; ``owner`` the new owner rank of every local particle."""
+    columns; ``owner`` the new owner rank of every local particle; ``carry`` further float
+    columns (named ``carry:<name>``)."""
     n = body.n
     member = np.zeros((n, len(body.constraints)), dtype=np.int64)
     for k, c in enumerate(body.constraints):
         member[c.index, k] = 1
     floats = [("x0", body.x0), ("y", body.y), ("v", body.v), ("f", body.f), ("vol", body.vol),
               ("m", body.m), ("theta", body.theta)]
+    floats += [(f"carry:{k}", v) for k, v in sorted(carry.items())]
     r = body.rates
     if r is not None:
         floats += [("rate_theta", r.theta), ("rate_factors", r.factors)]
@@ -121,7 +123,7 @@ def _local_numbers(gid, query):
     return out
 
 
-def migrate(body, owned: np.ndarray, owner: np.ndarray, comm):
+def migrate(body, owned: np.ndarray, owner: np.ndarray, comm, carry: dict | None = None):
     """This rank's new local body after every rank's owned particles moved to ``owner``.
 
     Parameters
@@ -136,14 +138,17 @@ def migrate(body, owned: np.ndarray, owner: np.ndarray, comm):
         (n,) new owner rank of every local particle (the halo's from their owners).
     comm
         The communicator. Collective.
+    carry
+        Further per-particle arrays ((n, k) or (n,) float64) to move with the particles.
 
     Returns
     -------
-    local, owned, new_owner
+    local, owned, new_owner, carried
         The new local body (no workspace, ledger or intact volume yet: the caller sets them
-        up), which particles of it this rank owns, and every local particle's owner.
+        up), which particles of it this rank owns, every local particle's owner, and the
+        ``carry`` arrays in the new local order ((n_new, k) each).
     """
-    fcols, icols = _particle_columns(body, owner)
+    fcols, icols = _particle_columns(body, owner, dict(carry or {}))
     pf = np.concatenate([v for _, v in fcols], axis=1)
     pi = np.concatenate([v for _, v in icols], axis=1)
     owner = owner.astype(np.int32)
@@ -228,7 +233,8 @@ def _assemble(body, fcols, icols, pf, pi, bf, bi, rank: int):
         xi_len=np.ascontiguousarray(bf[:, 0]),
         weight=np.ascontiguousarray(bf[:, 1], dtype=np.float32), flags=None,
         constraints=constraints, rest=rest, shear=shear, rates=rates, gid=gid)
-    return local, owned, new_owner
+    carried = {k[len("carry:"):]: vec(k) for k in fields if k.startswith("carry:")}
+    return local, owned, new_owner, carried
 
 
 def halo_lists(row_ptr: np.ndarray, nbr: np.ndarray, owned: np.ndarray,

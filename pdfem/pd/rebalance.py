@@ -56,16 +56,18 @@ class Rebalancing:
         mean = works.mean()
         return float(works.max() / mean) if mean > 0 else 1.0
 
-    def rebalance(self) -> None:
+    def rebalance(self, carry: dict[str, np.ndarray] | None = None) -> dict[str, np.ndarray]:
         """Re-partition by weighted coordinate bisection of the current positions and move the
-        particles and bonds to their new owners (see the module docstring; collective)."""
+        particles and bonds to their new owners (see the module docstring; collective).
+        ``carry``: other per-particle arrays ((n_local, k), e.g. a particle force's state) that
+        move with the particles; returned in the new local order."""
         t0 = time.perf_counter()
         b, comm, own = self.body, self.comm, self.plan.owned
         weight = bond_work(b.row_ptr, b.nbr, b.n)
         new = np.full(b.n, -1.0)
         new[own] = rcb_owners(b.y[own], b.gid[own], weight[own], comm.size, comm, self.global_n)
         self._exchange(new)  # the halo's new owners, from their owners
-        local, owned, owner = migrate(b, own, new.astype(np.int64), comm)
+        local, owned, owner, carried = migrate(b, own, new.astype(np.int64), comm, carry)
         send, recv = halo_lists(local.row_ptr, local.nbr, owned, owner)
         self.plan = dataclasses.replace(self.plan, local=local.gid, owned=owned, pairs=None,
                                         send=send, recv=recv)
@@ -76,3 +78,4 @@ class Rebalancing:
         self.layout_version += 1
         self.rebalances += 1
         self.rebalance_seconds += time.perf_counter() - t0
+        return carried

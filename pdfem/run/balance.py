@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import time
 
-from pdfem.errors import InputError
-
 
 class LoadBalance:
     """The load balance of a run's ice bodies (see the module docstring).
@@ -31,12 +29,10 @@ class LoadBalance:
     say
         Function taking one line of the run's report.
 
-    Raises
-    ------
-    InputError
-        Re-partitioning asked for with water (its per-particle state stays on the ranks;
-        short-range contact follows a re-partition: it rebuilds its halo when a body's halo
-        plan changes, :mod:`pdfem.forces.short_range_halo`).
+    A re-partition moves the particle forces' per-particle state with the particles
+    (:meth:`pdfem.forces.base.ParticleForce.moving_state`: water's drag and added-mass
+    counters); short-range contact rebuilds its halo when a body's halo plan changes
+    (:mod:`pdfem.forces.short_range_halo`).
     """
 
     def __init__(self, case, setup, comm, say=lambda s: None) -> None:
@@ -46,12 +42,6 @@ class LoadBalance:
         self.active = comm.size > 1 and any(b.distributed for b in self.bodies)
         self.size = comm.size
         self._left: dict[str, float] = {}  # body -> imbalance right after its last re-partition
-        asked = self.every > 0 or self.limit > 0.0
-        if self.active and asked and case.water is not None:
-            raise InputError(case.file, "run.rebalance_every", "re-partitioning split ice "
-                             "bodies is not supported when [water] is given (the water's "
-                             "per-particle state is not moved between ranks); set "
-                             "rebalance_every = 0 and rebalance_imbalance = 0")
         if self.active:
             levels = ", ".join(f"'{b.name}' {b.imbalance():.3f}" for b in self.bodies)
             when = " and ".join(w for w in ((f"every {self.every:,} steps" if self.every else ""),
@@ -73,7 +63,13 @@ class LoadBalance:
             due = (self.every and step % self.every == 0) or over
             if due:
                 before, t0 = level, time.perf_counter()
-                b.rebalance()
+                forces = self.coupler.forces
+                carry = {f"{i}:{k}": v for i, f in enumerate(forces)
+                         for k, v in f.moving_state(b).items()}
+                carried = b.rebalance(carry)
+                for i, f in enumerate(forces):
+                    f.moved_state(b, {k.split(":", 1)[1]: v for k, v in carried.items()
+                                      if k.split(":", 1)[0] == str(i)})
                 level, moved = b.imbalance(), True
                 self._left[b.name] = level
                 self.say(f"  t = {t:.6e} s (step {step:,}): re-partitioned '{b.name}' over "

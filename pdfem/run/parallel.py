@@ -60,12 +60,13 @@ def splits_bodies(case) -> bool:
     distributed set-up (:mod:`pdfem.pd.distributed_setup`: no rank holds a whole body).
 
     The global set-up (every rank builds each whole body, then keeps its part) stays for what
-    the distributed one does not support yet: water, whose restart check reads the whole body;
-    the full-family PD loop; shapes not in :data:`SPLIT_SHAPES`. Short-range contact (on, or
+    the distributed one does not support yet: the full-family PD loop; shapes not in
+    :data:`SPLIT_SHAPES`. Water acts per owned particle and checkpoints per rank, so it needs no
+    whole body either. Short-range contact (on, or
     implied by a crushing failure law) needs no whole body: each rank searches its own
     particles and a contact halo (:mod:`pdfem.forces.short_range_halo`), and a crushing law's
     bond state (rest lengths, shear springs) is per bond, built for the local bonds."""
-    if case.water is not None or case.run.pd_loop != "pairs":
+    if case.run.pd_loop != "pairs":
         return False
     return all(isinstance(cfg.shape, SPLIT_SHAPES) for cfg in case.ice)
 
