@@ -2,8 +2,8 @@
 
 Reference: the global set-up of the same body in the same process (every rank builds the whole
 body with IceBody.from_shape and keeps its part, pdfem.pd.distributed.DistributedIce with the
-same box partition). For a box, a cylinder with an oblique axis and a two-body case (a box and
-a sphere), on 2 and 3 ranks, every rank's local arrays are identical: global numbers, reference
+same box partition). For a box, a cylinder with an oblique axis, a two-body case (a box and
+a sphere) and a closed surface mesh (an oblique octahedron), on 2 and 3 ranks, every rank's local arrays are identical: global numbers, reference
 positions, pair lists, bond lengths, weights (cubic influence function and surface correction)
 and weighted volumes m, and the halo plans. A notched bar pulled apart on the distributed
 set-up agrees with the serial run to 1e-10 relative (measured: identical) with the same broken
@@ -33,7 +33,7 @@ EXACT = textwrap.dedent('''
     from pdfem.pd.distributed import DistributedIce
     from pdfem.pd.distributed_setup import distributed_body, distributed_ice
     from pdfem.pd.materials.lps import IceMaterial
-    from pdfem.geometry.shapes import Box, Cylinder, Sphere
+    from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
     from pdfem.run.parallel import warm_before_ranks
 
     comm = world()
@@ -64,6 +64,12 @@ EXACT = textwrap.dedent('''
     # two bodies, each split over all ranks on its own
     same("floe", Box((0, 0, 0), (0.16, 0.1, 0.05)))
     same("ball", Sphere((0.3, 0.05, 0.05), 0.06))
+    # a closed surface mesh (an oblique octahedron, lattice planes through its vertices)
+    verts = np.array([[0.0, 0.06, 0.04], [0.2, 0.06, 0.04], [0.1, 0.0, 0.04], [0.1, 0.13, 0.04],
+                      [0.1, 0.06, 0.0], [0.07, 0.05, 0.1]])
+    tris = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4],
+                     [0, 2, 5], [2, 1, 5], [1, 3, 5], [3, 0, 5]])
+    same("octahedron", ClosedSurface(verts, tris))
 
     # a notched bar pulled apart: the distributed set-up against the serial body
     bar = Box((0, 0, 0), (24 * 0.005, 8 * 0.005, 6 * 0.005))
@@ -176,7 +182,7 @@ def _run(tmp_path, text: str, ranks: int) -> str:
 def test_distributed_setup_equals_global_setup(tmp_path, ranks):
     out = _run(tmp_path, EXACT, ranks)
     exact = [line for line in out.splitlines() if line.startswith("EXACT")]
-    assert len(exact) == 4, out
+    assert len(exact) == 5, out
     for line in exact:
         assert line.endswith("same=True"), line
     run = dict(kv.split("=") for kv in next(

@@ -52,8 +52,9 @@ def add_arguments(r: argparse.ArgumentParser) -> None:
                    help="with --estimate: memory of one node, e.g. 24GB, 24GiB, 2.5e10 "
                         "(default: MemAvailable of the node)")
     e.add_argument("--setup", choices=("distributed", "global"), default=None,
-                   help="with --estimate: the set-up to size for (default: this build's; today "
-                        "global: every rank builds the whole ice body)")
+                   help="with --estimate: the set-up to size for (default: the one the case "
+                        "gets, distributed unless it uses the full-family loop; global: every "
+                        "rank first builds the whole ice body)")
 
 
 def demo_case_file() -> contextlib.AbstractContextManager[Path]:

@@ -28,7 +28,7 @@ from pdfem.run.build_structures import build_all
 from pdfem.fem.rigid import RigidBody
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
-from pdfem.geometry.shapes import Box, Cylinder, Sphere
+from pdfem.geometry.shapes import Box
 from pdfem.pd.distributed import DistributedIce
 from pdfem.pd.distributed_setup import distributed_body, distributed_ice
 from pdfem.parallel.partition import BYTES_PER_HALO_PARTICLE, choose_partition
@@ -50,25 +50,20 @@ def build_structures(configs, out: Path, file: str, comm) -> list:
     return build_all(configs, out, file, remesh=False)
 
 
-SPLIT_SHAPES = (Box, Cylinder, Sphere)
-"""Shapes the distributed set-up builds per rank (analytic point tests); bodies of other shapes
-(closed-surface meshes) are built whole on every rank and then split, as before."""
-
-
 def splits_bodies(case) -> bool:
     """Whether an MPI run of ``case`` builds its ice bodies split over the ranks by the
     distributed set-up (:mod:`pdfem.pd.distributed_setup`: no rank holds a whole body).
 
-    The global set-up (every rank builds each whole body, then keeps its part) stays for what
-    the distributed one does not support yet: the full-family PD loop; shapes not in
-    :data:`SPLIT_SHAPES`. Water acts per owned particle and checkpoints per rank, so it needs no
-    whole body either. Short-range contact (on, or
-    implied by a crushing failure law) needs no whole body: each rank searches its own
-    particles and a contact halo (:mod:`pdfem.forces.short_range_halo`), and a crushing law's
-    bond state (rest lengths, shear springs) is per bond, built for the local bonds."""
-    if case.run.pd_loop != "pairs":
-        return False
-    return all(isinstance(cfg.shape, SPLIT_SHAPES) for cfg in case.ice)
+    The global set-up (every rank builds each whole body, then keeps its part) stays only for
+    the full-family PD loop (the per-particle reference loop). Every shape is generated per
+    rank: the analytic ones and closed surface meshes alike answer the same point test for a
+    rank's box as for the whole body (each rank holds the surface mesh, not the particles).
+    Water acts per owned particle and checkpoints per rank, so it needs no whole body either.
+    Short-range contact (on, or implied by a crushing failure law) needs no whole body: each
+    rank searches its own particles and a contact halo (:mod:`pdfem.forces.short_range_halo`),
+    and a crushing law's bond state (rest lengths, shear springs) is per bond, built for the
+    local bonds."""
+    return case.run.pd_loop == "pairs"
 
 
 def setup_comm(case, comm):

@@ -8,9 +8,9 @@ an owned end). A rank's memory is ``FIXED_BYTES`` plus, per body, its local part
 
 * distributed (:mod:`pdfem.pd.distributed_setup`: each rank builds only its subdomain and
   halo): that is the rank's peak;
-* global (cases the distributed set-up does not cover yet: the full-family loop, closed-surface
-  shapes): every rank first builds the whole body, then keeps its part, so the peak per rank is
-  the whole body plus its part.
+* global (the one case the distributed set-up does not cover: the full-family loop): every rank
+  first builds the whole body, then keeps its part, so the peak per rank is the whole body plus
+  its part.
 
 :func:`pdfem.run.parallel.splits_bodies` says which one a case gets. A node's need is the sum
 over its ranks (ranks sharing memory: :func:`pdfem.parallel.nodes.node_layout`), compared with its
