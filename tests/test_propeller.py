@@ -164,3 +164,13 @@ def test_rake_moves_the_tip_aft(tmp_path):
         return (area[:, None] * tri.mean(axis=1)).sum(axis=0) / area.sum()
     shift = tip_centroid(0.2) - tip_centroid(0.0)
     assert shift[0] == pytest.approx(-0.7 * math.tan(0.2), abs=2e-3)
+
+
+def test_quick_milling_spectrum_validation_passes(tmp_path):
+    """``pdfem validate --quick --case milling_torque_spectrum``: the shaft torque's spectrum
+    peaks at the blade passing frequency Z n (here of the quick run's shaft at twice the
+    speed) within one frequency bin."""
+    from pdfem.validation.runner import run_validation
+    (case,) = [c for c in milling.CASES if c.name == "milling_torque_spectrum"]
+    (r,) = run_validation([case], tmp_path, quick=True)
+    assert r.passed and r.error <= r.tolerance, (r.value, r.message)

@@ -32,9 +32,10 @@ ELSEWHERE = {"flexural_strength_three_point", "flexural_strength_four_point",
              "flexural_strength_three_point_half_dx", "flexural_strength_four_point_half_dx",
              "panel_modes", "plate_clamped_frequency", "plate_clamped_deflection",
              "plate_simply_supported_frequency", "plate_simply_supported_deflection",
-             "floating_draught", "floating_heave_period"}
+             "floating_draught", "floating_heave_period", "step_energy_residual",
+             "step_dissipation_sign", "step_load_convergence", "milling_torque_spectrum"}
 """Cases whose ``--quick`` run has its own test (tests/test_strength.py, test_validation_plate.py,
-test_water.py): run once, there."""
+test_water.py, test_step_sweep.py, test_propeller.py): run once, there, beside the others."""
 
 
 def test_quick_validation_passes(capfd):
