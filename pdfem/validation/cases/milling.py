@@ -40,8 +40,8 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 #: UR I3 ice strength index S_ice and ice thickness H_ice (m) by Polar Class (UR I3 table 1)
-POLAR_CLASS = {"PC1": (1.2, 4.0), "PC2": (1.1, 3.5), "PC3": (1.1, 3.0), "PC4": (1.0, 2.5),
-               "PC5": (1.0, 2.0), "PC6": (1.0, 1.75), "PC7": (1.0, 1.5)}
+POLAR_CLASS = {"PC1": (1.2, 4.0), "PC2": (1.1, 3.5), "PC3": (1.1, 3.0), "PC4": (1.1, 2.5),
+               "PC5": (1.1, 2.0), "PC6": (1.0, 1.75), "PC7": (1.0, 1.5)}
 
 
 def _step_lengths(time: np.ndarray) -> np.ndarray:
