@@ -20,7 +20,7 @@ import time
 import numba
 import numpy as np
 
-from pdfem.pd import kernels as kn
+from pdfem.pd.bonds import kernels as kn
 from pdfem.pd.body import IceBody
 from pdfem.geometry.lattice import lattice_points
 from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial

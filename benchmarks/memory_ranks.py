@@ -3,7 +3,7 @@
 A block of about ``--n`` particles (dx = 0.01 m, delta = 3.015 dx, cubic influence function and
 surface correction) is set up and advanced ``--steps`` velocity-Verlet steps: serially as a
 whole :class:`~pdfem.pd.body.IceBody` (``from_shape``), and on K ranks by the distributed set-up
-(:mod:`pdfem.pd.distributed_setup`), each rank building only its part. Every process reports
+(:mod:`pdfem.pd.layout.setup`), each rank building only its part. Every process reports
 its peak resident set size (VmHWM of /proc/self/status, bytes), gathered to rank 0; the
 figures are the largest per rank, and their ratios to the serial run's.
 
@@ -39,7 +39,7 @@ def worker(n: int, steps: int) -> None:
     from pdfem.geometry.shapes import Box
     from pdfem.parallel.comm import world
     from pdfem.pd.body import IceBody
-    from pdfem.pd.distributed_setup import distributed_body, distributed_ice
+    from pdfem.pd.layout.setup import distributed_body, distributed_ice
     from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
     from pdfem.run.parallel import warm_before_ranks
 

@@ -31,7 +31,7 @@ from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 from pdfem.parallel.comm import world
-from pdfem.pd.distributed import DistributedIce
+from pdfem.pd.layout.halo import DistributedIce
 from pdfem.parallel.partition import choose_partition
 
 

@@ -2,8 +2,8 @@
 11, 1154: Table 2, Fig. 9, Table 4) with pdfem, next to the paper's figures.
 
 - Table 2: neighbour search time for the paper's particle counts A-H (7,000 to 1,000,000,
-  cubic domains, horizon 3.015 dx): pdfem's cell list (:func:`pdfem.pd.search.cell_pairs`)
-  against brute force (:func:`pdfem.pd.search.brute_pairs`, numba, O(N^2)). Brute force is
+  cubic domains, horizon 3.015 dx): pdfem's cell list (:func:`pdfem.pd.bonds.search.cell_pairs`)
+  against brute force (:func:`pdfem.pd.bonds.search.brute_pairs`, numba, O(N^2)). Brute force is
   measured while one run takes under ``--brute-budget`` seconds (predicted from the previous
   size as O(N^2)); larger sizes are extrapolated as O(N^2) from the largest measured one and
   marked "(extrapolated)".
@@ -95,7 +95,7 @@ def plate(n: int, layers: int = 6) -> np.ndarray:
 
 def warm_up() -> None:
     from pdfem.benchmarks.step import _warm_up
-    from pdfem.pd.search import brute_pairs, cell_pairs
+    from pdfem.pd.bonds.search import brute_pairs, cell_pairs
 
     x = cube(300)
     cell_pairs(x, HORIZON * DX)
@@ -106,7 +106,7 @@ def warm_up() -> None:
 # ------------------------------------------------------------------------------------ Table 2
 
 def table2(repeat: int, brute_budget: float) -> list[dict]:
-    from pdfem.pd.search import brute_pairs, cell_pairs
+    from pdfem.pd.bonds.search import brute_pairs, cell_pairs
 
     rows, last = [], None  # last: (n, seconds) of the largest brute-force run
     for case, (n_paper, *_ ) in PAPER_TABLE2.items():
@@ -135,11 +135,11 @@ def table2(repeat: int, brute_budget: float) -> list[dict]:
 def step_times(x: np.ndarray, steps: int, family: bool = True) -> dict:
     """Search time, pair-loop and full-family step times (s, best of ``steps``) on ``x``."""
     from pdfem.benchmarks.step import _timed
-    from pdfem.pd import kernels as kn
-    from pdfem.pd.bonds import bond_lengths
-    from pdfem.pd.family import build_family
+    from pdfem.pd.bonds import kernels as kn
+    from pdfem.pd.bonds.geometry import bond_lengths
+    from pdfem.pd.bonds.family import build_family
     from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
-    from pdfem.pd.search import cell_pairs
+    from pdfem.pd.bonds.search import cell_pairs
 
     delta = HORIZON * DX
     ld = load()
@@ -201,7 +201,7 @@ def table4_one(n: int, steps: int, family: bool) -> dict:
     """In this process: search, set-up and IceBody steps of the plate (and full family)."""
     from pdfem.pd.body import IceBody
     from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
-    from pdfem.pd.search import cell_pairs
+    from pdfem.pd.bonds.search import cell_pairs
 
     warm_up()
     x = plate(n)

@@ -18,7 +18,7 @@ import json
 
 
 from pdfem.geometry.lattice import fill
-from pdfem.pd.search import cell_pairs
+from pdfem.pd.bonds.search import cell_pairs
 from pdfem.geometry.shapes import Box
 from pdfem.parallel.partition import grid_partition, grid_shapes, partition_stats, rcb_partition
 

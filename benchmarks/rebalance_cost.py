@@ -36,7 +36,7 @@ def _vm_hwm() -> float:
 def main() -> None:
     from pdfem.geometry.shapes import Box
     from pdfem.parallel.comm import world
-    from pdfem.pd.distributed_setup import distributed_body, distributed_ice
+    from pdfem.pd.layout.setup import distributed_body, distributed_ice
     from pdfem.pd.materials.lps import IceMaterial
 
     ap = argparse.ArgumentParser()

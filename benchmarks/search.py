@@ -2,8 +2,8 @@
 
 A cubic lattice of about ``n`` particles (``round(n ** (1/3))`` per axis, dx = 1 m) and a horizon
 of ``horizon_factor`` dx. Each search is timed from positions to the canonical CSR pair list
-(everything a caller waits for): for :func:`~pdfem.pd.search.cell_pairs` the cell sort and the
-search, for :func:`~pdfem.pd.search.ckdtree_pairs` the tree build, the query and the conversion
+(everything a caller waits for): for :func:`~pdfem.pd.bonds.search.cell_pairs` the cell sort and the
+search, for :func:`~pdfem.pd.bonds.search.ckdtree_pairs` the tree build, the query and the conversion
 to CSR. Times are the best of ``repeat`` runs (``time.perf_counter``), after a warm-up on a tiny
 lattice that compiles (or loads) the numba kernels. The pair sets are checked to agree: same
 number of pairs and the same family size for every particle.
@@ -21,7 +21,7 @@ import numba
 import numpy as np
 
 from pdfem.geometry.lattice import lattice_points
-from pdfem.pd.search import brute_pairs, cell_pairs, ckdtree_pairs
+from pdfem.pd.bonds.search import brute_pairs, cell_pairs, ckdtree_pairs
 
 
 def _best_of(repeat: int, fn, *args):

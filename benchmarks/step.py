@@ -2,11 +2,11 @@
 
 A cubic lattice of about ``n`` sea-ice particles (dx = 1 cm) with small random displacements;
 a step is the dilatation followed by the forces with the bond-break check, as the time loop
-runs them (:func:`pdfem.pd.kernels.dilatation_and_forces`, which keeps the bond lengths of the
+runs them (:func:`pdfem.pd.bonds.kernels.dilatation_and_forces`, which keeps the bond lengths of the
 dilatation pass for the force pass; the two separate calls and the fused call without the
 bond-length scratch are timed as well). Bonds are stored as an ice body stores them: int32
 partner, float64 length and a float32 weight whose sign marks a broken bond (16 bytes per pair,
-:data:`pdfem.pd.kernels.SIGNED`). The figure of
+:data:`pdfem.pd.bonds.kernels.SIGNED`). The figure of
 merit is unique pair-steps per second (pairs P times steps over the seconds), the same numerator
 for both loops, so the full-family loop (which visits every bond twice, the "original PD" of
 Zhang et al. 2023) is charged for the work it actually has to do.
@@ -21,8 +21,8 @@ import time
 import numba
 import numpy as np
 
-from pdfem.pd import kernels as kn
-from pdfem.pd.family import build_family
+from pdfem.pd.bonds import kernels as kn
+from pdfem.pd.bonds.family import build_family
 from pdfem.pd.failure.ice import IceFailure
 from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
 
@@ -38,7 +38,7 @@ def _lattice(side: int, dx: float) -> np.ndarray:
 def _pairs(x: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
     """Cell-sorted positions and their CSR pairs (pdfem's cell search, else scipy's cKDTree)."""
     try:
-        from pdfem.pd.search import cell_pairs
+        from pdfem.pd.bonds.search import cell_pairs
     except ImportError:
         cell_pairs = None
     if cell_pairs is not None:
@@ -57,7 +57,7 @@ def _pairs(x: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 def _bond_lengths(x, row_ptr, nbr):
     try:
-        from pdfem.pd.bonds import bond_lengths
+        from pdfem.pd.bonds.geometry import bond_lengths
     except ImportError:
         i = np.repeat(np.arange(x.shape[0]), np.diff(row_ptr))
         return np.linalg.norm(x[nbr] - x[i], axis=1)
@@ -129,7 +129,7 @@ def bench_step(n: int = 1_000_000, horizon_factor: float = 3.015, steps: int = 1
         ``n_particles``, ``n_pairs``, ``threads``, ``step_s`` (seconds per pair-loop step),
         ``pair_steps_per_s`` (unique pairs x steps / s, pair loop),
         ``separate_step_s`` and ``separate_pair_steps_per_s`` (pair loop as two calls,
-        :func:`~pdfem.pd.kernels.dilatation` then :func:`~pdfem.pd.kernels.forces`),
+        :func:`~pdfem.pd.bonds.kernels.dilatation` then :func:`~pdfem.pd.bonds.kernels.forces`),
         ``full_family_step_s``, ``full_family_pair_steps_per_s`` (same numerator),
         ``speedup_pairs_vs_full_family``, ``pair_steps_per_s_best`` and
         ``full_family_pair_steps_per_s_best`` (from the fastest single step),

@@ -1,4 +1,4 @@
-"""The shear springs of crushed bonds (pdfem.pd.crushed_shear): Coulomb friction between the
+"""The shear springs of crushed bonds (pdfem.pd.failure.crushed_shear): Coulomb friction between the
 ends of a pushing crushed bond, as a tangential spring with slip (Cundall & Strack 1979,
 "A discrete numerical model for granular assemblies", Geotechnique 29:47-65).
 
@@ -18,9 +18,9 @@ import pytest
 
 from pdfem.geometry.shapes import Box
 from pdfem.pd.body import IceBody
-from pdfem.pd.crushed_shear import STIFFNESS_RATIO
+from pdfem.pd.failure.crushed_shear import STIFFNESS_RATIO
 from pdfem.pd.failure.ice import IceFailure
-from pdfem.pd.lps_law import crushed_shear
+from pdfem.pd.bonds.lps_law import crushed_shear
 from pdfem.pd.materials.lps import IceMaterial
 
 E, NU, ST, SC = 4.1e9, 0.3, 0.6e6, 3.0e6

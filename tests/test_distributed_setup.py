@@ -1,7 +1,7 @@
-"""The distributed set-up (pdfem.pd.distributed_setup) builds exactly the global set-up's parts.
+"""The distributed set-up (pdfem.pd.layout.setup) builds exactly the global set-up's parts.
 
 Reference: the global set-up of the same body in the same process (every rank builds the whole
-body with IceBody.from_shape and keeps its part, pdfem.pd.distributed.DistributedIce with the
+body with IceBody.from_shape and keeps its part, pdfem.pd.layout.halo.DistributedIce with the
 same box partition). For a box, a cylinder with an oblique axis, a two-body case (a box and
 a sphere) and a closed surface mesh (an oblique octahedron), on 2 and 3 ranks, every rank's local arrays are identical: global numbers, reference
 positions, pair lists, bond lengths, weights (cubic influence function and surface correction)
@@ -30,8 +30,8 @@ EXACT = textwrap.dedent('''
     import numpy as np
     from pdfem.parallel.comm import world
     from pdfem.pd.body import IceBody
-    from pdfem.pd.distributed import DistributedIce
-    from pdfem.pd.distributed_setup import distributed_body, distributed_ice
+    from pdfem.pd.layout.halo import DistributedIce
+    from pdfem.pd.layout.setup import distributed_body, distributed_ice
     from pdfem.pd.materials.lps import IceMaterial
     from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
     from pdfem.run.parallel import warm_before_ranks
@@ -128,8 +128,8 @@ MEMORY = textwrap.dedent('''
     import numpy as np
     from pdfem.parallel.comm import world
     from pdfem.pd.body import IceBody
-    from pdfem.pd.distributed import HaloPlan
-    from pdfem.pd.distributed_setup import distributed_body
+    from pdfem.pd.layout.halo import HaloPlan
+    from pdfem.pd.layout.setup import distributed_body
     from pdfem.pd.materials.lps import IceMaterial
     from pdfem.geometry.shapes import Box
     from pdfem.run.parallel import warm_before_ranks

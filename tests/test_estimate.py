@@ -23,7 +23,7 @@ from pdfem.geometry.lattice import fill
 from pdfem.geometry.shapes import Box
 from pdfem.parallel.nodes import block_layout
 from pdfem.parallel.partition import grid_partition, partition_stats
-from pdfem.pd.search import cell_pairs
+from pdfem.pd.bonds.search import cell_pairs
 from pdfem.run.estimates import BYTES_PER_PAIR, BYTES_PER_PARTICLE, FIXED_BYTES, split_lattice
 from pdfem.run.preflight import estimate_rank_memory, node_needs, nodes_needed
 from pdfem.run.sizing import parse_bytes
@@ -65,7 +65,7 @@ def test_split_by_hand_nearest_neighbours():
 
 def test_split_matches_the_bond_list():
     """Owned, halo and bonds-with-an-owned-end of every rank of grid splits equal the counts
-    from the real lattice, its bonds (pdfem.pd.search) and pdfem.parallel.partition (grids
+    from the real lattice, its bonds (pdfem.pd.bonds.search) and pdfem.parallel.partition (grids
     that cut at whole lattice planes, as the estimate assumes)."""
     counts, dx, delta = (16, 12, 8), 1.0, 3.015
     x = fill(Box((0, 0, 0), counts), dx)

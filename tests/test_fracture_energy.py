@@ -1,4 +1,4 @@
-"""The energy dissipated by fracture, computed on its own (pdfem.pd.fracture).
+"""The energy dissipated by fracture, computed on its own (pdfem.pd.failure.fracture).
 
 Definition: a step that breaks bonds at positions y dissipates W(y; bonds before) - W(y; bonds
 after), the LPS strain energy (Silling et al. 2007) with the dilatation of each bond set; the
@@ -195,7 +195,7 @@ MPI_SCRIPT = textwrap.dedent('''
     import numpy as np
     from pdfem.parallel.comm import world
     from pdfem.parallel.partition import choose_partition
-    from pdfem.pd.distributed import DistributedIce
+    from pdfem.pd.layout.halo import DistributedIce
     from pdfem.pd.body import IceBody
     from pdfem.pd.materials.lps import IceMaterial
     from pdfem.geometry.shapes import Box

@@ -274,7 +274,7 @@ def test_split_bodies_on_one_rank_give_the_same_forces():
     search: the same forces, pair count and potential as the plain bodies, bit for bit; a NaN
     position is refused; plain and split bodies cannot be mixed."""
     from pdfem.parallel.comm import SerialComm
-    from pdfem.pd.distributed import DistributedIce
+    from pdfem.pd.layout.halo import DistributedIce
 
     dx = 0.01
     plain = [IceBody.from_shape(n, Box(lo, hi), ICE, dx, 3.015 * dx)

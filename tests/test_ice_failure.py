@@ -158,7 +158,7 @@ def test_checkpoint_keeps_the_crushed_bonds():
 def test_strain_rate_dependence_of_the_compressive_strength():
     """Ductile below the transition rate: sigma_c (rate / rate_t)^(1/3) (power-law creep with
     Glen's n = 3, Schulson & Duval 2009 ch. 6), sigma_c at and above it; off by default."""
-    from pdfem.pd.strain_rate import RateTracker
+    from pdfem.pd.failure.strain_rate import RateTracker
     mat = IceMaterial(900.0, E, NU, tensile_strength=ST, compressive_strength=SC,
                       transition_rate=1e-3)
     law = IceFailure.from_material(mat, 0.03)
@@ -188,7 +188,7 @@ def test_a_block_crushed_to_pieces_keeps_its_energy(law_name):
     of its 29,000 bonds break within a few steps. Kinetic + strain + fracture energy must stay
     the initial energy, converging with the step: the LPS force of a damaged particle is the
     exact derivative of its strain energy only with the intact bonds' weighted volume in the
-    force state (pdfem/pd/damaged_volume.py; derivative of W = K theta^2/2 + 15 mu/(2m)
+    force state (pdfem/pd/failure/damaged_volume.py; derivative of W = K theta^2/2 + 15 mu/(2m)
     sum omega e_d^2 V). Without it the block gained 16 % (critical stretch) and 2 % (ice law),
     whatever the step; measured with it: 0.9 % and 0.6 % at 0.5 of the stable step, 0.06 % and
     0.04 % at 0.125."""

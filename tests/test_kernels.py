@@ -1,6 +1,6 @@
-"""Tests of the LPS kernels (pdfem.pd.kernels) and the family lists (pdfem.pd.family).
+"""Tests of the LPS kernels (pdfem.pd.bonds.kernels) and the family lists (pdfem.pd.bonds.family).
 
-Pairs are built here with scipy's cKDTree (independent of pdfem.pd.search). Each test names its
+Pairs are built here with scipy's cKDTree (independent of pdfem.pd.bonds.search). Each test names its
 reference in the docstring.
 """
 
@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from pdfem.pd import kernels as kn
-from pdfem.pd.family import build_family
-from pdfem.pd.influence import bond_weights, cubic_influence, isotropy_gain
+from pdfem.pd.bonds import kernels as kn
+from pdfem.pd.bonds.family import build_family
+from pdfem.pd.bonds.influence import bond_weights, cubic_influence, isotropy_gain
 
 DX = 1e-2
 DELTA = 3.015 * DX

@@ -1,4 +1,4 @@
-"""An ice body split over MPI ranks gives the serial answer (pdfem.pd.distributed).
+"""An ice body split over MPI ranks gives the serial answer (pdfem.pd.layout.halo).
 
 Reference: the serial run of the same body in the same process. A notched bar is pulled apart
 (bonds break) on 1, 2 and 3 ranks (3: an uneven split); positions agree with the serial run to
@@ -19,7 +19,7 @@ import pytest
 SCRIPT = textwrap.dedent('''
     import numpy as np
     from pdfem.parallel.comm import world
-    from pdfem.pd.distributed import DistributedIce
+    from pdfem.pd.layout.halo import DistributedIce
     from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
     from pdfem.pd.materials.lps import IceMaterial
@@ -64,7 +64,7 @@ COUPLED = textwrap.dedent('''
     from pdfem.coupling.coupler import ContactPair, Coupler
     from pdfem.fem.rigid import RigidBody
     from pdfem.parallel.comm import world
-    from pdfem.pd.distributed import DistributedIce
+    from pdfem.pd.layout.halo import DistributedIce
     from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
     from pdfem.pd.materials.lps import IceMaterial
@@ -138,7 +138,7 @@ def test_coupled_contact_split_matches_serial(tmp_path, ranks):
     (measured: identical) and the damage field is identical (contact impulses gathered from
     the ranks and summed in global particle order, as the serial run sums them; structure
     replicated). One numba thread per process: the ice's pair loops cut their pair list into
-    one chunk per thread (pdfem.pd.workspace), and a rank's list is cut at other particles than
+    one chunk per thread (pdfem.pd.bonds.workspace), and a rank's list is cut at other particles than
     the whole body's, so with several threads the ice's own force sums differ by round-off
     (1e-20 N at rest), which the crushing here grows to 6e-8: a matter of the PD kernels, not
     of the coupling this test checks."""

@@ -1,4 +1,4 @@
-"""Re-partitioning a split ice body mid-run (pdfem.pd.rebalance) keeps the serial answer.
+"""Re-partitioning a split ice body mid-run (pdfem.pd.layout.rebalance) keeps the serial answer.
 
 Reference: the serial run of the same body in the same process. On 2 and 3 ranks (3: uneven),
 one mpiexec launch each, with one numba thread per rank:
@@ -47,8 +47,8 @@ import time
 import numpy as np
 from pdfem.parallel.comm import world
 from pdfem.parallel.rcb import rcb_owners
-from pdfem.pd.distributed import DistributedIce
-from pdfem.pd.distributed_setup import distributed_body, distributed_ice
+from pdfem.pd.layout.halo import DistributedIce
+from pdfem.pd.layout.setup import distributed_body, distributed_ice
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.pd.failure.ice import IceFailure

@@ -33,7 +33,7 @@ from pdfem.geometry.shapes import Box
 from pdfem.output import read_results
 from pdfem.parallel.comm import SerialComm
 from pdfem.pd.body import IceBody
-from pdfem.pd.distributed import DistributedIce
+from pdfem.pd.layout.halo import DistributedIce
 from pdfem.pd.materials.lps import IceMaterial
 from test_mpi_run import CYLINDER as BASE_CYLINDER
 
@@ -57,7 +57,7 @@ import numpy as np
 from pdfem.parallel.comm import world
 from pdfem.coupling.coupler import Coupler
 from pdfem.forces.short_range import ShortRangeContact
-from pdfem.pd.distributed import DistributedIce
+from pdfem.pd.layout.halo import DistributedIce
 from pdfem.parallel.partition import choose_partition
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial

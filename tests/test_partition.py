@@ -13,7 +13,7 @@ import pytest
 from pdfem.parallel.partition import (choose_partition, grid_partition, grid_shapes,
                                       partition_stats, rcb_partition)
 from pdfem.geometry.lattice import fill
-from pdfem.pd.search import cell_pairs
+from pdfem.pd.bonds.search import cell_pairs
 from pdfem.geometry.shapes import Box
 
 

@@ -1,4 +1,4 @@
-"""Tests of pdfem.pd.body (IceBody) and pdfem.pd.surface: bond weights, fused step, stable step.
+"""Tests of pdfem.pd.body (IceBody) and pdfem.pd.bonds.surface: bond weights, fused step, stable step.
 
 Each test names its reference in the docstring.
 """
@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from pdfem.pd import kernels as kn
+from pdfem.pd.bonds import kernels as kn
 from pdfem.pd.body import IceBody
-from pdfem.pd.influence import bond_weights, isotropy_gain, partial_volume_factor
+from pdfem.pd.bonds.influence import bond_weights, isotropy_gain, partial_volume_factor
 from pdfem.geometry.lattice import fill
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
@@ -96,7 +96,7 @@ def test_surface_correction_threaded_and_in_place_match_serial():
     pairs sums the moments in another order, so the weights agree to float32 round-off; the
     result does not depend on timing (two runs are bit-identical); correcting the weight array
     in place (out=weight) gives the same weights as a separate output."""
-    from pdfem.pd.surface import surface_corrected_weights
+    from pdfem.pd.bonds.surface import surface_corrected_weights
 
     b = block(10, 9, 8, surface_correction=False)
     args = (b.x0, b.row_ptr, b.nbr, b.xi_len, b.weight, b.vol)

@@ -242,7 +242,7 @@ MPI_SCRIPT = textwrap.dedent('''
     from pdfem.parallel.comm import world
     from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
-    from pdfem.pd.distributed import DistributedIce
+    from pdfem.pd.layout.halo import DistributedIce
     from pdfem.pd.materials.lps import IceMaterial
 
     def build():

@@ -11,7 +11,7 @@ import itertools
 import numpy as np
 import pytest
 
-from pdfem.pd.search import (brute_pairs, cell_pairs, cell_sort, ckdtree_pairs, pairs_to_array,
+from pdfem.pd.bonds.search import (brute_pairs, cell_pairs, cell_sort, ckdtree_pairs, pairs_to_array,
                              search_cell_size)
 
 

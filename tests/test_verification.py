@@ -97,7 +97,7 @@ def test_recovered_youngs_modulus_and_poisson_ratio():
     model is free of bond-based PD's nu = 1/4). It needs both bond-weight corrections of lattice
     bodies: with w = 1 the lattice LPS is cubic (here E = 0.99 E, nu = 0.327), with the cubic
     influence function alone the stiff surface layers of the 14 x 14 section give E = 1.12 E
-    (pdfem.pd.influence, pdfem.pd.surface)."""
+    (pdfem.pd.bonds.influence, pdfem.pd.bonds.surface)."""
     nx, ny, nz, dx = 36, 14, 14, 0.01
     b = block(nx, ny, nz, dx)
     sigma = 1e6  # Pa

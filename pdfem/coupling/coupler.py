@@ -119,7 +119,7 @@ class Coupler:
         gravity and short-range contact between ice particles): after the bond forces of each
         ice step, each adds its force density to the bodies' ``f``, in list order.
     comm
-        With ice bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`):
+        With ice bodies split over MPI ranks (:class:`pdfem.pd.layout.halo.DistributedIce`):
         the communicator over which the contact impulses are gathered and summed in global
         particle order (the serial order), so every rank advances the replicated structures
         identically and as the serial run does. Contact

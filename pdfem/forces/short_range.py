@@ -59,7 +59,7 @@ from run to run and for any thread or chunk count. Candidates further apart than
 with one squared distance, which is all the work an intact body costs (about 30 candidates per
 particle).
 
-Bodies split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`) are searched by
+Bodies split over MPI ranks (:class:`pdfem.pd.layout.halo.DistributedIce`) are searched by
 :class:`pdfem.forces.short_range_ranks.DistributedSearch`: per rank, its own particles and a
 contact halo kept with a Verlet skin (:mod:`pdfem.forces.short_range_halo`), on the serial
 run's cells with tables sized from the local particles; the serial forces bit for bit. The
@@ -90,7 +90,7 @@ from pdfem.forces.short_range_kernels import (
 )
 from pdfem.forces.short_range_ranks import DistributedSearch
 from pdfem.geometry.cell_hash import bounding_box, counting_sort
-from pdfem.pd.workspace import SERIAL_BELOW_PARTICLES
+from pdfem.pd.bonds.workspace import SERIAL_BELOW_PARTICLES
 
 if TYPE_CHECKING:
     from pdfem.pd.body import IceBody
@@ -121,7 +121,7 @@ class ShortRangeContact(ParticleForce):
     bodies
         The ice bodies (:class:`pdfem.pd.body.IceBody`: ``y``, ``x0``, ``vol``, ``dx``,
         ``delta``, ``material.K``, ``f``); a single body may be passed alone. Under MPI, all of
-        them :class:`pdfem.pd.distributed.DistributedIce` (every call is then collective, and
+        them :class:`pdfem.pd.layout.halo.DistributedIce` (every call is then collective, and
         forces go to the owned particles).
     stiffness_factor
         c_S / c, the short-range constant over the bond-based micromodulus (Silling & Askari: 15).

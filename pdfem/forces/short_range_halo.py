@@ -2,7 +2,7 @@
 
 Short-range contact (:mod:`pdfem.forces.short_range`) acts between particles closer than the
 cut-off h (the largest critical distance), whatever body or rank they belong to, and fragments
-move, so the static bond halo of :class:`pdfem.pd.distributed.DistributedIce` does not serve.
+move, so the static bond halo of :class:`pdfem.pd.layout.halo.DistributedIce` does not serve.
 :class:`ContactHalo` keeps, on each rank, its owned particles (of all bodies) plus *ghosts*:
 the particles of other ranks that were within ``h + s`` of the box of the rank's owned
 particles at the last *refresh*. ``s`` is the Verlet skin, :data:`SKIN_FRACTION` times h.
@@ -48,7 +48,7 @@ class ContactHalo:
     Parameters
     ----------
     bodies
-        The :class:`~pdfem.pd.distributed.DistributedIce` bodies (``plan.local``,
+        The :class:`~pdfem.pd.layout.halo.DistributedIce` bodies (``plan.local``,
         ``plan.owned``, ``y``, ``x0``, ``vol``).
     offsets
         (n_bodies + 1,) first global number of each body's particles (whole bodies).

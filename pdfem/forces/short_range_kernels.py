@@ -22,7 +22,7 @@ import numpy as np
 from numba import prange
 
 from pdfem.geometry.cell_hash import HALF_STENCIL_COLUMNS, cell_id, cell_index, forward_column
-from pdfem.pd.chunk_kernels import twin
+from pdfem.pd.bonds.chunk_kernels import twin
 
 NOT_FINITE = ("ice particle positions are not finite (NaN or Inf): the run has become "
               "unstable")

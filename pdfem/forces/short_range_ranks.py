@@ -1,7 +1,7 @@
 """Short-range contact across MPI ranks: each rank searches its own particles and its contact halo.
 
 :class:`DistributedSearch` is the search of a :class:`pdfem.forces.short_range.ShortRangeContact`
-whose bodies are split over MPI ranks (:class:`pdfem.pd.distributed.DistributedIce`, which carry
+whose bodies are split over MPI ranks (:class:`pdfem.pd.layout.halo.DistributedIce`, which carry
 the communicator). Each rank holds its owned particles and their contact ghosts
 (:class:`pdfem.forces.short_range_halo.ContactHalo`: a Verlet skin, refreshed only when some
 particle has moved far enough; between refreshes only the ghosts' positions are exchanged) in
@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 
 class DistributedSearch:
     """The search of a :class:`ShortRangeContact` whose bodies are split over MPI ranks
-    (:class:`pdfem.pd.distributed.DistributedIce`), with the serial run's forces, bit for bit.
+    (:class:`pdfem.pd.layout.halo.DistributedIce`), with the serial run's forces, bit for bit.
 
     Every call, each rank
 

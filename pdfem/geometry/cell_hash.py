@@ -4,7 +4,7 @@ A grid of cubic cells of side h anchored at a corner ``lo``; a point's cell alon
 ``floor((p - lo) * inv_h)`` (always this expression, with ``inv_h = 1 / h``, so that every
 search puts a point in the same cell), its linear cell id ``(ix * ny + iy) * nz + iz``. Users:
 
-- the neighbour search of the bonds (:mod:`pdfem.pd.search`): points counting-sorted by cell,
+- the neighbour search of the bonds (:mod:`pdfem.pd.bonds.search`): points counting-sorted by cell,
   runs of equal cell ids, half stencil of forward columns;
 - short-range contact between ice particles (:mod:`pdfem.forces.short_range_kernels`): the
   same sort by (possibly folded) cell, the same half stencil on the dense grid;

@@ -9,7 +9,7 @@ centre lies inside the shape are kept, so the body's volume is right up to the d
 its surface (the particle count times dx^3 converges to the shape's volume as dx -> 0).
 
 No volume correction is applied here: the partial-volume correction for neighbours that straddle
-the edge of the horizon is applied by the bond kernels (:mod:`pdfem.pd.kernels`).
+the edge of the horizon is applied by the bond kernels (:mod:`pdfem.pd.bonds.kernels`).
 """
 
 from __future__ import annotations

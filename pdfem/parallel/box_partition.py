@@ -1,6 +1,6 @@
 """A partition of a lattice-filled body decided before any particle exists: a grid of boxes.
 
-The distributed set-up (:mod:`pdfem.pd.distributed_setup`) needs each rank's subdomain before
+The distributed set-up (:mod:`pdfem.pd.layout.setup`) needs each rank's subdomain before
 the particles are generated, so the cuts cannot be quantiles of particle coordinates
 (:mod:`pdfem.parallel.partition`). Here they are lattice planes: along each axis the lattice
 index range is cut into ``p_k`` runs holding equal numbers of particles according to the

@@ -3,7 +3,7 @@
 mpi4py is imported only when the process was started by an MPI launcher (so a serial run needs
 no mpiexec and no MPI library at all). Both communicators offer the few operations pdfem
 needs: rank and size, a sum over ranks, a gather to rank 0, an all-gather, a broadcast, and the point-to-point
-halo exchange of :mod:`pdfem.pd.distributed`.
+halo exchange of :mod:`pdfem.pd.layout.halo`.
 """
 
 from __future__ import annotations

@@ -22,9 +22,9 @@ fewest neighbours. Positions in m; communication volume in bytes per step.
 
 No spatial hash here (so none of :mod:`pdfem.geometry.cell_hash`): the halo is selected from the
 bond list itself (a rank's halo is exactly the bond partners of its particles owned elsewhere,
-:func:`partition_stats`, :func:`pdfem.pd.distributed.halo_plan`), which is exact, and the cuts
+:func:`partition_stats`, :func:`pdfem.pd.layout.halo.halo_plan`), which is exact, and the cuts
 are quantiles of sorted coordinates. A geometric (cell) selection could only over-approximate
-the halo, and the bonds already are the result of the cell search (:mod:`pdfem.pd.search`).
+the halo, and the bonds already are the result of the cell search (:mod:`pdfem.pd.bonds.search`).
 """
 
 from __future__ import annotations
@@ -160,7 +160,7 @@ def partition_stats(owner: np.ndarray, row_ptr: np.ndarray, nbr: np.ndarray,
     owner
         (N,) owner rank of each particle.
     row_ptr, nbr
-        The unique pairs i < j of the body (CSR, :func:`pdfem.pd.search.cell_pairs`).
+        The unique pairs i < j of the body (CSR, :func:`pdfem.pd.bonds.search.cell_pairs`).
     n_parts
         Number of ranks.
     """

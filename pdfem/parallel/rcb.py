@@ -1,6 +1,6 @@
 """Recursive coordinate bisection of particles spread over MPI ranks, without gathering them.
 
-Used to re-partition a split ice body as it moves (:mod:`pdfem.pd.rebalance`). Each rank holds
+Used to re-partition a split ice body as it moves (:mod:`pdfem.pd.layout.rebalance`). Each rank holds
 some particles: current positions (m), global numbers and weights (their work: the bond count).
 The K ranks are cut recursively as :func:`pdfem.parallel.partition.rcb_partition` does: a piece
 given n ranks is cut across its longest extent so that the left side, with floor(n/2) ranks,

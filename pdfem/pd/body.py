@@ -1,23 +1,23 @@
 """An ice body: particles, bonds and state arrays, advanced by velocity-Verlet steps.
 
-The class holds flat arrays and calls the numba kernels of :mod:`pdfem.pd.kernels` (no loops of
+The class holds flat arrays and calls the numba kernels of :mod:`pdfem.pd.bonds.kernels` (no loops of
 its own). Particles are numbered in cell order, so bond partners sit close in memory.
 
 Bodies filled with a cubic lattice (:meth:`IceBody.from_shape`, hence every body of a case file)
-weigh their bonds with the cubic influence function of :mod:`pdfem.pd.influence`, which makes the
+weigh their bonds with the cubic influence function of :mod:`pdfem.pd.bonds.influence`, which makes the
 lattice LPS isotropic (E and nu as input, not E = 0.89 E_input and nu = 0.32 along the lattice
-axes), and correct the weights near free surfaces (:mod:`pdfem.pd.surface`), which removes the
+axes), and correct the weights near free surfaces (:mod:`pdfem.pd.bonds.surface`), which removes the
 stiff surface layers of the LPS; bodies from arbitrary point clouds
 (:meth:`IceBody.from_points`) use w = 1 and no correction unless asked.
 
 Bonds cost 16 bytes each: int32 partner (``nbr``), float64 reference length (``xi_len``) and a
-float32 weight (``weight``) whose sign marks a broken bond (:data:`pdfem.pd.kernels.SIGNED`);
+float32 weight (``weight``) whose sign marks a broken bond (:data:`pdfem.pd.bonds.kernels.SIGNED`);
 ``broken`` gives the flags as a uint8 copy. Which bonds break is the body's failure law's
 decision (:mod:`pdfem.pd.failure`; default: the material's critical stretch), which gives the
 kernels their threshold. The body implements the ice-body interface that contact, particle
 forces and output use (:class:`pdfem.pd.ice_interface.IceParticles`), as a whole body: every
 particle is owned. The strain energy that breaking bonds take with them is counted in
-``fracture_dissipated`` (:mod:`pdfem.pd.fracture`).
+``fracture_dissipated`` (:mod:`pdfem.pd.failure.fracture`).
 
 One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (kg/m^3)::
 
@@ -37,25 +37,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pdfem.pd import kernels
+from pdfem.pd.bonds import kernels
 from pdfem.pd.body_diagnostics import BodyDiagnostics
-from pdfem.pd.body_state import BodyCheckpoint
-from pdfem.pd.bonds import bond_lengths, cut_crack
-from pdfem.pd.damaged_volume import IntactVolume
+from pdfem.pd.checkpoint.state import BodyCheckpoint
+from pdfem.pd.bonds.geometry import bond_lengths, cut_crack
+from pdfem.pd.failure.damaged_volume import IntactVolume
 from pdfem.pd.constraints import VelocityConstraint, applied_forces, next_name, step_work
 from pdfem.pd.constraints import reaction_forces
-from pdfem.pd.crushed_shear import CrushedShear
+from pdfem.pd.failure.crushed_shear import CrushedShear
 from pdfem.pd.failure import CriticalStretch, FailureLaw
-from pdfem.pd.fracture import FractureLedger
+from pdfem.pd.failure.fracture import FractureLedger
 from pdfem.pd.ice_interface import WholeBody
-from pdfem.pd.family import build_family
-from pdfem.pd.influence import bond_weights, isotropy_gain
-from pdfem.pd.surface import surface_corrected_weights
+from pdfem.pd.bonds.family import build_family
+from pdfem.pd.bonds.influence import bond_weights, isotropy_gain
+from pdfem.pd.bonds.surface import surface_corrected_weights
 from pdfem.geometry.lattice import fill
 from pdfem.pd.materials.lps import IceMaterial
-from pdfem.pd.pair_kernels import SIGNED
-from pdfem.pd.search import cell_pairs
-from pdfem.pd.strain_rate import RateTracker
+from pdfem.pd.bonds.pair_loop import SIGNED
+from pdfem.pd.bonds.search import cell_pairs
+from pdfem.pd.failure.strain_rate import RateTracker
 
 
 @dataclass
@@ -86,7 +86,7 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     fixed: np.ndarray = None  # (N,) bool
     constraints: list = field(default_factory=list)
     external_work: float = 0.0
-    # energy (J) released by the bonds broken in the steps so far (pdfem.pd.fracture)
+    # energy (J) released by the bonds broken in the steps so far (pdfem.pd.failure.fracture)
     fracture_dissipated: float = 0.0
     time: float = 0.0
     failure: FailureLaw | None = None  # default: critical stretch of the material at delta
@@ -96,13 +96,13 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     # (P,) float32 stretch at which each bond broke, NaN if intact or broken for good: with a
     # failure law whose broken bonds keep pushing in compression (crushed ice), else None
     rest: np.ndarray | None = field(default=None, repr=False, compare=False)
-    # crushed bonds' shear springs (pdfem.pd.crushed_shear) if crushed ice has friction
+    # crushed bonds' shear springs (pdfem.pd.failure.crushed_shear) if crushed ice has friction
     shear: CrushedShear | None = field(default=None, repr=False, compare=False)
     # strain rates and strength factors, for a law whose strength depends on the rate
     rates: RateTracker | None = field(default=None, repr=False, compare=False)
     # (N,) global particle numbers of a rank's part of a body (summation order); None: own
     gid: np.ndarray | None = field(default=None, repr=False, compare=False)
-    # the weighted volume of the intact bonds (pdfem.pd.damaged_volume)
+    # the weighted volume of the intact bonds (pdfem.pd.failure.damaged_volume)
     _intact: IntactVolume | None = field(default=None, init=False, repr=False, compare=False)
     _ledger: FractureLedger = field(default_factory=FractureLedger, init=False, repr=False,
                                     compare=False)
@@ -146,11 +146,11 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
         isotropic
             Weigh the bonds with the cubic influence function that makes a cubic lattice of
             spacing ``dx`` aligned with the axes isotropic
-            (:func:`pdfem.pd.influence.isotropy_gain`); only right for such lattices.
+            (:func:`pdfem.pd.bonds.influence.isotropy_gain`); only right for such lattices.
             False: w = 1.
         surface_correction
             Correct the bond weights so that every family's second moment is isotropic
-            (:func:`pdfem.pd.surface.surface_corrected_weights`).
+            (:func:`pdfem.pd.bonds.surface.surface_corrected_weights`).
         failure
             The failure law of the bonds (:mod:`pdfem.pd.failure`); default: the critical
             stretch of ``material`` at ``delta``.
@@ -262,7 +262,7 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
         return self.failure.stretch_limits()
 
     def cut_crack(self, point, normal, lo, hi) -> int:
-        """Break the bonds crossing a planar pre-crack (see :func:`pdfem.pd.bonds.cut_crack`)."""
+        """Break the bonds crossing a planar pre-crack (see :func:`pdfem.pd.bonds.geometry.cut_crack`)."""
         nrm = np.asarray(normal, dtype=np.float64)
         nrm = nrm / np.linalg.norm(nrm)
         flags = self.broken
@@ -292,7 +292,7 @@ class IceBody(BodyCheckpoint, BodyDiagnostics, WholeBody):
     def compute_forces(self) -> int:
         """Dilatation, then force density and bond breaking at the current positions; the
         strain energy the broken bonds held goes to :attr:`fracture_dissipated`
-        (:mod:`pdfem.pd.fracture`). Returns the number of bonds that broke."""
+        (:mod:`pdfem.pd.failure.fracture`). Returns the number of bonds that broke."""
         self._ledger.prepare(self)
         mat = self.material
         br = self._broken_arg()

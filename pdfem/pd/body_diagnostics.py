@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pdfem.pd import kernels
-from pdfem.pd.crushed_shear import shear_energy_args
+from pdfem.pd.bonds import kernels
+from pdfem.pd.failure.crushed_shear import shear_energy_args
 
 
 class BodyDiagnostics:

@@ -20,7 +20,7 @@ points)::
 with ``m = rho sum V_i`` and ``F = sum_i V_i (f_i + rho g)``: the kinetic energy the driver gives
 its particles minus the trapezoidal work of the other forces on them. For a constant velocity this
 is the trapezoidal integral of the power R . v. Under MPI ``index`` holds a rank's owned local
-particles; a re-partition (:mod:`pdfem.pd.migration`) moves each particle's membership with it
+particles; a re-partition (:mod:`pdfem.pd.layout.migration`) moves each particle's membership with it
 and rebuilds the lists. Units: SI.
 """
 

@@ -1,7 +1,7 @@
 """The interface of an ice body that the coupler, the particle forces and the output use.
 
 Two classes implement it: :class:`pdfem.pd.body.IceBody`, a whole body on one rank (through
-:class:`WholeBody` below), and :class:`pdfem.pd.distributed.DistributedIce`, one rank's part of
+:class:`WholeBody` below), and :class:`pdfem.pd.layout.halo.DistributedIce`, one rank's part of
 a body split over MPI ranks. Code above them (contact, short-range forces, the driver and its
 output) uses only what :class:`IceParticles` lists, so it never asks which of the two it holds:
 per-particle arrays are the rank's local ones, ``owned`` marks the particles the rank answers
@@ -58,7 +58,7 @@ class IceParticles(Protocol):
     def fracture_dissipated(self) -> float:
         """Energy (J) the bonds broken since the start held when they broke: at the positions
         y of their step, W(y; bonds before) - W(y; bonds after), summed over the steps
-        (:mod:`pdfem.pd.fracture`); over all ranks (collective under MPI), kept in checkpoints."""
+        (:mod:`pdfem.pd.failure.fracture`); over all ranks (collective under MPI), kept in checkpoints."""
         ...
 
     def owned_sum(self, values: np.ndarray):

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pdfem.geometry.shapes import Box
-from pdfem.pd import kernels
+from pdfem.pd.bonds import kernels
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 
@@ -108,7 +108,7 @@ def plate_moduli(layers: int, horizon_factor: float, poisson_ratio: float = 0.3,
         nu of the ice.
     surface_correction
         Build the sheet with the surface correction of the bond weights (as every case-file
-        body is; :mod:`pdfem.pd.surface`).
+        body is; :mod:`pdfem.pd.bonds.surface`).
 
     Returns
     -------

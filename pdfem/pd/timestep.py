@@ -10,7 +10,7 @@ Three estimates, from cheap to exact:
 - :func:`max_eigenvalue_time_step`: the true critical step from the largest eigenvalue of the
   linearised system (Lanczos iteration), a check rather than a per-run step for large bodies.
 
-All three include the bond weights omega = w beta (:mod:`pdfem.pd.influence`).
+All three include the bond weights omega = w beta (:mod:`pdfem.pd.bonds.influence`).
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
-from pdfem.pd.pair_kernels import dilatation, family_sum, forces
-from pdfem.pd.workspace import PairWorkspace, workspace_for
+from pdfem.pd.bonds.pair_loop import dilatation, family_sum, forces
+from pdfem.pd.bonds.workspace import PairWorkspace, workspace_for
 
 
 def stable_time_step(
@@ -135,7 +135,7 @@ def max_eigenvalue_time_step(
     y
         (N, 3) positions about which to linearise (m), usually the reference positions.
     row_ptr, nbr, xi_len, weight, broken, vol, m
-        As in :func:`pdfem.pd.pair_kernels.forces` (``broken`` is read, never changed).
+        As in :func:`pdfem.pd.bonds.pair_loop.forces` (``broken`` is read, never changed).
     K, mu
         Bulk and shear modulus (Pa).
     dx

@@ -1,8 +1,8 @@
 """When the run re-partitions its split ice bodies, and the imbalance history it writes.
 
 Under MPI every coupling step :class:`LoadBalance` asks each ice body for its imbalance (the
-largest rank's work over the mean, :meth:`pdfem.pd.rebalance.Rebalancing.imbalance`) and
-re-partitions it (:meth:`~pdfem.pd.rebalance.Rebalancing.rebalance`) every
+largest rank's work over the mean, :meth:`pdfem.pd.layout.rebalance.Rebalancing.imbalance`) and
+re-partitions it (:meth:`~pdfem.pd.layout.rebalance.Rebalancing.rebalance`) every
 ``run.rebalance_every`` coupling steps, or when the imbalance exceeds
 ``run.rebalance_imbalance``. It writes the history ``parallel/<body>`` (``imbalance``: of the
 partition the next step runs with, -; ``rebalanced``: 1 at the steps that re-partitioned) and

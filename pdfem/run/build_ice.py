@@ -4,7 +4,7 @@ Each region in the case (fixed, prescribed velocity, no-fail, cracks) must selec
 fixed and prescribed regions carry their names (for their reaction histories) into the body;
 one that selects no particle (or cuts no bond) is a user error, reported with its field name.
 Under MPI (a communicator of several ranks given) a body is built split over the ranks, each
-building only its part (:mod:`pdfem.pd.distributed_setup`); the regions then apply to each
+building only its part (:mod:`pdfem.pd.layout.setup`); the regions then apply to each
 rank's part, and the checks count over all ranks.
 The case's material section becomes the kernels' :class:`~pdfem.pd.materials.lps.IceMaterial`
 here (:func:`ice_material`), so that the case schema does not depend on the physics.
@@ -19,9 +19,9 @@ from pdfem.case.ice import IceMaterialSection
 from pdfem.errors import InputError
 from pdfem.geometry.path import DisplacementPath
 from pdfem.pd.body import IceBody
-from pdfem.pd.distributed_setup import distributed_body, distributed_ice
+from pdfem.pd.layout.setup import distributed_body, distributed_ice
 from pdfem.pd.failure import failure_law
-from pdfem.pd.influence import isotropy_gain
+from pdfem.pd.bonds.influence import isotropy_gain
 from pdfem.pd.materials.lps import IceMaterial, tensile_from_flexural
 
 
@@ -64,8 +64,8 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>", comm=No
         Case-file name for error messages.
     comm
         With a communicator of several ranks, the body is built split over them by the
-        distributed set-up (:mod:`pdfem.pd.distributed_setup`): every rank builds only its part,
-        and the result is a :class:`~pdfem.pd.distributed.DistributedIce` (collective). None:
+        distributed set-up (:mod:`pdfem.pd.layout.setup`): every rank builds only its part,
+        and the result is a :class:`~pdfem.pd.layout.halo.DistributedIce` (collective). None:
         the whole body.
 
     Returns

@@ -11,7 +11,7 @@ beside it (:mod:`pdfem.run.checkpoint` writes the manifest that makes a set vali
 
 Reading (:func:`restore_parts`): every rank opens every part, reads its global numbers chunk by
 chunk (:data:`CHUNK` rows) and reads the values only over the span of rows it holds
-(:class:`pdfem.pd.checkpoint_parts.PartPicker`), so no rank holds a global array.
+(:class:`pdfem.pd.checkpoint.parts.PartPicker`), so no rank holds a global array.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from pdfem.pd.checkpoint_parts import (BOND_KEYS, PARTICLE_KEYS, Layout, PartPicker, owned_part,
+from pdfem.pd.checkpoint.parts import (BOND_KEYS, PARTICLE_KEYS, Layout, PartPicker, owned_part,
                                        locate, rank_scalars, whole_layout)
 
 CHUNK = 1 << 20
@@ -39,7 +39,7 @@ def part_path(manifest: Path, generation: int, rank: int) -> Path:
 
 
 def layout_of(body) -> Layout:
-    """The rank's :class:`~pdfem.pd.checkpoint_parts.Layout` of an ice body (whole or split)."""
+    """The rank's :class:`~pdfem.pd.checkpoint.parts.Layout` of an ice body (whole or split)."""
     return body.checkpoint_layout() if body.distributed else whole_layout(body)
 
 

@@ -23,7 +23,7 @@ a point of ``O``: a point whose distance to the box ``O`` in lattice units is ``
 e_z)`` (``e_k`` in 0..r, r = floor(delta/dx)) belongs to it when ``|e| <= delta/dx``, so the halo
 is ``sum over such e of prod_k c_k(e_k) - owned`` with ``c_k(0) = len_k`` and ``c_k(e > 0)`` the
 number of sides of ``O`` along k (0, 1 or 2) that have body points e planes away. Its bonds are
-those with an owned end (how :mod:`pdfem.pd.distributed` keeps them): ``sum over i in O of
+those with an owned end (how :mod:`pdfem.pd.layout.halo` keeps them): ``sum over i in O of
 deg(i) - pairs(O)``, the degrees summed per offset of the whole family as a product of 1-D
 interval overlaps. All exact for a box whose counts the grid divides (the run's partition cuts at
 particle quantiles, so with an uneven division it may cut inside a lattice plane: a difference
@@ -54,7 +54,7 @@ rest length (float32)."""
 
 SHEAR_SPRING_BYTES_PER_PAIR = 12
 """Extra bytes per bond when crushed ice has friction: the shear spring's stretch (3 x float32,
-:mod:`pdfem.pd.crushed_shear`)."""
+:mod:`pdfem.pd.failure.crushed_shear`)."""
 
 FIXED_BYTES = 200 * 2**20
 """Interpreter, libraries and compiled kernels (bytes), measured about 100-200 MB."""

@@ -3,7 +3,7 @@
 * :func:`build_structures`: rank 0 meshes the structure models into the output directory, then
   every rank reads the same meshes (the structures are small and replicated on every rank).
 * :func:`setup_comm`: whether the ice bodies are built split over the ranks from the start (the
-  distributed set-up, :mod:`pdfem.pd.distributed_setup`; the default under MPI where it
+  distributed set-up, :mod:`pdfem.pd.layout.setup`; the default under MPI where it
   applies) or whole on every rank and split afterwards;
 * :func:`distribute`: split each whole ice body over the ranks (the partition is reported), or
   leave it whole on a single rank.
@@ -29,8 +29,8 @@ from pdfem.fem.rigid import RigidBody
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
-from pdfem.pd.distributed import DistributedIce
-from pdfem.pd.distributed_setup import distributed_body, distributed_ice
+from pdfem.pd.layout.halo import DistributedIce
+from pdfem.pd.layout.setup import distributed_body, distributed_ice
 from pdfem.parallel.partition import BYTES_PER_HALO_PARTICLE, choose_partition
 
 
@@ -52,7 +52,7 @@ def build_structures(configs, out: Path, file: str, comm) -> list:
 
 def splits_bodies(case) -> bool:
     """Whether an MPI run of ``case`` builds its ice bodies split over the ranks by the
-    distributed set-up (:mod:`pdfem.pd.distributed_setup`: no rank holds a whole body).
+    distributed set-up (:mod:`pdfem.pd.layout.setup`: no rank holds a whole body).
 
     The global set-up (every rank builds each whole body, then keeps its part) stays only for
     the full-family PD loop (the per-particle reference loop). Every shape is generated per

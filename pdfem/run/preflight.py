@@ -6,7 +6,7 @@ rank needs least; :func:`pdfem.run.estimates.split_lattice`: owned and halo part
 an owned end). A rank's memory is ``FIXED_BYTES`` plus, per body, its local particles x
 ``BYTES_PER_PARTICLE`` + its bonds x ``BYTES_PER_PAIR`` (bytes). Two set-ups:
 
-* distributed (:mod:`pdfem.pd.distributed_setup`: each rank builds only its subdomain and
+* distributed (:mod:`pdfem.pd.layout.setup`: each rank builds only its subdomain and
   halo): that is the rank's peak;
 * global (the one case the distributed set-up does not cover: the full-family loop): every rank
   first builds the whole body, then keeps its part, so the peak per rank is the whole body plus

@@ -1,6 +1,6 @@
 """The failure-law interface: which bonds of an ice body break, given its state.
 
-The bond loop itself is a numba kernel (:func:`pdfem.pd.kernels.dilatation_and_forces` and the
+The bond loop itself is a numba kernel (:func:`pdfem.pd.bonds.kernels.dilatation_and_forces` and the
 full-family reference), which breaks a bond for good when its stretch ``s = e / |xi|`` leaves
 the interval [s_min, s_max] and neither end is a no-fail particle. The bounds are linear in the
 bond's mean dilatation theta = (theta_i + theta_j) / 2 (the volumetric strain of its ends, which
@@ -39,20 +39,20 @@ class FailureLaw(Protocol):
 
     broken_bonds_push: bool
     """True if a broken bond keeps pushing its ends apart when compressed below the length it
-    broke at (crushed ice: :func:`pdfem.pd.lps_law.crushed_bond`); False: broken bonds
+    broke at (crushed ice: :func:`pdfem.pd.bonds.lps_law.crushed_bond`); False: broken bonds
     carry nothing."""
 
     crush_yield: float
-    """The yield compression (stretch) of those pushing bonds (:func:`pdfem.pd.lps_law.
+    """The yield compression (stretch) of those pushing bonds (:func:`pdfem.pd.bonds.lps_law.
     crushed_bond`); ``inf`` if they do not push."""
 
     crush_friction: float
-    """The friction coefficient between the ends of a pushing bond (:func:`pdfem.pd.lps_law.
+    """The friction coefficient between the ends of a pushing bond (:func:`pdfem.pd.bonds.lps_law.
     crushed_friction`, -); 0 if they do not push."""
 
     rate_dependent: bool
     """True if the compressive strength depends on the strain rate (:meth:`strength_factor`,
-    rates from :mod:`pdfem.pd.strain_rate`)."""
+    rates from :mod:`pdfem.pd.failure.strain_rate`)."""
 
     def strength_factor(self, rate):
         """Factors (-) on the compressive strength for strain rates ``rate`` (1/s, array)."""

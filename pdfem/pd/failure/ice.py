@@ -41,7 +41,7 @@ any particle spacing, because both criteria are in stresses, not in stretches sc
 horizon (the limits, and the implied fracture energy, are in ``docs/ice_failure.md``).
 
 A broken bond (in either mode) gives up its strain energy as fracture dissipation
-(:mod:`pdfem.pd.fracture`) and becomes a crushed bond (:func:`pdfem.pd.lps_law.crushed_bond`):
+(:mod:`pdfem.pd.failure.fracture`) and becomes a crushed bond (:func:`pdfem.pd.bonds.lps_law.crushed_bond`):
 a compression-only, elastic-perfectly-plastic spring with the bond's deviatoric stiffness
 b = b_i + b_j, whose plastic rest length starts at min(|xi|, r + s_y |xi|) (so a bond broken in
 compression goes on pushing with at most its yield force: breaking releases no stress wave)
@@ -51,7 +51,7 @@ is thus granular: it carries compression up to a crushing pressure and, through 
 bonds at every angle in a horizon, shear in proportion to the confinement (a frictional
 resistance), but no tension; it is never deleted and can be squeezed out of the contact
 zone. Optionally (``crushed_friction`` > 0, off by default) a shear spring with Coulomb slip
-between the ends of a pushing crushed bond (:mod:`pdfem.pd.crushed_shear`) holds the crushed
+between the ends of a pushing crushed bond (:mod:`pdfem.pd.failure.crushed_shear`) holds the crushed
 layer in the contact as a granular material's internal friction does. Pairs that were never bonded meet through the
 short-range contact force
 (:mod:`pdfem.forces.short_range`, switched on for a body with this law).
@@ -63,7 +63,7 @@ and then falls slowly (Schulson & Duval 2009, ch. 6 and 11; Timco & Frederking 1
 ice). With ``transition_rate`` given, ``compressive_strength`` is the strength at the
 transition and the strength at a lower rate is scaled by (rate / transition_rate)^n
 (``rate_exponent``, default 1/3), each particle with its own rate from the last step
-(:mod:`pdfem.pd.strain_rate`); above the transition it stays sigma_c. The brittle-range
+(:mod:`pdfem.pd.failure.strain_rate`); above the transition it stays sigma_c. The brittle-range
 decline is not modelled.
 
 The friction angle of ice: Coulombic shear faulting of ice under confinement follows
@@ -133,7 +133,7 @@ class IceFailure:
 
     @property
     def crush_friction(self) -> float:
-        """mu of crushed ice sliding on itself (:mod:`pdfem.pd.crushed_shear`; 0: none)."""
+        """mu of crushed ice sliding on itself (:mod:`pdfem.pd.failure.crushed_shear`; 0: none)."""
         return self.crushed_friction
 
     @property

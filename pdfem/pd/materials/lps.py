@@ -1,6 +1,6 @@
 """Material constants of the linear peridynamic solid (LPS) for ice.
 
-The ordinary state-based kernels (:mod:`pdfem.pd.kernels`) need the bulk modulus ``K`` (Pa), the
+The ordinary state-based kernels (:mod:`pdfem.pd.bonds.kernels`) need the bulk modulus ``K`` (Pa), the
 shear modulus ``mu`` (Pa) and the critical stretch ``s0`` (dimensionless) of the bond-breaking
 criterion. This module derives them from engineering constants: ``s0`` from a tensile strength
 (``s0 = sigma_t / E``, independent of the spacing), from the fracture energy (``s0`` scales as
@@ -77,7 +77,7 @@ def critical_stretch(fracture_energy: float, K: float, mu: float, delta: float) 
     bond-based analogue is Silling & Askari 2005).
 
     The relation is a continuum result for the influence function w = 1. pdfem's lattice bodies
-    use the cubic influence function of :mod:`pdfem.pd.influence`, whose mean over directions is
+    use the cubic influence function of :mod:`pdfem.pd.bonds.influence`, whose mean over directions is
     1, so the continuum relation holds unchanged on average over crack orientations. On the
     lattice, the energy of the bonds crossing a unit area at a given stretch,
     sum over crossing bonds of omega |xi|^2 / m, is with that weight 0.967 (crack plane normal to
@@ -209,7 +209,7 @@ class IceMaterial:
     friction_angle
         Internal friction angle (degrees) of the ``"ice"`` failure law's Coulomb criterion.
     crushed_friction
-        Friction coefficient (-) of crushed ice sliding on itself (:mod:`pdfem.pd.crushed_shear`);
+        Friction coefficient (-) of crushed ice sliding on itself (:mod:`pdfem.pd.failure.crushed_shear`);
         0: none.
     transition_rate
         Ductile-to-brittle transition strain rate (1/s) of the ``"ice"`` law's compressive

@@ -15,7 +15,7 @@ Checked over the run (5 cm of penetration at 0.1 m/s; ``--quick``: at 0.5 m/s):
   I = 1-3 (confinement), a contact factor k = 0.4-0.7 (non-simultaneous contact) and a shape
   factor m = 0.85-1 (ISO 19906:2019 A.8.2.4.3 has the same form): their product spans about
   0.3-2.5. The crushed ice's friction (``crushed_friction`` = 0.58 in the case,
-  :mod:`pdfem.pd.crushed_shear`) holds the crushed layer in the contact; without it the layer
+  :mod:`pdfem.pd.failure.crushed_shear`) holds the crushed layer in the contact; without it the layer
   is squeezed out at 0.27-0.37 sigma_c (docs/ice_failure.md).
 
 Measured: see docs/ice_failure.md (``pdfem validate --case edge_crushing_load --case

@@ -1,0 +1,125 @@
+"""Machinery of the chunked pair loops: serial/parallel kernel twins and overflow adds.
+
+The pair loops (:mod:`pdfem.pd.bonds.pair_step_kernels`, :mod:`pdfem.pd.bonds.pair_sum_kernels`) cut the
+particles into chunks of equal pair count (:class:`pdfem.pd.bonds.workspace.PairWorkspace` holds the
+layout); each chunk writes the j side of a bond that leaves the chunk into its overflow buffer,
+and :func:`add_overflow1` / :func:`add_overflow3` add those buffers in fixed chunk order. Every
+kernel is compiled twice (:func:`twin`): thread-parallel and serial. :func:`pairs_forward` and
+:func:`chunk_split` check and analyse a pair list for the layout.
+
+Same input, same output, whatever the state of numba's on-disk cache: :data:`FASTMATH` (the
+flags of the hot loops) has no ``contract`` and no ``reassoc``, and the hot loops spell their
+fused multiply-adds out with :func:`fma` (``llvm.fma.f64``: one rounding, and no optimization
+pass may split, fuse or move it). With ``contract`` the LLVM backend fused a multiply and an
+add wherever the shape of the optimized code allowed, and a ``parallel=True`` kernel does not
+run the same code in the process that compiles it as in one that loads it from the cache: the
+compiling process runs the parfor body as optimized on its own (its gufunc library, loaded
+first, wins the symbol), while the cache holds the kernel's module, in which a copy of that
+body was linked and optimized a second time. The two copies fused different pairs, so the first
+run after a cache clear or a source change differed from later runs by round-off (the demo's
+contact force by ~3e-6 N; found in :func:`pdfem.pd.bonds.pair_step_kernels.forces_pairs`). Without
+``contract`` the hot loops were ~10 % slower; the explicit FMAs win that back.
+``reassoc`` is left out as a value-changing rewrite of the same kind that gained nothing.
+tests/test_determinism.py runs a coupled case with a cold and then a warm private cache.
+"""
+
+from __future__ import annotations
+
+import types
+
+import numba
+import numpy as np
+from numba.core.types import float64 as _f8
+from numba.extending import intrinsic
+
+FASTMATH = {"nsz", "arcp"}
+U64 = np.uint64
+
+
+@intrinsic
+def fma(typingctx, a, b, c):
+    """a * b + c with one rounding (``llvm.fma.f64``): an explicit fused multiply-add."""
+    if (a, b, c) != (_f8, _f8, _f8):
+        return None
+    return _f8(_f8, _f8, _f8), lambda context, builder, sig, args: builder.fma(*args)
+
+
+class Twin:
+    """A kernel compiled twice: thread-parallel (``prange``) and serial (``prange`` = range).
+
+    Called as ``kernel(parallel, *args)``. The serial build is a clone of the function under
+    another qualified name, so both builds have their own on-disk cache entries.
+    """
+
+    __slots__ = ("par", "ser")
+
+    def __init__(self, pyfunc, fastmath):
+        fm = FASTMATH if fastmath else False
+        self.par = numba.njit(parallel=True, cache=True, fastmath=fm, error_model="numpy")(pyfunc)
+        clone = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__ + "_serial",
+                                   pyfunc.__defaults__, pyfunc.__closure__)
+        clone.__qualname__ = pyfunc.__qualname__ + "_serial"
+        clone.__doc__ = pyfunc.__doc__
+        self.ser = numba.njit(cache=True, fastmath=fm, error_model="numpy")(clone)
+
+    def __call__(self, parallel, *args):
+        return (self.par if parallel else self.ser)(*args)
+
+
+def twin(fastmath: bool = True):
+    """Decorator: compile a kernel as a :class:`Twin` (``fastmath`` uses ``FASTMATH``)."""
+    return lambda pyfunc: Twin(pyfunc, fastmath)
+
+
+@numba.njit(cache=True)
+def add_overflow1(t, cb, ov_ptr, ov, col, out):
+    """Add the overflow of chunks 0..t-1 (in that order) into the rows of chunk t."""
+    r0 = cb[t]
+    r1 = cb[t + 1]
+    for c in range(t):
+        s = cb[c + 1]
+        base = ov_ptr[c]
+        e = s + (ov_ptr[c + 1] - base)
+        lo = max(s, r0)
+        hi = min(e, r1)
+        for p in range(lo, hi):
+            out[p] += ov[base + p - s, col]
+
+
+@numba.njit(cache=True)
+def add_overflow3(t, cb, ov_ptr, ov, out):
+    """:func:`add_overflow1` for (N, 3) outputs (all three columns)."""
+    for col in range(3):
+        add_overflow1(t, cb, ov_ptr, ov, col, out[:, col])
+
+
+@numba.njit(cache=True)
+def pairs_forward(row_ptr, nbr):
+    """True when every pair of row i has i < nbr[k] < N (what the chunked loops rely on)."""
+    n = row_ptr.shape[0] - 1
+    for i in range(n):
+        if row_ptr[i + 1] < row_ptr[i]:
+            return False
+        for k in range(row_ptr[i], row_ptr[i + 1]):
+            j = nbr[k]
+            if j <= i or j >= n:
+                return False
+    return True
+
+
+@numba.njit(cache=True)
+def chunk_split(row_ptr, nbr, cb):
+    """Per chunk, the first row with a partner beyond the chunk (rows before it need no check)."""
+    C = cb.shape[0] - 1
+    split = cb[1:].copy()
+    for c in range(C):
+        for i in range(cb[c], cb[c + 1]):
+            hit = False
+            for k in range(row_ptr[i], row_ptr[i + 1]):
+                if nbr[k] >= cb[c + 1]:
+                    hit = True
+                    break
+            if hit:
+                split[c] = i
+                break
+    return split

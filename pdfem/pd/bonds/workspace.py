@@ -1,0 +1,159 @@
+"""Race-free, deterministic parallel loops over a unique-pair list: chunks and overflow buffers.
+
+The pair kernels (:mod:`pdfem.pd.bonds.pair_loop`) loop over unique bonds i < j grouped by i (CSR:
+``row_ptr`` int64 (N+1,), ``nbr`` int32 (P,)) and add each bond's contribution to both ends.
+To do that in parallel without data races, the particles (rows) are cut into C chunks of equal
+pair count (:class:`PairWorkspace`); a ``prange`` over chunks accumulates the i side of each row
+in registers and writes the j side directly into the output when j lies in the chunk's own rows
+and otherwise into the chunk's overflow buffer (pairs point forwards, j > i, so only later rows
+can be hit from outside). A second ``prange`` over chunks adds the overflow buffers of the
+earlier chunks in fixed chunk order (:func:`add_overflow1`, :func:`add_overflow3`). The result is
+therefore bit-identical from run to run for a given chunk count (by default the number of numba
+threads). Small pair lists (fewer than ``SERIAL_BELOW_PAIRS``) get one chunk and run a serial
+build of the same kernel (:func:`twin`).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from pdfem.pd.bonds.chunk_kernels import (  # noqa: F401  (re-exported: the old home of these names)
+    FASTMATH,
+    U64,
+    Twin,
+    add_overflow1,
+    add_overflow3,
+    chunk_split,
+    pairs_forward,
+    twin,
+)
+
+# Below these sizes the kernels run their serial build: a parallel region costs more than the
+# work, and a lot more when the machine is oversubscribed (the threads wait at a barrier for a
+# descheduled peer).
+SERIAL_BELOW_PAIRS = 50_000
+SERIAL_BELOW_PARTICLES = 20_000
+
+
+class PairWorkspace:
+    """Chunk layout and scratch buffers for the pair loops over one pair list.
+
+    Build it once per pair list and pass it to every kernel call (the kernels make a temporary
+    one when none is given).
+
+    Parameters
+    ----------
+    row_ptr, nbr
+        The CSR pair list (int64 (N+1,), int32 (P,)); every pair must have i < nbr[k] < N.
+    n_chunks
+        Number of chunks C; default ``numba.get_num_threads()``, or 1 for fewer than
+        ``SERIAL_BELOW_PAIRS`` pairs. With C = 1 the kernels run their serial build. Results are
+        bit-identical run to run for the same C.
+    keep_bond_length
+        Let :func:`pdfem.pd.bonds.pair_loop.dilatation_and_forces` keep the current bond lengths
+        between its two passes (8 bytes per pair of scratch, saves a square root per bond);
+        False: no per-pair scratch at all.
+
+    Attributes
+    ----------
+    chunk_ptr
+        int64 (C+1,) first row of each chunk (chunks hold equal numbers of pairs).
+    split
+        int64 (C,) first row of each chunk with a partner beyond the chunk; the hot loops check
+        for overflow only from there on.
+    ov_ptr
+        int64 (C+1,) offsets of each chunk's overflow rows in ``ov``; chunk c's overflow covers
+        particles ``chunk_ptr[c+1] : chunk_ptr[c+1] + ov_ptr[c+1] - ov_ptr[c]``.
+    ov
+        float64 (ov_ptr[-1], 3) overflow buffer.
+    coef
+        float64 (N, 2) per-particle force coefficients (a, b of
+        :func:`pdfem.pd.bonds.lps_law.force_coefficients`).
+    aux
+        float64 (N, 2) per-particle halves of the dilatation and of the strength factor that
+        the failure test of a bond adds over its ends.
+    bond_length
+        float64 (P,) current bond lengths kept by
+        :func:`pdfem.pd.bonds.pair_loop.dilatation_and_forces` (None until that is first called,
+        and always None without ``keep_bond_length``).
+    """
+
+    def __init__(self, row_ptr: np.ndarray, nbr: np.ndarray, n_chunks: int | None = None,
+                 keep_bond_length: bool = True):
+        row_ptr = np.asarray(row_ptr)
+        nbr = np.asarray(nbr)
+        n = row_ptr.shape[0] - 1
+        if n < 0 or row_ptr[0] != 0 or row_ptr[-1] != nbr.shape[0]:
+            raise ValueError("row_ptr must start at 0 and end at the number of pairs len(nbr)")
+        if not pairs_forward(row_ptr, nbr):
+            raise ValueError(
+                "the pair list must hold unique pairs i < j grouped by i (nbr[k] > i for k in "
+                "row i, and every index below N)"
+            )
+        P = nbr.shape[0]
+        if n_chunks is None:
+            C = 1 if P < SERIAL_BELOW_PAIRS else int(numba.get_num_threads())
+        else:
+            C = int(n_chunks)
+        C = max(1, min(C, max(n, 1)))
+        targets = (np.arange(C + 1, dtype=np.int64) * P) // C
+        cb = np.searchsorted(row_ptr, targets, side="left").astype(np.int64)
+        cb[0] = 0
+        cb[-1] = n
+        cb = np.maximum.accumulate(cb)
+        ov_len = np.zeros(C, dtype=np.int64)
+        for c in range(C):
+            k0, k1 = row_ptr[cb[c]], row_ptr[cb[c + 1]]
+            if k1 > k0:
+                ov_len[c] = max(0, int(nbr[k0:k1].max()) + 1 - int(cb[c + 1]))
+        self.n = n
+        self.n_pairs = P
+        self.n_chunks = C
+        self.chunk_ptr = cb
+        self.split = chunk_split(row_ptr, nbr, cb)
+        self.ov_ptr = np.concatenate(([0], np.cumsum(ov_len))).astype(np.int64)
+        self.ov = np.zeros((int(self.ov_ptr[-1]), 3))
+        self.coef = np.empty((n, 2))
+        self.aux = np.empty((n, 2))
+        self.counts = np.zeros(C, dtype=np.int64)
+        self.crush = np.zeros(C)  # energy (J) each chunk's crushed bonds dissipated, last pass
+        self.crush_dissipated = 0.0  # their sum in chunk order
+        self.parallel = C > 1
+        # per-particle loops (force coefficients) of a small body run serially even when the
+        # pair loops are threaded: a parallel region over a few thousand particles costs more
+        # than the work (2.3 ms per call in the demo at load 4, against microseconds serially)
+        self.parallel_particles = self.parallel and n >= SERIAL_BELOW_PARTICLES
+        self.bond_length: np.ndarray | None = None
+        self.keep_bond_length = bool(keep_bond_length)
+
+    def bond_length_buffer(self) -> np.ndarray:
+        """The (P,) float64 bond-length scratch of the fused step (allocated on first use)."""
+        if self.bond_length is None:
+            self.bond_length = np.empty(self.n_pairs)
+        return self.bond_length
+
+    def check(self, row_ptr: np.ndarray, nbr: np.ndarray) -> None:
+        """Raise ValueError if this workspace was not built for a list of this size."""
+        if row_ptr.shape[0] - 1 != self.n or nbr.shape[0] != self.n_pairs:
+            raise ValueError(
+                f"workspace built for {self.n} particles and {self.n_pairs} pairs, got "
+                f"{row_ptr.shape[0] - 1} and {nbr.shape[0]}"
+            )
+
+
+def c_contiguous(a: np.ndarray, name: str) -> np.ndarray:
+    """``a`` itself if C-contiguous (the kernels index flat views), else ValueError."""
+    if not a.flags.c_contiguous:
+        raise ValueError(f"{name} must be a C-contiguous array")
+    return a
+
+
+def workspace_for(ws: PairWorkspace | None, row_ptr: np.ndarray, nbr: np.ndarray) -> PairWorkspace:
+    """``ws`` checked against the pair list, or a new workspace for it when ``ws`` is None."""
+    if ws is None:
+        return PairWorkspace(row_ptr, nbr)
+    ws.check(row_ptr, nbr)
+    return ws
+
+
