@@ -69,10 +69,22 @@ def _arrays(path: Path) -> dict[str, np.ndarray]:
     return out
 
 
+def _relative(x: np.ndarray, y: np.ndarray) -> float:
+    """Largest |y - x| over the largest |x| (0: bit-identical; inf: shapes or kinds differ)."""
+    if x.shape != y.shape:
+        return np.inf
+    if np.array_equal(x, y, equal_nan=x.dtype.kind in "fc"):
+        return 0.0
+    if x.dtype.kind not in "fc":
+        return np.inf
+    scale = float(np.abs(x[np.isfinite(x)]).max(initial=0.0)) or 1.0
+    return float(np.abs(np.nan_to_num(y - x, nan=np.inf)).max()) / scale
+
+
 def compare(old: Path, new: Path) -> dict:
-    """Per case of ``old``: ``{"identical": bool, "arrays": n, "worst": (path, rel)}``, with
-    ``rel`` the largest |new - old| over the array's largest |old| (inf: shapes or keys
-    differ); cases missing from ``new`` are reported as such."""
+    """Per case of ``old``: ``{"identical": bool, "arrays": n, "differ": {path: rel}}``, with
+    ``rel`` the largest |new - old| over the array's largest |old| (inf: missing, shapes or
+    kinds differ); cases missing from ``new`` are reported as such."""
     report = {}
     for d in sorted(p for p in old.iterdir() if (p / "results.h5").is_file()):
         other = new / d.name / "results.h5"
@@ -80,28 +92,12 @@ def compare(old: Path, new: Path) -> dict:
             report[d.name] = {"identical": False, "missing": True}
             continue
         a, b = _arrays(d / "results.h5"), _arrays(other)
-        worst, where, same = 0.0, "", True
+        differ = {}
         for key in sorted(set(a) | set(b)):
-            if key not in a or key not in b or a[key].shape != b[key].shape:
-                worst, where, same = np.inf, key, False
-                continue
-            x, y = a[key], b[key]
-            if x.dtype.kind in "fc":
-                eq = np.array_equal(x, y, equal_nan=True)
-            else:
-                eq = np.array_equal(x, y)
-            if eq:
-                continue
-            same = False
-            if x.dtype.kind not in "fc":
-                rel = np.inf
-            else:
-                scale = float(np.abs(x[np.isfinite(x)]).max(initial=0.0)) or 1.0
-                diff = np.abs(np.nan_to_num(y - x, nan=np.inf))
-                rel = float(diff.max()) / scale
-            if rel > worst or not where:
-                worst, where = rel, key
-        report[d.name] = {"identical": same, "arrays": len(a), "worst": [where, worst]}
+            rel = np.inf if key not in a or key not in b else _relative(a[key], b[key])
+            if rel != 0.0:
+                differ[key] = rel
+        report[d.name] = {"identical": not differ, "arrays": len(a), "differ": differ}
     return report
 
 
@@ -129,7 +125,9 @@ def main(argv: list[str] | None = None) -> int:
             elif r["identical"]:
                 print(f"{name:45s} identical ({r['arrays']} arrays)")
             else:
-                print(f"{name:45s} differs: {r['worst'][0]} {r['worst'][1]:.3e}")
+                print(f"{name:45s} {len(r['differ'])} of {r['arrays']} arrays differ:")
+                for key, rel in r["differ"].items():
+                    print(f"    {key:60s} {rel:.3e}")
     return 0 if all(r.get("identical") for r in report.values()) else 1
 
 

@@ -52,9 +52,8 @@ def add_arguments(r: argparse.ArgumentParser) -> None:
                    help="with --estimate: memory of one node, e.g. 24GB, 24GiB, 2.5e10 "
                         "(default: MemAvailable of the node)")
     e.add_argument("--setup", choices=("distributed", "global"), default=None,
-                   help="with --estimate: the set-up to size for (default: the one the case "
-                        "gets, distributed unless it uses the full-family loop; global: every "
-                        "rank first builds the whole ice body)")
+                   help="with --estimate: the set-up to size for (default: distributed, the one "
+                        "runs use; global: every rank would first build the whole ice body)")
 
 
 def demo_case_file() -> contextlib.AbstractContextManager[Path]:
@@ -75,17 +74,15 @@ def _budget(row: dict | None) -> list[dict] | None:
 def _estimate(args: argparse.Namespace, case) -> int:
     """``--estimate``: print the sizing of the run on rank 0; exit status 0 or 2."""
     from pdfem.parallel.comm import run_guarded, world
-    from pdfem.run.parallel import splits_bodies
     from pdfem.run.sizing import estimate_report, parse_bytes
     for name, value in (("--ranks", args.ranks), ("--nodes", args.nodes)):
         if value is not None and value < 1:
             raise InputError(None, name, "give a positive whole number", value)
     memory = None if args.node_memory is None else parse_bytes(args.node_memory)
-    setup = splits_bodies(case) if args.setup is None else args.setup == "distributed"
+    setup = args.setup != "global"  # runs use the distributed set-up
     comm = world()
-    if comm.size > 1:
-        from pdfem.run.parallel import warm_before_ranks
-        run_guarded(warm_before_ranks, comm, comm=comm)
+    from pdfem.run.parallel import warm_before_ranks
+    run_guarded(warm_before_ranks, comm, comm=comm)
     lines, refusal = run_guarded(estimate_report, case, comm, args.ranks, args.nodes, memory,
                                  setup, comm=comm)
     if comm.rank == 0:
@@ -130,9 +127,8 @@ def run(args: argparse.Namespace) -> int:
     demo = args.case is None
     from pdfem.parallel.comm import run_guarded, world
     comm = world()  # under mpiexec: every rank runs, rank 0 writes and reports
-    if comm.size > 1:
-        from pdfem.run.parallel import warm_before_ranks
-        run_guarded(warm_before_ranks, comm, comm=comm)  # one rank fills numba's cache first
+    from pdfem.run.parallel import warm_before_ranks
+    run_guarded(warm_before_ranks, comm, comm=comm)  # one rank fills numba's cache first
     if args.json:
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):

@@ -59,10 +59,15 @@ from run to run and for any thread or chunk count. Candidates further apart than
 with one squared distance, which is all the work an intact body costs (about 30 candidates per
 particle).
 
-Bodies split over MPI ranks (:class:`pdfem.pd.layout.halo.DistributedIce`) are searched by
-:class:`pdfem.forces.short_range_ranks.DistributedSearch`: per rank, its own particles and a
-contact halo kept with a Verlet skin (:mod:`pdfem.forces.short_range_halo`), on the serial
-run's cells with tables sized from the local particles; the serial forces bit for bit. The
+One search serves every layout of the bodies (whole, or split over MPI ranks): each process
+searches its owned particles and a contact halo of other ranks' particles kept with a Verlet
+skin (:mod:`pdfem.forces.short_range_halo`; none on one process), in global order, on the cells
+of the grid over all particles (box and dense/folded choice from the global extent and particle
+count) with a table sized from the local particles: the cells of the local particles' box when
+that is small, else a sparse table of the occupied buckets. The stable sort keeps the local
+particles in the global sorted order, so every owned particle meets its partners in the same
+order on 1 and N ranks and its force is the same bit for bit. Each pair's potential is counted
+on the rank that owns the pair's first particle (in sorted order), so once over the ranks. The
 kernels (cell hash, pair search, sums) are :mod:`pdfem.forces.short_range_kernels`.
 
 Units: m, m^3, Pa, N/m^3 (force density), J.
@@ -71,29 +76,26 @@ Units: m, m^3, Pa, N/m^3 (force density), J.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Sequence
+from typing import Sequence
 
 import numba
 import numpy as np
 
 from pdfem.forces.base import ParticleForce
+from pdfem.forces.short_range_halo import ContactHalo
 from pdfem.forces.short_range_kernels import (
     NO_SHIFT,
-    NOT_FINITE,
-    add_into,
+    add_owned,
     cells,
+    counted_pairs,
     find_dense,
     find_folded,
     gather,
     sparse_table,
     sum_pairs,
 )
-from pdfem.forces.short_range_ranks import DistributedSearch
 from pdfem.geometry.cell_hash import bounding_box, counting_sort
 from pdfem.pd.bonds.workspace import SERIAL_BELOW_PARTICLES
-
-if TYPE_CHECKING:
-    from pdfem.pd.body import IceBody
 
 __all__ = ["ShortRangeContact", "short_range_constant", "DENSE_CELLS_PER_PARTICLE"]
 
@@ -120,9 +122,8 @@ class ShortRangeContact(ParticleForce):
     ----------
     bodies
         The ice bodies (:class:`pdfem.pd.body.IceBody`: ``y``, ``x0``, ``vol``, ``dx``,
-        ``delta``, ``material.K``, ``f``); a single body may be passed alone. Under MPI, all of
-        them :class:`pdfem.pd.layout.halo.DistributedIce` (every call is then collective, and
-        forces go to the owned particles).
+        ``delta``, ``material.K``, ``f``, ``layout``); a single body may be passed alone. Every
+        call is collective when they are split over ranks; forces go to the owned particles.
     stiffness_factor
         c_S / c, the short-range constant over the bond-based micromodulus (Silling & Askari: 15).
     distance_factor
@@ -135,16 +136,19 @@ class ShortRangeContact(ParticleForce):
     Attributes
     ----------
     n_active
-        Number of interacting pairs found by the last call (under MPI: those counted on this
-        rank, the pairs whose first particle it owns; :meth:`total_pairs` sums over ranks).
+        Number of interacting pairs found by the last call that this process counts (those
+        whose first particle it owns; :meth:`total_pairs` sums over ranks).
     cell_size
         Side of the search cells, m (the largest critical distance).
     dense, n_buckets
         Whether the last search used the dense grid (else the folded one), and its number of
         buckets (at most ``DENSE_CELLS_PER_PARTICLE * max(N, 1024)``).
+    halo
+        The :class:`~pdfem.forces.short_range_halo.ContactHalo`: this process's owned particles
+        and ghosts.
     """
 
-    def __init__(self, bodies: "IceBody | Sequence[IceBody]", *, stiffness_factor: float = 15.0,
+    def __init__(self, bodies: "Sequence", *, stiffness_factor: float = 15.0,
                  distance_factor: float = 0.9, radius_factor: float = 1.35,
                  n_chunks: int | None = None):
         if not isinstance(bodies, (list, tuple)):
@@ -156,12 +160,8 @@ class ShortRangeContact(ParticleForce):
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"{name} must be a positive finite number, got {v!r}")
         self.bodies: list = list(bodies)
-        distributed = [b.distributed for b in self.bodies]
-        if any(distributed) and not all(distributed):
-            raise ValueError("short-range contact needs all ice bodies split over the ranks "
-                             "(DistributedIce) or none")
-        # the particles of all bodies, numbered body after body (whole bodies under MPI)
-        sizes = [int(b.global_n) if b.distributed else int(b.x0.shape[0]) for b in self.bodies]
+        # the particles of all bodies, numbered body after body (whole bodies)
+        sizes = [int(b.n_global) for b in self.bodies]
         self.offsets = np.concatenate(([0], np.cumsum(sizes))).astype(np.int64)
         n = int(self.offsets[-1])
         if n >= 2 ** 31 - 1:
@@ -177,8 +177,10 @@ class ShortRangeContact(ParticleForce):
         # the rounding of the cell coordinates
         self.cell_size = max(self.radius_factor, self.distance_factor) * dx_max * (1.0 + 1e-12)
         threads = int(numba.get_num_threads())
-        C = 4 * threads if n_chunks is None else int(n_chunks)
-        self._chunks_wanted = max(1, C)
+        self._chunks_wanted = max(1, 4 * threads if n_chunks is None else int(n_chunks))
+        self.comm = self.bodies[0].layout.comm
+        self.halo = ContactHalo(self.bodies, self.offsets, k_body, r_body, self.cell_size,
+                                self.comm)
         self._size = -1
         self._no_ub = np.empty(0, dtype=np.int64)
         self._start = np.empty(1, dtype=np.int64)
@@ -186,26 +188,12 @@ class ShortRangeContact(ParticleForce):
         self.n_active = 0
         self.dense = True
         self.n_buckets = 0
+        self.grid_buckets = 0  # buckets of the grid over all particles (not allocated here)
         self._cap = _INITIAL_CAPACITY
-        if all(distributed):  # per-rank tables only (pdfem.forces.short_range_ranks)
-            self._dist = DistributedSearch(self, k_body, r_body)
-            self._pair = np.empty((self._chunks_wanted * self._cap, 2), dtype=np.int32)
-            self._val = np.empty((self._chunks_wanted * self._cap, 4))
-            self._counts = np.zeros(1, dtype=np.int64)
-            self._reserve(0)
-            return
-        self._dist = None
-        self.x0 = np.concatenate([b.x0 for b in self.bodies]).astype(np.float64)
-        self.vol = np.concatenate([b.vol for b in self.bodies]).astype(np.float64)
-        self.stiffness = np.concatenate([np.full(s, k) for k, s in zip(k_body, sizes)])
-        self.radius = np.concatenate([np.full(s, r) for r, s in zip(r_body, sizes)])
-        self.body = np.concatenate([np.full(s, k, dtype=np.int32) for k, s in enumerate(sizes)])
-        self.n_chunks = max(1, min(C, max(n, 1)))
-        self.chunk_ptr = (np.arange(self.n_chunks + 1, dtype=np.int64) * n) // self.n_chunks
-        self._pair = np.empty((self.n_chunks * self._cap, 2), dtype=np.int32)
-        self._val = np.empty((self.n_chunks * self._cap, 4))
-        self._counts = np.zeros(self.n_chunks, dtype=np.int64)
-        self._reserve(n)
+        self._pair = np.empty((self._chunks_wanted * self._cap, 2), dtype=np.int32)
+        self._val = np.empty((self._chunks_wanted * self._cap, 4))
+        self._counts = np.zeros(1, dtype=np.int64)
+        self._reserve(0)
 
     energy_key = "short_range_potential"
     """Key of :meth:`potential_energy` in the energy history (:class:`ParticleForce`)."""
@@ -237,14 +225,9 @@ class ShortRangeContact(ParticleForce):
         """Most cells (buckets) of a table for ``n`` particles."""
         return DENSE_CELLS_PER_PARTICLE * max(n, 1024)
 
-    def _positions(self) -> np.ndarray:
-        if len(self.bodies) == 1:
-            return np.ascontiguousarray(self.bodies[0].y, dtype=np.float64)
-        return np.concatenate([b.y for b in self.bodies])
-
     def _grid(self, lo, hi, n_total: int):
         """Cell geometry over the box [lo, hi] for ``n_total`` particles: dims, pad, fold and
-        the number of buckets (sets ``dense`` and ``n_buckets``)."""
+        the number of buckets (sets ``dense``)."""
         inv_h = 1.0 / self.cell_size
         dims = np.array([min(int((hi[k] - lo[k]) * inv_h) + 1, _AXIS_CELLS) for k in range(3)],
                         dtype=np.int64)
@@ -259,21 +242,33 @@ class ShortRangeContact(ParticleForce):
             while float(np.prod(fold)) > budget:
                 k = int(np.argmax(fold))
                 fold[k] = (fold[k] + 1) // 2
-        nb = int(np.prod(fold))
-        self.n_buckets = nb
-        return dims, pad, fold, nb
+        return dims, pad, fold, int(np.prod(fold))
 
-    def _scan(self, y, lo, dims, pad, fold, nb, x0, vol, stiffness, radius, body, chunk_ptr,
-              counts, shift=NO_SHIFT, sparse=False):
-        """Sort the particles ``y`` (with their constants) into the grid and find the
-        interacting pairs into ``self._pair``, ``self._val``, ``counts`` (per chunk).
-        ``sparse``: a stable sort and a table of the occupied buckets only (else a counting
-        sort into a table of all ``nb`` buckets)."""
-        n = y.shape[0]
-        h = self.cell_size
+    def _local_table(self, y, glo, dims, fold, nb, m: int):
+        """The table of the local particles: the cells of their box on the global grid when
+        that is small (a shifted dense table), else a sparse table of the occupied buckets;
+        returns (shift, sparse, fold, buckets)."""
+        if not self.dense:
+            return NO_SHIFT, True, fold, nb
+        llo, lhi, _ = bounding_box(y)
+        inv_h = 1.0 / self.cell_size
+        first = np.array([int(min((llo[k] - glo[k]) * inv_h, float(dims[k] - 1)))
+                          for k in range(3)], dtype=np.int64)
+        last = np.array([int(min((lhi[k] - glo[k]) * inv_h, float(dims[k] - 1)))
+                         for k in range(3)], dtype=np.int64)
+        box = last - first + 3
+        if float(np.prod(box)) <= self.budget(m):
+            return first, False, box, int(np.prod(box))
+        return NO_SHIFT, True, fold, nb
+
+    def _scan(self, y, lo, dims, pad, fold, nb, chunk_ptr, counts, shift, sparse):
+        """Sort the local particles ``y`` into the grid and find the interacting pairs into
+        ``self._pair``, ``self._val``, ``counts`` (per chunk). ``sparse``: a stable sort and a
+        table of the occupied buckets only (else a counting sort into all ``nb`` buckets)."""
+        h, n = self.halo, y.shape[0]
         ijk, key, bucket, perm = self._ijk[:n], self._key[:n], self._bucket[:n], self._perm[:n]
         ys, ijks, keys, buckets = self._ys[:n], self._ijks[:n], self._keys[:n], self._buckets[:n]
-        cells(y, lo, 1.0 / h, dims, pad, fold, ijk, key, bucket, shift)
+        cells(y, lo, 1.0 / self.cell_size, dims, pad, fold, ijk, key, bucket, shift)
         if sparse:
             perm[:] = np.argsort(bucket, kind="stable")
             k = sparse_table(bucket[perm], self._ub, self._sstart)
@@ -288,17 +283,17 @@ class ShortRangeContact(ParticleForce):
         if self._pair.shape[0] < n_chunks * self._cap:
             self._pair = np.empty((n_chunks * self._cap, 2), dtype=np.int32)
             self._val = np.empty((n_chunks * self._cap, 4))
+        args = (perm, h.x0, h.vol, h.stiffness, h.radius, h.body, self.cell_size)
         while True:
             par = n >= SERIAL_BELOW_PARTICLES
             if self.dense:
-                find_dense(par, ys, buckets, start, ub, perm, x0, vol, stiffness, radius,
-                           body, h, fold, self.distance_factor, self.radius_factor, chunk_ptr,
-                           self._cap, self._pair, self._val, counts)
+                find_dense(par, ys, buckets, start, ub, *args, fold, self.distance_factor,
+                           self.radius_factor, chunk_ptr, self._cap, self._pair, self._val,
+                           counts)
             else:
-                find_folded(par, ys, ijks, keys, buckets, start, ub, perm, x0, vol,
-                            stiffness, radius, body, h, dims, fold, self.distance_factor,
-                            self.radius_factor, chunk_ptr, self._cap, self._pair, self._val,
-                            counts)
+                find_folded(par, ys, ijks, keys, buckets, start, ub, *args, dims, fold,
+                            self.distance_factor, self.radius_factor, chunk_ptr, self._cap,
+                            self._pair, self._val, counts)
             most = int(counts.max())
             if most <= self._cap:
                 break
@@ -307,30 +302,44 @@ class ShortRangeContact(ParticleForce):
             self._val = np.empty((n_chunks * self._cap, 4))
 
     def _search(self) -> float:
-        """Find the interacting pairs at the current positions; returns their potential (J)."""
-        if self._dist is not None:
-            energy = self._dist.search()
-            self.n_active = self._dist.n_counted
-            return energy
-        n = self.n
+        """Find the pairs of the local particles at the current positions; returns the
+        potential (J) of the pairs this process counts. Collective."""
+        h = self.halo
         self._n_touched = 0
         self.n_active = 0
-        if n < 2:
+        if self.n < 2:
             return 0.0
-        y = self._positions()
-        lo, hi, finite = bounding_box(y)
-        if not finite:
-            raise FloatingPointError(NOT_FINITE)
-        dims, pad, fold, nb = self._grid(lo, hi, n)
-        self._scan(y, lo, dims, pad, fold, nb, self.x0, self.vol, self.stiffness, self.radius,
-                   self.body, self.chunk_ptr, self._counts)
-        self.n_active = int(self._counts.sum())
-        if self.n_active == 0:
+        glo, ghi = h.update()
+        m = h.m
+        dims, pad, fold, nb = self._grid(glo, ghi, self.n)  # the grid over all particles
+        self.grid_buckets = nb
+        if m < 2:
             return 0.0
-        nt, energy = sum_pairs(self._counts, self._cap, self._pair, self._val, self.vol,
-                               self._acc, self._mark, self._touched)
-        self._n_touched = nt
-        return energy
+        self._reserve(m)
+        shift, sparse, fold, nb = self._local_table(h.y, glo, dims, fold, nb, m)
+        self.n_buckets = m if sparse else nb
+        n_chunks = max(1, min(self._chunks_wanted, m))
+        chunk_ptr = (np.arange(n_chunks + 1, dtype=np.int64) * m) // n_chunks
+        counts = np.zeros(n_chunks, dtype=np.int64)
+        self._scan(h.y, glo, dims, pad, fold, nb, chunk_ptr, counts, shift, sparse)
+        self._counts = counts
+        n_pairs, energy = counted_pairs(counts, self._cap, self._pair, self._val, h.owned)
+        self.n_active = int(n_pairs)
+        if counts.sum():
+            self._n_touched, _ = sum_pairs(counts, self._cap, self._pair, self._val, h.vol,
+                                           self._acc, self._mark, self._touched)
+        return float(energy)
+
+    def _add_into(self, fs: list) -> None:
+        """Add the last search's force density of each owned particle into ``fs`` (one local
+        array per body)."""
+        h, nt = self.halo, self._n_touched
+        if nt == 0:
+            return
+        k = 0
+        for f, o in zip(fs, h.own):
+            add_owned(f, o, h.own_pos[k:k + len(o)], self._acc, self._touched, nt, self._mark)
+            k += len(o)
 
     # -- public ---------------------------------------------------------------------------------
     def add_forces(self) -> int:
@@ -341,7 +350,7 @@ class ShortRangeContact(ParticleForce):
         Returns
         -------
         int
-            The number of interacting pairs (under MPI: those this rank counts).
+            The number of interacting pairs this process counts.
 
         Raises
         ------
@@ -349,49 +358,36 @@ class ShortRangeContact(ParticleForce):
             If a position is NaN or infinite.
         """
         self._search()
-        if self._dist is not None:
-            self._dist.add_into([b.f for b in self.bodies])
-        elif self._n_touched:
-            for b, off in zip(self.bodies, self.offsets[:-1]):
-                add_into(b.f, int(off), self._touched, self._n_touched, self._acc)
+        self._add_into([b.f for b in self.bodies])
         return self.n_active
 
     def forces(self) -> list[np.ndarray]:
-        """The short-range force density (N/m^3) on each body at the current positions.
+        """The short-range force density (N/m^3) on each body's local particles at the current
+        positions (zero on halo particles).
 
         Returns
         -------
         list of ndarray
-            One (N_b, 3) array per body; the bodies' ``f`` are not touched.
+            One (n_b, 3) array per body; the bodies' ``f`` are not touched.
         """
         self._search()
         out = [np.zeros((b.x0.shape[0], 3)) for b in self.bodies]
-        if self._dist is not None:
-            self._dist.add_into(out)
-            return out
-        for f, off in zip(out, self.offsets[:-1]):
-            add_into(f, int(off), self._touched, self._n_touched, self._acc)
+        self._add_into(out)
         return out
 
     def potential_energy(self) -> float:
         """Potential energy of the short-range force at the current positions, J.
 
         ``sum over interacting pairs of 1/2 k_ij V_i V_j (r_ij - |y_j - y_i|)^2`` (over all
-        ranks: collective under MPI).
+        ranks: collective).
         """
-        energy = self._search()
-        if self._dist is None:
-            return energy
-        return float(self._dist.comm.allreduce_sum(energy))
+        return float(self.comm.allreduce_sum(self._search()))
 
     def total_pairs(self) -> int:
-        """Interacting pairs found by the last call, over all ranks (collective under MPI)."""
-        if self._dist is None:
-            return self.n_active
-        return int(self._dist.comm.allreduce_sum(np.int64(self.n_active)))
+        """Interacting pairs found by the last call, over all ranks (collective)."""
+        return int(self.comm.allreduce_sum(np.int64(self.n_active)))
 
     def invalidate(self) -> None:
-        """Under MPI: rebuild the contact halo at the next call (e.g. after particles moved
-        between ranks; a change of a body's halo plan is also noticed by itself)."""
-        if self._dist is not None:
-            self._dist.halo.invalidate()
+        """Rebuild the contact halo at the next call (e.g. after particles moved between
+        ranks; a change of a body's layout is also noticed by itself)."""
+        self.halo.invalidate()

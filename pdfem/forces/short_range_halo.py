@@ -2,9 +2,9 @@
 
 Short-range contact (:mod:`pdfem.forces.short_range`) acts between particles closer than the
 cut-off h (the largest critical distance), whatever body or rank they belong to, and fragments
-move, so the static bond halo of :class:`pdfem.pd.layout.halo.DistributedIce` does not serve.
+move, so the static bond halo of a split body (:mod:`pdfem.pd.layout.halo`) does not serve.
 :class:`ContactHalo` keeps, on each rank, its owned particles (of all bodies) plus *ghosts*:
-the particles of other ranks that were within ``h + s`` of the box of the rank's owned
+the particles of other ranks (none on one process) that were within ``h + s`` of the box of the rank's owned
 particles at the last *refresh*. ``s`` is the Verlet skin, :data:`SKIN_FRACTION` times h.
 
 Between refreshes the ghost set is fixed and only the ghosts' positions travel, point to point
@@ -23,8 +23,8 @@ a particle moved 0.15 h ~ 0.2 dx, which ice fragments at 20 m/s with steps of 1e
 hundreds of steps to do, so refreshes are rare and the ghost shell stays thin.
 
 The owned set can change during a run (load balancing moves particles between ranks): a change
-of a body's halo plan (its ``plan``, ``plan.local`` or ``plan.owned`` objects) is detected at the
-next call and forces a refresh on all ranks; :meth:`ContactHalo.invalidate` forces one too.
+of a body's layout (its ``layout``, ``layout.gid`` or ``layout.owned`` objects) is detected at
+the next call and forces a refresh on all ranks; :meth:`ContactHalo.invalidate` forces one too.
 
 Local arrays (positions, constants) are in global order (body offset + index in the body), the
 serial run's order. Units: m, m^3, N/m^7.
@@ -48,8 +48,8 @@ class ContactHalo:
     Parameters
     ----------
     bodies
-        The :class:`~pdfem.pd.layout.halo.DistributedIce` bodies (``plan.local``,
-        ``plan.owned``, ``y``, ``x0``, ``vol``).
+        The :class:`~pdfem.pd.body.IceBody` bodies (``layout.gid``, ``layout.owned``, ``y``,
+        ``x0``, ``vol``).
     offsets
         (n_bodies + 1,) first global number of each body's particles (whole bodies).
     stiffness, radius
@@ -95,7 +95,7 @@ class ContactHalo:
 
     # -- the owned particles -----------------------------------------------------------------
     def _plans(self) -> list:
-        return [(b.plan, b.plan.local, b.plan.owned) for b in self.bodies]
+        return [(b.layout, b.layout.gid, b.layout.owned) for b in self.bodies]
 
     def _owned_changed(self) -> bool:
         if self._seen is None:
@@ -111,7 +111,7 @@ class ContactHalo:
         rec = []
         for k, (b, o) in enumerate(zip(self.bodies, self.own)):
             r = np.empty((len(o), _COLUMNS))
-            r[:, 0] = b.plan.local[o] + self.offsets[k]
+            r[:, 0] = b.layout.gid[o] + self.offsets[k]
             r[:, 4:7] = b.x0[o]
             r[:, 7] = b.vol[o]
             r[:, 8] = self.k_body[k]

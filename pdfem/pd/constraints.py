@@ -5,7 +5,7 @@ velocity (ramped linearly from 0 over ``ramp_time``) or follows a displacement p
 (:class:`pdfem.geometry.path.DisplacementPath`). Its reaction, the force (N) that the support or
 driver exerts on the ice, is what keeps its particles on the prescribed motion::
 
-    R = sum_i V_i (rho a_prescribed - f_i - rho g)
+    R = sum_i V_i (rho a_prescribed - f_i - rho g)      (summed over every process)
 
 (``f`` force density N/m^3 at the current positions, ``g`` the body's uniform acceleration;
 contact impulses on the region's own particles are not in it). On a path the particles drift
@@ -101,12 +101,17 @@ def applied_forces(body) -> np.ndarray:
 
 
 def reaction_forces(body) -> np.ndarray:
-    """(k, 3) reaction R = sum_i V_i (rho a - f_i - rho g) (N) of each of ``body.constraints``
-    at ``body.time``: the force its support or driver exerts on the ice (sums over the rows of
-    each ``index``; under MPI the rank's owned particles)."""
-    rho, out = body.material.density, -applied_forces(body)
+    """(k, 3) reaction R = (rho sum_i V_i) (a - g) - sum_i V_i f_i (N) of each of
+    ``body.constraints`` at ``body.time``: the force its support or driver exerts on the ice,
+    summed over the region's particles on every process, correctly rounded (the body's layout:
+    the same on 1 and N ranks; collective)."""
+    rho, total = body.material.density, body.layout.total
+    out = np.zeros((len(body.constraints), 3))
     for k, c in enumerate(body.constraints):
-        out[k] += (rho * float(body.vol[c.index].sum())) * c.acceleration(body.time)
+        vol = body.vol[c.index]
+        mass = rho * float(total(vol))
+        out[k] = mass * (c.acceleration(body.time) - body.gravity) - total(vol[:, None]
+                                                                           * body.f[c.index])
     return out
 
 

@@ -138,8 +138,8 @@ def plate_moduli(layers: int, horizon_factor: float, poisson_ratio: float = 0.3,
     for name, (u, ref) in _fields(x, poisson_ratio, _CURVATURE).items():
         y = np.ascontiguousarray(x + u)
         kernels.dilatation(y, body.row_ptr, body.nbr, body.xi_len, body.weight, broken, body.vol,
-                           body.m, theta, body._ws)
+                           body.m, theta, body.workspace)
         w = kernels.strain_energy(y, body.row_ptr, body.nbr, body.xi_len, body.weight, broken,
-                                  body.vol, body.m, theta, mat.K, mat.mu, body._ws)
+                                  body.vol, body.m, theta, mat.K, mat.mu, body.workspace)
         ratios[name] = float((w[middle] * body.vol[middle]).sum() / area / ref)
     return PlateModuli(poisson_ratio=poisson_ratio, **ratios)

@@ -1,8 +1,8 @@
 """When the run re-partitions its split ice bodies, and the imbalance history it writes.
 
 Under MPI every coupling step :class:`LoadBalance` asks each ice body for its imbalance (the
-largest rank's work over the mean, :meth:`pdfem.pd.layout.rebalance.Rebalancing.imbalance`) and
-re-partitions it (:meth:`~pdfem.pd.layout.rebalance.Rebalancing.rebalance`) every
+largest rank's work over the mean, :func:`pdfem.pd.layout.rebalance.imbalance`) and
+re-partitions it (:func:`~pdfem.pd.layout.rebalance.rebalance`) every
 ``run.rebalance_every`` coupling steps, or when the imbalance exceeds
 ``run.rebalance_imbalance``. It writes the history ``parallel/<body>`` (``imbalance``: of the
 partition the next step runs with, -; ``rebalanced``: 1 at the steps that re-partitioned) and
@@ -39,7 +39,7 @@ class LoadBalance:
         run = case.run
         self.every, self.limit = int(run.rebalance_every), float(run.rebalance_imbalance)
         self.bodies, self.coupler, self.say = setup.bodies, setup.coupler, say
-        self.active = comm.size > 1 and any(b.distributed for b in self.bodies)
+        self.active = comm.size > 1 and bool(self.bodies)  # whole bodies never move
         self.size = comm.size
         self._left: dict[str, float] = {}  # body -> imbalance right after its last re-partition
         if self.active:

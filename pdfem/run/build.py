@@ -24,7 +24,7 @@ from pdfem.errors import InputError
 from pdfem.meshing.quality import MeshQualityError
 from pdfem.run.build_forces import build_forces
 from pdfem.run.build_ice import build_ice_body
-from pdfem.run.parallel import body_counts, build_structures, distribute, setup_comm
+from pdfem.run.parallel import build_structures, report_partitions
 from pdfem.run.parallel import reference as parallel_reference
 from pdfem.run.timesteps import choose_time_steps
 
@@ -167,8 +167,7 @@ def build(case: Case, out: Path, comm, say, steps: tuple[float, int, int] | None
     InputError
         Bad input found while building.
     """
-    split = setup_comm(case, comm)  # the distributed set-up where it applies
-    bodies = [build_ice_body(cfg, case.run, case.file, split) for cfg in case.ice]
+    bodies = [build_ice_body(cfg, case.run, case.file, comm) for cfg in case.ice]
     structures = build_structures(case.structures, out, case.file, comm)
     for st, cfg in zip(structures, case.structures):
         check_mesh(st, cfg, case.file)
@@ -176,13 +175,13 @@ def build(case: Case, out: Path, comm, say, steps: tuple[float, int, int] | None
     probes = make_probes(case, structures)
     dt, n_ice, n_st = choose_time_steps(case, bodies, structures)
     stable = {b.name: b.stable_time_step() for b in bodies}
-    sizes = [body_counts(b) for b in bodies]
+    sizes = [b.counts() for b in bodies]
     for b, (n, nb, _) in zip(bodies, sizes):
         say(f"  ice '{b.name}': {n:,} particles, {nb:,} bonds, dx = {b.dx:g} m, "
             f"horizon = {b.delta:g} m, s0 = {b.s0:.3e}, stable step {stable[b.name]:.3e} s")
     reference = {b.name: parallel_reference(b) for b in bodies}
     counts = tuple(sum(c) for c in zip(*sizes)) if sizes else (0, 0, 0)
-    bodies = distribute(bodies, comm, say)
+    report_partitions(bodies, comm, say)
     pairs = contact_pairs(case, bodies, structures, comm)
     if steps is not None:
         dt, n_ice, n_st = steps

@@ -18,8 +18,8 @@ from pdfem.case.config import IceConfig, RunConfig
 from pdfem.case.ice import IceMaterialSection
 from pdfem.errors import InputError
 from pdfem.geometry.path import DisplacementPath
-from pdfem.pd.body import IceBody
-from pdfem.pd.layout.setup import distributed_body, distributed_ice
+from pdfem.parallel.comm import SerialComm
+from pdfem.pd.layout.setup import lattice_body
 from pdfem.pd.failure import failure_law
 from pdfem.pd.bonds.influence import isotropy_gain
 from pdfem.pd.materials.lps import IceMaterial, tensile_from_flexural
@@ -51,7 +51,7 @@ def ice_material(m: IceMaterialSection, dx: float | None = None,
                        rate_exponent=m.rate_exponent)
 
 
-def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>", comm=None):
+def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>", comm=SerialComm()):
     """Build the ice body that ``cfg`` describes.
 
     Parameters
@@ -63,15 +63,14 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>", comm=No
     file
         Case-file name for error messages.
     comm
-        With a communicator of several ranks, the body is built split over them by the
-        distributed set-up (:mod:`pdfem.pd.layout.setup`): every rank builds only its part,
-        and the result is a :class:`~pdfem.pd.layout.halo.DistributedIce` (collective). None:
-        the whole body.
+        The communicator: on several ranks every rank builds only its part of the body
+        (:func:`pdfem.pd.layout.setup.lattice_body`; collective).
 
     Returns
     -------
-    IceBody or DistributedIce
-        The body at rest in its reference state (initial velocity applied), forces not yet computed.
+    IceBody
+        The body (this process's part) at rest in its reference state (initial velocity
+        applied), forces not yet computed.
     """
     try:
         isotropy_gain(cfg.horizon / cfg.dx)
@@ -83,31 +82,23 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>", comm=No
         material = ice_material(cfg.material, cfg.dx, float(hi[2] - lo[2]))
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.material.flexural_strength", str(exc)) from None
-    split = comm is not None and comm.size > 1
     try:
         law = failure_law(cfg.material.failure, material, cfg.horizon)
-        if split:
-            body, plan, census, part = distributed_body(cfg.name, cfg.shape, material, cfg.dx,
-                                                     cfg.horizon, comm, loop=run.pd_loop,
-                                                     failure=law)
-            n = census.n
-        else:
-            body = IceBody.from_shape(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon,
-                                      loop=run.pd_loop, failure=law)
-            n = body.n
+        body = lattice_body(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon, comm,
+                            loop=run.pd_loop, failure=law)
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.shape", str(exc)) from None
+    n = body.n_global
     if n < 2:
         raise InputError(file, f"{cfg.field}.dx", f"the shape holds {n} particle(s) at this spacing; "
                          "choose a smaller dx", cfg.dx)
     body.gravity = np.asarray(run.gravity, dtype=np.float64)
     body.v[:] = np.asarray(cfg.initial_velocity)
-    total = (lambda k: int(comm.allreduce_sum(np.int64(k)))) if split else int
-    apply_regions(body, cfg, file, total)
-    return distributed_ice(body, plan, comm, n, part.name) if split else body
+    apply_regions(body, cfg, file, lambda k: int(body.layout.allsum(np.int64(k))))
+    return body
 
 
-def apply_regions(body: IceBody, cfg: IceConfig, file: str, total=int) -> None:
+def apply_regions(body, cfg: IceConfig, file: str, total=int) -> None:
     """No-fail regions, pre-cracks, fixed and prescribed regions of ``cfg`` on ``body`` (a whole
     body, or a rank's part with ``total`` summing a count over the ranks: a region must select
     a particle, a crack cut a bond, somewhere in the body)."""

@@ -17,9 +17,9 @@ end of a coupling step:
 
 The ice and the particle forces' per-particle state (water) are stored in *parts*, one per rank
 that wrote them (:mod:`pdfem.run.checkpoint_ranks`: owned particles and non-fresh bonds under
-their global numbers). A serial run (``parts`` = 0) keeps its one part inside the manifest. A
-run on K ranks has every rank write ``checkpoint.g<step>.rank<R>.h5``; rank 0 then writes the
-manifest, naming the K files with their sizes (``/parts`` dataset), LAST: written to
+their global numbers). A run on K ranks (K = 1 serially) has every rank write
+``checkpoint.g<step>.rank<R>.h5``; rank 0 then writes the manifest, naming the K files with
+their sizes (``/part_sizes`` dataset), LAST: written to
 ``checkpoint.h5.tmp``, fsync'ed, moved over the old one with ``os.replace``; only then are the
 previous generation's part files deleted. A run killed at any moment therefore leaves a valid
 set: the previous manifest with its parts, or the new one with its parts.
@@ -31,7 +31,8 @@ another count rank 0 takes their totals, which changes only the rounding of thei
 
 Scalars are attributes, arrays datasets. Restoring sets every array bit for bit, so a restart on
 as many ranks continues exactly as the uninterrupted run would. :data:`FORMAT` 2 (per-rank
-parts); a checkpoint of format 1 (pdfem before per-rank parts) is refused (exit 2).
+parts); a checkpoint of format 1 (pdfem before per-rank parts) is refused (exit 2). A manifest
+with ``parts`` = 0 (serial checkpoints of earlier versions) holds its one part itself.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ import numpy as np
 from pdfem import __version__
 from pdfem.errors import InputError
 from pdfem.run.checkpoint_ranks import (has_force_state, part_path, remove_other_generations,
-                                        restore_force, restore_ice, write_part, write_part_file)
+                                        restore_force, restore_ice, write_part_file)
 
 FORMAT = 2
 """Checkpoint format version; a checkpoint of another version is refused."""
@@ -110,18 +111,12 @@ def _get(group: h5py.Group) -> dict:
     return out
 
 
-def _split_comm(bodies: list):
-    """The communicator of the ice bodies split over ranks (``None`` when none is)."""
-    return next((b.comm for b in bodies if b.distributed), None)
-
-
 def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverState, bodies: list,
-                     structures: list, coupler, rank: int = 0) -> Path | None:
+                     structures: list, coupler, comm) -> Path | None:
     """Write a checkpoint so that a kill at any moment leaves the previous or the new one whole.
 
-    Every rank calls this. With ice bodies split over K > 1 ranks each rank writes its part file
-    (generation ``driver.step``), then rank 0 the manifest naming them, then removes the older
-    generation; serially (or with no split body) rank 0 writes the manifest with its one part.
+    Every rank calls this. Each rank writes its part file (generation ``driver.step``), then
+    rank 0 the manifest naming them, then removes the older generation.
 
     Parameters
     ----------
@@ -135,8 +130,8 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         The ice bodies and the structures (with ``checkpoint_state()``).
     coupler
         The :class:`pdfem.coupling.coupler.Coupler` (its ``forces`` with ``checkpoint_state()``).
-    rank
-        This process's MPI rank (rank 0 writes the manifest).
+    comm
+        The communicator (rank 0 writes the manifest).
 
     Returns
     -------
@@ -144,15 +139,12 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         ``path`` (``None`` on ranks other than 0).
     """
     path, gen = Path(path), int(driver.step)
-    comm = _split_comm(bodies)
-    sizes = None
-    if comm is not None and comm.size > 1:
-        mine = write_part_file(part_path(path, gen, comm.rank), gen, comm.rank, bodies,
-                               coupler.forces)
-        sizes = comm.gather(mine)  # every part is on disk before the manifest names it
-        before_manifest(gen)
+    mine = write_part_file(part_path(path, gen, comm.rank), gen, comm.rank, bodies,
+                           coupler.forces)
+    sizes = comm.gather(mine)  # every part is on disk before the manifest names it
+    before_manifest(gen)
     coupler_state = coupler.checkpoint_state()  # collective under MPI
-    if rank != 0:
+    if comm.rank != 0:
         return None
     tmp = path.with_name(path.name + ".tmp")
     with h5py.File(tmp, "w") as f:
@@ -160,11 +152,8 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         f.attrs["pdfem_version"] = __version__
         f.attrs["case_sha256"] = case_hash(case_text)
         f.attrs["generation"] = gen
-        f.attrs["parts"] = 0 if sizes is None else len(sizes)
-        if sizes is None:
-            write_part(f, bodies, coupler.forces)
-        else:
-            f.create_dataset("part_sizes", data=np.array(sizes, dtype=np.int64))
+        f.attrs["parts"] = len(sizes)
+        f.create_dataset("part_sizes", data=np.array(sizes, dtype=np.int64))
         d = f.create_group("driver")
         values = asdict(driver)
         rows = values.pop("history_rows")
@@ -174,7 +163,7 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
             h.attrs[k] = int(n)
         g = f.create_group("bodies")
         for b in bodies:
-            g.attrs[b.name] = int(b.global_n if b.distributed else b.n)
+            g.attrs[b.name] = int(b.n_global)
         for s in structures:
             _put(f.create_group(f"structure/{s.name}"), s.checkpoint_state())
         _put(f.create_group("coupler"), coupler_state)
@@ -182,7 +171,7 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         os.fsync(fh.fileno())
     os.replace(tmp, path)
     _fsync_dir(path.parent)
-    remove_other_generations(path, gen, 0 if sizes is None else len(sizes))
+    remove_other_generations(path, gen, len(sizes))
     return path
 
 
@@ -264,7 +253,7 @@ def read_checkpoint(path: str | os.PathLike, case_text: str, case_file: str) -> 
     return Checkpoint(p, driver, bodies, structures, coupler, parts)
 
 
-def restore(checkpoint: Checkpoint, bodies: list, structures: list, coupler) -> None:
+def restore(checkpoint: Checkpoint, bodies: list, structures: list, coupler, comm) -> None:
     """Put the state of a checkpoint into freshly built bodies, structures and coupler; every
     rank takes its own particles and bonds from the parts (collective under MPI).
 
@@ -278,15 +267,12 @@ def restore(checkpoint: Checkpoint, bodies: list, structures: list, coupler) -> 
         raise InputError(str(checkpoint.path), "--restart",
                          f"the checkpoint holds ice {sorted(checkpoint.bodies)} and structures "
                          f"{sorted(checkpoint.structures)}, the case {names[0]} and {names[1]}")
-    comm = _split_comm(bodies)
-    rank, size = (0, 1) if comm is None else (comm.rank, comm.size)
     try:
         for b in bodies:
-            n = b.global_n if b.distributed else b.n
-            if n != checkpoint.bodies[b.name]:
-                raise ValueError(f"ice body '{b.name}' has {checkpoint.bodies[b.name]} particles "
-                                 f"in the checkpoint, {n} in the case")
-            restore_ice(checkpoint.parts, b, rank, size)
+            if b.n_global != checkpoint.bodies[b.name]:
+                raise ValueError(f"ice body '{b.name}' has {checkpoint.bodies[b.name]} "
+                                 f"particles in the checkpoint, {b.n_global} in the case")
+            restore_ice(checkpoint.parts, b, comm.rank, comm.size)
         for s in structures:
             s.restore_state(checkpoint.structures[s.name])
         coupler.restore_state(checkpoint.coupler)

@@ -23,8 +23,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from pdfem.pd.checkpoint.parts import (BOND_KEYS, PARTICLE_KEYS, Layout, PartPicker, owned_part,
-                                       locate, rank_scalars, whole_layout)
+from pdfem.pd.checkpoint.parts import (BOND_KEYS, PARTICLE_KEYS, PartLayout, PartPicker, owned_part,
+                                       locate, rank_scalars)
 
 CHUNK = 1 << 20
 """Rows read at a time from a part (particles or listed bonds)."""
@@ -38,9 +38,9 @@ def part_path(manifest: Path, generation: int, rank: int) -> Path:
     return manifest.with_name(f"{manifest.stem}.g{int(generation)}.rank{int(rank)}.h5")
 
 
-def layout_of(body) -> Layout:
-    """The rank's :class:`~pdfem.pd.checkpoint.parts.Layout` of an ice body (whole or split)."""
-    return body.checkpoint_layout() if body.distributed else whole_layout(body)
+def layout_of(body) -> PartLayout:
+    """The rank's :class:`~pdfem.pd.checkpoint.parts.PartLayout` of an ice body."""
+    return body.checkpoint_layout()
 
 
 def _put(group: h5py.Group, state: dict) -> None:

@@ -72,7 +72,7 @@ class RunSummary:
                 "in ParaView)" + ("\n" + self.budget() if self.energy else ""))
 
 
-def _start(case: Case, setup: Setup, outputs: Outputs, ckpt, say) -> LoopState:
+def _start(case: Case, setup: Setup, outputs: Outputs, ckpt, say, comm) -> LoopState:
     """Initial forces, energy and first frame of a new run, or the state of a checkpoint."""
     if ckpt is None:
         setup.coupler.start()
@@ -80,7 +80,7 @@ def _start(case: Case, setup: Setup, outputs: Outputs, ckpt, say) -> LoopState:
         outputs.frame(0.0)
         outputs.step(0.0)
         return LoopState(1, 1, case.run.output_interval, 0)
-    restore(ckpt, setup.bodies, setup.structures, setup.coupler)
+    restore(ckpt, setup.bodies, setup.structures, setup.coupler, comm)
     d = ckpt.driver
     outputs.resume(outputs.writer.path, d.frames, d.history_rows)
     outputs.energy.initial = d.initial_energy
@@ -165,7 +165,7 @@ def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart
         monitor = BlowupMonitor(setup.bodies, setup.dt / setup.n_ice, setup.stable,
                                 case.run.stability_check_interval_steps,
                                 energy_tolerance=case.run.energy_tolerance)
-        state = _start(case, setup, outputs, ckpt, say)
+        state = _start(case, setup, outputs, ckpt, say, comm)
     except BaseException:
         outputs.close()
         raise

@@ -94,7 +94,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
                                  DriverState(step, t, dt, setup.n_ice, setup.n_st, next_out,
                                              frames, broken, outputs.energy.initial,
                                              outputs.writer.history_rows()),
-                                 setup.bodies, setup.structures, coupler, comm.rank)
+                                 setup.bodies, setup.structures, coupler, comm)
                 last_checkpoint = time.monotonic()
             bar.update(t, step)
     except InstabilityError as exc:

@@ -244,7 +244,7 @@ class Outputs:
                 if self.per_rank:
                     index, x0, vol = b.owned_reference()
                     self.ice_writer.add_ice_body(b.name, x0, vol, index=index)
-                    counts = rank_grid_files(self.writer.path, b.comm.allgather(len(index)))
+                    counts = rank_grid_files(self.writer.path, b.layout.comm.allgather(len(index)))
                     self.writer.add_rank_ice_body(b.name, counts, vol is not None)
                 else:
                     self.ice_writer.add_ice_body(b.name, *setup.reference[b.name])

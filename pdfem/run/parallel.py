@@ -1,12 +1,9 @@
-"""What a run needs to go parallel, in three calls the driver makes without knowing MPI.
+"""What a run needs to go parallel, in a few calls the driver makes without knowing MPI.
 
 * :func:`build_structures`: rank 0 meshes the structure models into the output directory, then
   every rank reads the same meshes (the structures are small and replicated on every rank).
-* :func:`setup_comm`: whether the ice bodies are built split over the ranks from the start (the
-  distributed set-up, :mod:`pdfem.pd.layout.setup`; the default under MPI where it
-  applies) or whole on every rank and split afterwards;
-* :func:`distribute`: split each whole ice body over the ranks (the partition is reported), or
-  leave it whole on a single rank.
+* :func:`report_partitions`: how each ice body is split over the ranks (the ice bodies are built
+  split from the start: :func:`pdfem.pd.layout.setup.lattice_body`);
 * :func:`warm_before_ranks`: rank 0 fills numba's kernel cache before the other ranks start.
 
 Gathering a frame to rank 0 (or keeping each rank's particles) is the ice bodies' own business
@@ -29,8 +26,8 @@ from pdfem.fem.rigid import RigidBody
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
-from pdfem.pd.layout.halo import DistributedIce
-from pdfem.pd.layout.setup import distributed_body, distributed_ice
+from pdfem.pd.layout.setup import distributed_body
+from pdfem.pd.layout.split import split_body
 from pdfem.parallel.partition import BYTES_PER_HALO_PARTICLE, choose_partition
 
 
@@ -50,41 +47,23 @@ def build_structures(configs, out: Path, file: str, comm) -> list:
     return build_all(configs, out, file, remesh=False)
 
 
-def splits_bodies(case) -> bool:
-    """Whether an MPI run of ``case`` builds its ice bodies split over the ranks by the
-    distributed set-up (:mod:`pdfem.pd.layout.setup`: no rank holds a whole body).
-
-    The global set-up (every rank builds each whole body, then keeps its part) stays only for
-    the full-family PD loop (the per-particle reference loop). Every shape is generated per
-    rank: the analytic ones and closed surface meshes alike answer the same point test for a
-    rank's box as for the whole body (each rank holds the surface mesh, not the particles).
-    Water acts per owned particle and checkpoints per rank, so it needs no whole body either.
-    Short-range contact (on, or implied by a crushing failure law) needs no whole body: each
-    rank searches its own particles and a contact halo (:mod:`pdfem.forces.short_range_halo`),
-    and a crushing law's bond state (rest lengths, shear springs) is per bond, built for the
-    local bonds."""
-    return case.run.pd_loop == "pairs"
-
-
-def setup_comm(case, comm):
-    """``comm`` if the case's ice bodies are built split over its ranks (:func:`splits_bodies`,
-    more than one rank), else None."""
-    return comm if comm.size > 1 and splits_bodies(case) else None
-
-
-def body_counts(b) -> tuple[int, int, int]:
-    """Particles, bonds and broken bonds of a whole body or of a split one (collective)."""
-    if b.distributed:
-        return b.counts()
-    return b.n, b.n_bonds, int(b.broken.sum())
-
-
 def reference(b) -> tuple:
-    """``(x0 m, vol m^3)`` of the whole body in global order (on rank 0 only for a body from
-    the distributed set-up, ``(None, None)`` elsewhere; collective)."""
-    if not b.distributed:
-        return b.x0, b.vol
+    """``(x0 m, vol m^3)`` of the whole body in global order on rank 0 (``(None, None)``
+    elsewhere; collective)."""
     return b.gather(b.x0), b.gather(b.vol)
+
+
+def report_partitions(bodies: list, comm, say=lambda s: None) -> None:
+    """Report how each body is split over the ranks (nothing on one rank; collective)."""
+    if comm.size == 1:
+        return
+    for b in bodies:
+        lay = b.layout
+        figures = comm.allgather((int(lay.owned.sum()), int((~lay.owned).sum()),
+                                  len(lay.plan.recv)))
+        owned, halo, nbrs = (np.array(v) for v in zip(*figures))
+        _say_split(say, b.name, lay.partition, owned, halo, nbrs,
+                   halo.sum() * BYTES_PER_HALO_PARTICLE / 1e6, comm.size)
 
 
 def _say_split(say, name: str, how: str, owned, halo, nbrs, mb: float, ranks: int) -> None:
@@ -99,46 +78,13 @@ def _say_split(say, name: str, how: str, owned, halo, nbrs, mb: float, ranks: in
                 f"{int(nbrs[r])} neighbours")
 
 
-def _report_split(b, comm, say) -> None:
-    """The partition of a body from the distributed set-up, as :func:`distribute` reports."""
-    p = b.plan
-    figures = comm.allgather((int(p.owned.sum()), int((~p.owned).sum()), len(p.recv)))
-    owned, halo, nbrs = (np.array(v) for v in zip(*figures))
-    _say_split(say, b.name, f"{b.partition_name} (distributed set-up)", owned, halo, nbrs,
-               halo.sum() * BYTES_PER_HALO_PARTICLE / 1e6, comm.size)
-
-
-def distribute(bodies: list, comm, say=lambda s: None) -> list:
-    """Each body split over the ranks by :func:`~pdfem.parallel.partition.choose_partition`
-    (the bodies themselves when there is one rank); the partition is reported with ``say``.
-    Bodies already split by the distributed set-up are reported and kept."""
-    if comm.size == 1:
-        return bodies
-    out = []
-    for b in bodies:
-        if b.distributed:
-            _report_split(b, comm, say)
-            out.append(b)
-            continue
-        owner, st = choose_partition(b.x0, b.row_ptr, b.nbr, comm.size)
-        _say_split(say, b.name, st.name, st.owned, st.halo, st.neighbours,
-                   st.bytes_per_step / 1e6, comm.size)
-        out.append(DistributedIce(b, owner, comm))
-    return out
-
-
-def any_rank(flag: bool, comm) -> bool:
-    """True on every rank if ``flag`` is true on any."""
-    return bool(comm.allreduce_sum(np.int64(bool(flag))))
-
-
 def warm_up() -> None:
     """Run two steps of a tiny ice cube pressed by a rigid plate (with short-range contact),
-    split over one 'rank'."""
+    split over one 'rank', and set up a tiny body the distributed way."""
     mat = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3, fracture_energy=1.0)
     body = IceBody.from_shape("warm", Box((0, 0, 0), (0.05, 0.05, 0.05)), mat, 0.01, 0.03015)
     owner, _ = choose_partition(body.x0, body.row_ptr, body.nbr, 1)
-    ice = DistributedIce(body, owner, SerialComm())
+    ice = split_body(body, owner, SerialComm())
     plate = RigidBody(np.array([[-1, -1, 0.0501], [1, -1, 0.0501], [1, 1, 0.0501],
                                 [-1, 1, 0.0501]]), np.array([[0, 1, 2], [0, 2, 3]]),
                       velocity=(0, 0, -1.0))
@@ -155,9 +101,9 @@ def warm_up() -> None:
     ice.kinetic_energy()
     ice.strain_energy()
     ice.gather(ice.damage())
-    local, plan, census, _ = distributed_body("warm", Box((0, 0, 0), (0.05, 0.05, 0.05)), mat,
-                                              0.01, 0.03015, SerialComm())
-    distributed_ice(local, plan, SerialComm(), census.n).stable_time_step()
+    local, _, _ = distributed_body("warm", Box((0, 0, 0), (0.05, 0.05, 0.05)), mat, 0.01,
+                                   0.03015, SerialComm())
+    local.stable_time_step()
 
 
 def warm_before_ranks(comm) -> None:

@@ -8,11 +8,11 @@ an owned end). A rank's memory is ``FIXED_BYTES`` plus, per body, its local part
 
 * distributed (:mod:`pdfem.pd.layout.setup`: each rank builds only its subdomain and
   halo): that is the rank's peak;
-* global (the one case the distributed set-up does not cover: the full-family loop): every rank
-  first builds the whole body, then keeps its part, so the peak per rank is the whole body plus
-  its part.
+* global (every rank first builds the whole body, then keeps its part, so the peak per rank is
+  the whole body plus its part): no run uses it any more; ``pdfem run --estimate --setup
+  global`` sizes it for comparison.
 
-:func:`pdfem.run.parallel.splits_bodies` says which one a case gets. A node's need is the sum
+Runs use the distributed set-up. A node's need is the sum
 over its ranks (ranks sharing memory: :func:`pdfem.parallel.nodes.node_layout`), compared with its
 ``MemAvailable``.
 """
@@ -27,7 +27,6 @@ import numpy as np
 from pdfem.case.schema import Case
 from pdfem.errors import InputError
 from pdfem.parallel.nodes import block_layout, node_layout, per_node
-from pdfem.run.parallel import splits_bodies
 from pdfem.run.estimates import (BYTES_PER_PAIR, BYTES_PER_PARTICLE, CRUSHED_ICE_BYTES_PER_PAIR,
                                  FIXED_BYTES, SHEAR_SPRING_BYTES_PER_PAIR, BodyEstimate,
                                  available_memory, best_split, estimate_body, format_bytes,
@@ -207,7 +206,7 @@ def preflight(case: Case, comm) -> list[str]:
     InputError
         From :func:`check_nodes`.
     """
-    setup = splits_bodies(case)
+    setup = True  # runs build their ice split over the ranks (pdfem.pd.layout.setup)
     ranks = estimate_rank_memory(case, comm.size, setup)
     nodes = node_layout(comm)
     available = per_node(comm, nodes, available_memory)

@@ -13,6 +13,12 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from pdfem.pd.bonds.family_kernels import (dilatation_family_loop, forces_family_loop,
+                                           mark_family_breaks)
+from pdfem.pd.bonds.lps_law import force_coefficients, stretch_limits
+from pdfem.pd.bonds.pair_loop import INTACT, UNIT_STRENGTH, check_broken, check_weight
+from pdfem.pd.bonds.workspace import c_contiguous
+
 
 @numba.njit(cache=True)
 def _build_family(row_ptr, nbr, n):
@@ -78,3 +84,85 @@ def build_family(
     if nbr.size and (nbr.min() < 0 or nbr.max() >= n):
         raise ValueError("nbr holds particle indices outside 0..n-1")
     return _build_family(row_ptr, nbr, n)
+
+
+def dilatation_family(
+    y: np.ndarray,
+    fam_ptr: np.ndarray,
+    fam_nbr: np.ndarray,
+    fam_bond: np.ndarray,
+    xi_len: np.ndarray,
+    weight: np.ndarray,
+    broken: np.ndarray,
+    vol: np.ndarray,
+    m: np.ndarray,
+    theta_out: np.ndarray,
+) -> None:
+    """Dilatation by the per-particle full-family loop (reference for the pair loop).
+
+    ``fam_ptr``, ``fam_nbr``, ``fam_bond`` come from :func:`pdfem.pd.bonds.family.build_family`; the
+    other parameters are as in :func:`pdfem.pd.bonds.pair_loop.dilatation`.
+    """
+    dilatation_family_loop(c_contiguous(y, "y"), fam_ptr, fam_nbr, fam_bond, xi_len, broken,
+                       check_broken(broken, xi_len), vol, m, check_weight(weight, xi_len), theta_out)
+
+
+def forces_family(
+    y: np.ndarray,
+    fam_ptr: np.ndarray,
+    fam_nbr: np.ndarray,
+    fam_bond: np.ndarray,
+    xi_len: np.ndarray,
+    weight: np.ndarray,
+    broken: np.ndarray,
+    vol: np.ndarray,
+    m: np.ndarray,
+    theta: np.ndarray,
+    K: float,
+    mu: float,
+    s0: float,
+    nofail: np.ndarray,
+    f_out: np.ndarray,
+    coef: np.ndarray | None = None,
+    m_now: np.ndarray | None = None,
+) -> int:
+    """Force density by the per-particle full-family loop (reference for the pair loop).
+
+    Every bond is evaluated from both ends; each particle writes only its own force. A bond
+    that breaks at these positions still acts in this evaluation (as in the pair loop: the
+    step's force is that of the bonds intact at its start, so the time integration stays
+    energy-consistent and the energy the bond held is the fracture's) and is marked afterwards,
+    once, by its smaller-index end.
+
+    Parameters
+    ----------
+    fam_ptr, fam_nbr, fam_bond
+        Family lists from :func:`pdfem.pd.bonds.family.build_family`.
+    coef
+        Optional (N, 2) float64 scratch for the per-particle force coefficients.
+    m_now
+        Optional weighted volume of the intact bonds, as in
+        :func:`pdfem.pd.bonds.pair_loop.forces`.
+    others
+        As in :func:`pdfem.pd.bonds.pair_loop.forces`.
+
+    Returns
+    -------
+    int
+        Number of bonds broken in this call.
+    """
+    n = fam_ptr.shape[0] - 1
+    if coef is None:
+        coef = np.empty((n, 2))
+    if coef.shape != (n, 2):
+        raise ValueError(f"coef must be an (N, 2) float64 scratch array, got shape {coef.shape}")
+    aux = np.empty((n, 2))
+    force_coefficients(True, m, INTACT if m_now is None else m_now, theta, K, mu, UNIT_STRENGTH,
+                       coef, aux)
+    yc, signed, wt = c_contiguous(y, "y"), check_broken(broken, xi_len), check_weight(weight, xi_len)
+    forces_family_loop(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol,
+                   c_contiguous(coef, "coef"), wt, c_contiguous(f_out, "f_out"))
+    return int(mark_family_breaks(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, aux,
+                            nofail, stretch_limits(s0)))
+
+

@@ -20,18 +20,14 @@ from pdfem.pd.bonds.lps_law import (
     breaks,
     dilatation_of,
     dilatation_term,
-    force_coefficients,
     is_broken,
     mark_broken,
     pair_force_scalar,
-    stretch_limits,
 )
-from pdfem.pd.bonds.pair_loop import _INTACT, _NO_STRENGTH, check_broken, check_weight
-from pdfem.pd.bonds.workspace import c_contiguous
 
 
 @numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
-def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, m, wt, theta):
+def dilatation_family_loop(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, m, wt, theta):
     y = y2.reshape(y2.size)
     for i in prange(fam_ptr.shape[0] - 1):
         yi0 = y[3 * i]
@@ -52,7 +48,7 @@ def _dilatation_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, v
 
 
 @numba.njit(parallel=True, cache=True, fastmath=FASTMATH, error_model="numpy")
-def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, coef2, wt, fout):
+def forces_family_loop(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, coef2, wt, fout):
     y = y2.reshape(y2.size)
     coef = coef2.reshape(coef2.size)
     f = fout.reshape(fout.size)
@@ -87,7 +83,7 @@ def _forces_family(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol, 
 
 
 @numba.njit(cache=True)
-def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, aux2, nofail, lim):
+def mark_family_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, aux2, nofail, lim):
     """Mark the bonds that break at these positions (after the forces, in which they still
     acted), each once from its smaller-index end; the number marked."""
     y = y2.reshape(y2.size)
@@ -113,85 +109,3 @@ def _mark_breaks(y2, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, aux
                 mark_broken(signed, wt, w, broken, k)
                 nb += 1
     return nb
-
-
-def dilatation_family(
-    y: np.ndarray,
-    fam_ptr: np.ndarray,
-    fam_nbr: np.ndarray,
-    fam_bond: np.ndarray,
-    xi_len: np.ndarray,
-    weight: np.ndarray,
-    broken: np.ndarray,
-    vol: np.ndarray,
-    m: np.ndarray,
-    theta_out: np.ndarray,
-) -> None:
-    """Dilatation by the per-particle full-family loop (reference for the pair loop).
-
-    ``fam_ptr``, ``fam_nbr``, ``fam_bond`` come from :func:`pdfem.pd.bonds.family.build_family`; the
-    other parameters are as in :func:`pdfem.pd.bonds.pair_loop.dilatation`.
-    """
-    _dilatation_family(c_contiguous(y, "y"), fam_ptr, fam_nbr, fam_bond, xi_len, broken,
-                       check_broken(broken, xi_len), vol, m, check_weight(weight, xi_len), theta_out)
-
-
-def forces_family(
-    y: np.ndarray,
-    fam_ptr: np.ndarray,
-    fam_nbr: np.ndarray,
-    fam_bond: np.ndarray,
-    xi_len: np.ndarray,
-    weight: np.ndarray,
-    broken: np.ndarray,
-    vol: np.ndarray,
-    m: np.ndarray,
-    theta: np.ndarray,
-    K: float,
-    mu: float,
-    s0: float,
-    nofail: np.ndarray,
-    f_out: np.ndarray,
-    coef: np.ndarray | None = None,
-    m_now: np.ndarray | None = None,
-) -> int:
-    """Force density by the per-particle full-family loop (reference for the pair loop).
-
-    Every bond is evaluated from both ends; each particle writes only its own force. A bond
-    that breaks at these positions still acts in this evaluation (as in the pair loop: the
-    step's force is that of the bonds intact at its start, so the time integration stays
-    energy-consistent and the energy the bond held is the fracture's) and is marked afterwards,
-    once, by its smaller-index end.
-
-    Parameters
-    ----------
-    fam_ptr, fam_nbr, fam_bond
-        Family lists from :func:`pdfem.pd.bonds.family.build_family`.
-    coef
-        Optional (N, 2) float64 scratch for the per-particle force coefficients.
-    m_now
-        Optional weighted volume of the intact bonds, as in
-        :func:`pdfem.pd.bonds.pair_loop.forces`.
-    others
-        As in :func:`pdfem.pd.bonds.pair_loop.forces`.
-
-    Returns
-    -------
-    int
-        Number of bonds broken in this call.
-    """
-    n = fam_ptr.shape[0] - 1
-    if coef is None:
-        coef = np.empty((n, 2))
-    if coef.shape != (n, 2):
-        raise ValueError(f"coef must be an (N, 2) float64 scratch array, got shape {coef.shape}")
-    aux = np.empty((n, 2))
-    force_coefficients(True, m, _INTACT if m_now is None else m_now, theta, K, mu, _NO_STRENGTH,
-                       coef, aux)
-    yc, signed, wt = c_contiguous(y, "y"), check_broken(broken, xi_len), check_weight(weight, xi_len)
-    _forces_family(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, vol,
-                   c_contiguous(coef, "coef"), wt, c_contiguous(f_out, "f_out"))
-    return int(_mark_breaks(yc, fam_ptr, fam_nbr, fam_bond, xi_len, broken, signed, wt, aux,
-                            nofail, stretch_limits(s0)))
-
-

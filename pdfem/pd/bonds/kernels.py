@@ -23,7 +23,7 @@ The kernels live in modules with one concept each:
 
 from __future__ import annotations
 
-from pdfem.pd.bonds.family_kernels import dilatation_family, forces_family
+from pdfem.pd.bonds.family import dilatation_family, forces_family
 from pdfem.pd.bonds.influence import bond_weights, isotropy_gain
 from pdfem.pd.integrate import verlet_drift, verlet_kick
 from pdfem.pd.bonds.pair_loop import (

@@ -60,8 +60,8 @@ if TYPE_CHECKING:
 _NO_R = np.zeros(0)  # stands for "no bond-length buffer" (read-only by convention)
 _NO_REST = np.zeros(0, dtype=np.float32)  # "broken bonds never push" (read-only by convention)
 _ALL_ROWS = np.zeros(0, dtype=np.uint8)  # "every row's crushing energy counts" (read-only)
-_NO_STRENGTH = np.zeros(0)  # "every particle's strength factor is 1" (read-only by convention)
-_INTACT = np.zeros(0)  # "m' = m: no broken bond" (read-only by convention)
+UNIT_STRENGTH = np.zeros(0)  # "every particle's strength factor is 1" (read-only by convention)
+INTACT = np.zeros(0)  # "m' = m: no broken bond" (read-only by convention)
 
 
 def rest_arg(rest: np.ndarray | None, per_pair: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -319,8 +319,8 @@ def forces(
     ws = workspace_for(ws, row_ptr, nbr)
     rest, granular = rest_arg(rest, nbr)
     owned = _ALL_ROWS if owned is None else owned
-    force_coefficients(ws.parallel_particles, m, _INTACT if m_now is None else m_now, theta, K,
-                       mu, _NO_STRENGTH if strength is None else strength, ws.coef, ws.aux)
+    force_coefficients(ws.parallel_particles, m, INTACT if m_now is None else m_now, theta, K,
+                       mu, UNIT_STRENGTH if strength is None else strength, ws.coef, ws.aux)
     nb = _force_pass(ws, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
                      check_broken(broken, nbr), vol, check_weight(weight, nbr), s0, nofail,
                      c_contiguous(f_out, "f_out"), _NO_R, False, rest, granular, crush_yield,
@@ -383,8 +383,8 @@ def dilatation_and_forces(
                      m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
     if between is not None:
         between(theta_out)
-    force_coefficients(ws.parallel_particles, m, _INTACT if m_now is None else m_now, theta_out,
-                       K, mu, _NO_STRENGTH if strength is None else strength, ws.coef, ws.aux)
+    force_coefficients(ws.parallel_particles, m, INTACT if m_now is None else m_now, theta_out,
+                       K, mu, UNIT_STRENGTH if strength is None else strength, ws.coef, ws.aux)
     nb = _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail,
                      c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular, crush_yield, owned,
                      shear)

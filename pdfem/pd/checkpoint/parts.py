@@ -31,7 +31,7 @@ two energy counters (J)."""
 
 
 @dataclass
-class Layout:
+class PartLayout:
     """Which particles and bonds a rank holds of a body.
 
     Attributes
@@ -61,13 +61,7 @@ class Layout:
         return self.gid[i_of], self.gid[np.asarray(self.nbr, dtype=np.int64)]
 
 
-def whole_layout(body) -> Layout:
-    """The :class:`Layout` of a body held whole by one rank (every particle and bond)."""
-    return Layout(np.arange(body.n, dtype=np.int64), np.ones(body.n, dtype=bool),
-                  np.ones(len(body.nbr), dtype=bool), body.row_ptr, body.nbr, int(body.n))
-
-
-def owned_part(layout: Layout, state: dict) -> tuple[dict, dict, dict]:
+def owned_part(layout: PartLayout, state: dict) -> tuple[dict, dict, dict]:
     """This rank's part of a body's local state (``checkpoint_state()`` of its local body).
 
     Returns
@@ -99,14 +93,14 @@ class PartPicker:
     Parameters
     ----------
     layout
-        The rank's :class:`Layout` of the body.
+        The rank's :class:`PartLayout` of the body.
     template
         The local body's own ``checkpoint_state()`` (a copy): its arrays are filled in place
         and returned by :meth:`state` (bonds start fresh: ``broken`` 0, ``rest`` NaN, ``slip``
         0), so a restore needs no second copy of the local state.
     """
 
-    def __init__(self, layout: Layout, template: dict) -> None:
+    def __init__(self, layout: PartLayout, template: dict) -> None:
         self.layout = layout
         self.arrays = {k: template[k] for k in PARTICLE_KEYS if k in template}
         self.found = np.zeros(len(layout.gid), dtype=np.int64)

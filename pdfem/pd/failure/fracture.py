@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from pdfem.pd.failure.fracture_kernels import first_rows, released_energy, seen_bits
-from pdfem.pd.bonds.pair_loop import check_broken
+from pdfem.pd.bonds.pair_loop import SIGNED
 
 _ALL = np.zeros(0, dtype=np.bool_)  # "every particle is owned" (read-only by convention)
 
@@ -48,28 +48,29 @@ class FractureLedger:
 
     def prepare(self, body) -> None:
         """Before a force pass: take the current broken bonds as accounted, if forgotten."""
+        b = body.bonds
         if self._seen is None:
-            br = body._broken_arg()
-            self._seen = seen_bits(body.row_ptr, body.nbr, br, check_broken(br, body.nbr),
-                                   body.weight)
+            self._seen = seen_bits(b.row_ptr, b.nbr, SIGNED, True, b.weight)
         if self._first is None:
-            self._first = first_rows(body.row_ptr, body.nbr)
+            self._first = first_rows(b.row_ptr, b.nbr)
 
-    def released(self, body, owned: np.ndarray = _ALL) -> float:
+    def released(self, body, owned: np.ndarray = _ALL) -> tuple[float, int]:
         """Energy (J) released by the bonds the last force pass broke, over the ``owned``
-        particles ((n,) bool; default all); those bonds count as accounted from now on.
+        particles ((n,) bool; default all), and how many of those bonds lie in owned rows
+        (each bond of a split body counted on one rank); they count as accounted from now on.
 
-        ``body`` is an :class:`~pdfem.pd.body.IceBody` (or a rank's local part of one) right
-        after its force pass: the pair loop's chunks with broken bonds are those with a
-        non-zero count in its workspace; after the full-family loop every row is searched.
+        ``body`` is an :class:`~pdfem.pd.body.IceBody` right after its force pass: the pair
+        loop's chunks with broken bonds are those with a non-zero count in its workspace;
+        after the full-family loop every row is searched.
         """
-        br = body._broken_arg()
-        if body.loop == "pairs":
-            cb, counts = body._ws.chunk_ptr, body._ws.counts
+        b = body.bonds
+        if body.family is None:
+            cb, counts = body.workspace.chunk_ptr, body.workspace.counts
         else:
             cb, counts = np.array([0, body.n], dtype=np.int64), np.ones(1, dtype=np.int64)
         mat = body.material
-        return float(released_energy(body.y, body.row_ptr, body.nbr, body.xi_len, br,
-                                     check_broken(br, body.nbr), body.weight, body.vol, body.m,
-                                     float(mat.K), float(mat.mu), owned, self._seen,
-                                     self._first, cb, counts))
+        energy, counted = released_energy(body.y, b.row_ptr, b.nbr, b.xi_len, SIGNED, True,
+                                          b.weight, body.vol, body.m, float(mat.K),
+                                          float(mat.mu), owned, self._seen, self._first, cb,
+                                          counts)
+        return float(energy), int(counted)

@@ -66,10 +66,13 @@ def seen_bits(row_ptr, nbr, broken, signed, wt):
 
 
 @numba.njit(**_JIT)
-def _mark_hits(row_ptr, nbr, broken, signed, wt, seen, cb, counts, hit):
+def _mark_hits(row_ptr, nbr, broken, signed, wt, seen, cb, counts, owned, hit):
     """Mark the ends of the new broken bonds in the rows of chunks with counts > 0; returns
-    (number of new bonds, smallest and largest hit particle)."""
+    (number of new bonds, of them those in ``owned`` rows (all if size 0), smallest and
+    largest hit particle)."""
     new = 0
+    counted = 0
+    all_owned = owned.shape[0] == 0
     lo = hit.shape[0]
     hi = -1
     for c in range(cb.shape[0] - 1):
@@ -82,9 +85,11 @@ def _mark_hits(row_ptr, nbr, broken, signed, wt, seen, cb, counts, hit):
                     hit[i] = 1
                     hit[j] = 1
                     new += 1
+                    if all_owned or owned[i]:
+                        counted += 1
                     lo = min(lo, i)
                     hi = max(hi, j)
-    return new, lo, hi
+    return new, counted, lo, hi
 
 
 @numba.njit(**_JIT)
@@ -144,12 +149,14 @@ def _hit_sums(y2, row_ptr, nbr, xi_len, broken, signed, wt, vol, seen, hit, r0, 
 def released_energy(y, row_ptr, nbr, xi_len, broken, signed, wt, vol, m, K, mu, owned, seen,
                     first_row, cb, counts):
     """Energy (J) released by the bonds that broke since ``seen`` was last updated, over the
-    hit particles that are ``owned`` (size 0: all); marks those bonds in ``seen``."""
+    hit particles that are ``owned`` (size 0: all), and the number of those bonds in ``owned``
+    rows (each bond of a split body counted on one rank); marks the bonds in ``seen``."""
     n = row_ptr.shape[0] - 1
     hit = np.zeros(n, dtype=np.uint8)
-    new, lo, hi = _mark_hits(row_ptr, nbr, broken, signed, wt, seen, cb, counts, hit)
+    new, counted, lo, hi = _mark_hits(row_ptr, nbr, broken, signed, wt, seen, cb, counts, owned,
+                                      hit)
     if new == 0:
-        return 0.0
+        return 0.0, 0
     r0 = lo
     for p in range(lo, hi + 1):
         if hit[p] != 0:
@@ -173,4 +180,4 @@ def released_energy(y, row_ptr, nbr, xi_len, broken, signed, wt, vol, m, K, mu, 
             after = energy_density(K, mu, theta[p, 1], acc[p, 1], m[p])
             total += (before - after) * vol[p]
     _mark_seen(row_ptr, broken, signed, wt, seen, cb, counts)
-    return total
+    return total, counted

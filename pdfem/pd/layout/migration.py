@@ -1,6 +1,6 @@
 """Migration of a split ice body's particles and bonds to new owner ranks (load balance).
 
-:meth:`pdfem.pd.layout.rebalance.Rebalancing.rebalance` decides new owners
+:func:`pdfem.pd.layout.rebalance.rebalance` decides new owners
 (:func:`pdfem.parallel.rcb.rcb_owners` on the current positions, weighted by bond counts) and
 calls :func:`migrate`, which moves everything a rank holds per particle and per bond:
 
@@ -30,6 +30,7 @@ import dataclasses
 import numba
 import numpy as np
 
+from pdfem.pd.bonds.data import Bonds
 from pdfem.pd.failure.crushed_shear import CrushedShear
 
 
@@ -143,10 +144,11 @@ def migrate(body, owned: np.ndarray, owner: np.ndarray, comm, carry: dict | None
 
     Returns
     -------
-    local, owned, new_owner, carried
-        The new local body (no workspace, ledger or intact volume yet: the caller sets them
-        up), which particles of it this rank owns, every local particle's owner, and the
-        ``carry`` arrays in the new local order ((n_new, k) each).
+    parts, owned, new_owner, carried
+        The new local arrays (``x0``, ``vol``, ``m``, ``bonds``, ``nofail``, ``fixed``, the
+        ``state`` keywords of :class:`~pdfem.pd.body.IceBody` and the global numbers ``gid``),
+        which particles this rank owns, every local particle's owner, and the ``carry`` arrays
+        in the new local order ((n_new, k) each).
     """
     fcols, icols = _particle_columns(body, owner, dict(carry or {}))
     pf = np.concatenate([v for _, v in fcols], axis=1)
@@ -215,26 +217,26 @@ def _assemble(body, fcols, icols, pf, pi, bf, bi, rank: int):
                                                                           == 1)))
                    for k, con in enumerate(body.constraints)]
     c = 2
-    rest = shear = None
+    state = {"y": vec("y"), "v": vec("v"), "f": vec("f"), "theta": sca("theta"),
+             "constraints": constraints, "time": body.time, "gravity": body.gravity}
     if body.rest is not None:
-        rest = np.ascontiguousarray(bf[:, c], dtype=np.float32)
+        state["rest"] = np.ascontiguousarray(bf[:, c], dtype=np.float32)
         c += 1
     if body.shear is not None:
-        shear = CrushedShear(np.ascontiguousarray(bf[:, c:c + 3], dtype=np.float32),
-                             body.shear.friction, body.shear.stiffness_ratio)
+        state["shear"] = CrushedShear(np.ascontiguousarray(bf[:, c:c + 3], dtype=np.float32),
+                                      body.shear.friction, body.shear.stiffness_ratio)
     rates = body.rates
     if rates is not None:
         rates.theta = sca("rate_theta") if "rate_theta" in fields else None
         rates.factors = sca("rate_factors") if "rate_factors" in fields else None
-    local = dataclasses.replace(
-        body, x0=vec("x0"), y=vec("y"), v=vec("v"), f=vec("f"), vol=sca("vol"), m=sca("m"),
-        theta=sca("theta"), nofail=sca("nofail").astype(np.uint8),
-        fixed=sca("fixed").astype(bool), row_ptr=row_ptr, nbr=lj,
-        xi_len=np.ascontiguousarray(bf[:, 0]),
-        weight=np.ascontiguousarray(bf[:, 1], dtype=np.float32), flags=None,
-        constraints=constraints, rest=rest, shear=shear, rates=rates, gid=gid)
+        state["rates"] = rates
+    bonds = Bonds(row_ptr, lj, np.ascontiguousarray(bf[:, 0]),
+                  np.ascontiguousarray(bf[:, 1], dtype=np.float32))
+    parts = {"x0": vec("x0"), "vol": sca("vol"), "m": sca("m"), "bonds": bonds,
+             "nofail": sca("nofail").astype(np.uint8), "fixed": sca("fixed").astype(bool),
+             "state": state, "gid": gid}
     carried = {k[len("carry:"):]: vec(k) for k in fields if k.startswith("carry:")}
-    return local, owned, new_owner, carried
+    return parts, owned, new_owner, carried
 
 
 def halo_lists(row_ptr: np.ndarray, nbr: np.ndarray, owned: np.ndarray,

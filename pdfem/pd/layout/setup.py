@@ -1,6 +1,6 @@
 """Distributed set-up of a lattice-filled ice body: each rank builds only its part.
 
-The global set-up (:class:`pdfem.pd.layout.halo.DistributedIce` from a whole
+The global set-up (:func:`pdfem.pd.layout.split.split_body` of a whole
 :class:`~pdfem.pd.body.IceBody`) builds the whole body on every rank and keeps its part, so
 memory per rank does not fall with the rank count. Here each rank, with no global particle or
 bond array:
@@ -27,8 +27,6 @@ differ and sums agree to round-off, as for the global set-up). Units: SI.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numba
 import numpy as np
 
@@ -37,9 +35,10 @@ from pdfem.parallel.box_partition import BoxPartition, choose_box_partition
 from pdfem.pd.bonds import kernels
 from pdfem.pd.body import IceBody
 from pdfem.pd.bonds.geometry import bond_lengths
-from pdfem.pd.layout.halo import HaloPlan, DistributedIce
+from pdfem.pd.bonds.data import Bonds
+from pdfem.pd.layout.halo import HaloLayout, HaloPlan
 from pdfem.pd.layout.census import cell_offsets, halo_planes, lattice_census, plane_mask
-from pdfem.pd.layout.surface import distributed_surface_weights, halo_exchange
+from pdfem.pd.layout.surface import distributed_surface_weights
 from pdfem.pd.bonds.influence import bond_weights, isotropy_gain
 from pdfem.pd.bonds.search import cell_pairs
 
@@ -170,11 +169,9 @@ def distributed_body(name: str, shape, material, dx: float, delta: float, comm, 
 
     Returns
     -------
-    local
-        The local :class:`~pdfem.pd.body.IceBody` (owned and halo particles, ``gid`` their
-        global numbers), at rest, constraints still to add.
-    plan
-        Its :class:`~pdfem.pd.layout.halo.HaloPlan`.
+    body
+        The rank's :class:`~pdfem.pd.body.IceBody` (owned and halo particles, a
+        :class:`~pdfem.pd.layout.halo.HaloLayout`), at rest, regions still to add.
     census
         The :class:`~pdfem.pd.layout.census.LatticeCensus` (``census.n`` particles).
     part
@@ -192,32 +189,27 @@ def distributed_body(name: str, shape, material, dx: float, delta: float, comm, 
     plan = local_plan(gid, owned, owner, row_ptr, nbr, comm.rank)
     n = len(gid)
     vol = np.full(n, dx ** 3)
-    body = IceBody(name=name, x0=x, vol=vol, material=material, dx=float(dx),
-                   delta=float(delta), row_ptr=row_ptr, nbr=nbr,
-                   xi_len=bond_lengths(x, row_ptr, nbr), nofail=np.zeros(n, dtype=np.uint8),
-                   loop=loop, failure=failure, gid=gid)
-    body.y = x.copy()
-    body.v = np.zeros_like(x)
-    body.f = np.zeros_like(x)
-    body.theta = np.zeros(n)
-    body.fixed = np.zeros(n, dtype=bool)
-    body.influence_gain = gain
-    body.weight = bond_weights(x, row_ptr, nbr, body.xi_len, body.delta, body.dx, gain)
-    body._ws = kernels.PairWorkspace(row_ptr, nbr)
-    distributed_surface_weights(x, row_ptr, nbr, body.xi_len, body.weight, vol,
-                                lambda v: halo_exchange(comm, plan, v))
-    body.m = kernels.weighted_volume(row_ptr, nbr, body.xi_len, body.weight, vol, body._ws)
-    halo_exchange(comm, plan, body.m)
-    return body, plan, census, part
+    xi_len = bond_lengths(x, row_ptr, nbr)
+    weight = bond_weights(x, row_ptr, nbr, xi_len, float(delta), float(dx), gain)
+    layout = HaloLayout(comm, plan, census.n, partition=f"{part.name} (distributed set-up)")
+    distributed_surface_weights(x, row_ptr, nbr, xi_len, weight, vol, layout.exchange)
+    m = kernels.weighted_volume(row_ptr, nbr, xi_len, weight, vol,
+                                kernels.PairWorkspace(row_ptr, nbr, keep_bond_length=False))
+    layout.exchange(m)
+    layout.exchange_seconds = 0.0
+    body = IceBody(name, x, vol, material, dx, delta, Bonds(row_ptr, nbr, xi_len, weight), m,
+                   layout=layout, loop=loop, failure=failure, influence_gain=gain)
+    return body, census, part
 
 
-def distributed_ice(local: IceBody, plan: HaloPlan, comm, n_global: int,
-                    partition: str = "") -> DistributedIce:
-    """Wrap a local body from :func:`distributed_body` (constraints, cracks and regions added)
-    as a :class:`~pdfem.pd.layout.halo.DistributedIce`; its constraints keep only owned
-    particles, as the global set-up's do."""
-    local.constraints = [dataclasses.replace(c, index=c.index[plan.owned[c.index]])
-                         for c in local.constraints]
-    ice = DistributedIce.from_local(local, plan, comm, n_global)
-    ice.partition_name = partition  # for the start-up report
-    return ice
+def lattice_body(name: str, shape, material, dx: float, delta: float, comm, *,
+                 loop: str = "pairs", failure=None):
+    """The ice body filling ``shape`` with a cubic lattice of spacing ``dx`` (isotropic weights,
+    surface correction), as this process holds it: the whole body on one process
+    (:meth:`IceBody.from_shape <pdfem.pd.body.IceBody.from_shape>`), else the rank's part from
+    the distributed set-up (:func:`distributed_body`). At rest, regions still to add.
+    Collective."""
+    if comm.size == 1:
+        return IceBody.from_shape(name, shape, material, dx, delta, loop=loop, failure=failure)
+    return distributed_body(name, shape, material, dx, delta, comm, loop=loop,
+                            failure=failure)[0]

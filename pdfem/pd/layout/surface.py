@@ -1,5 +1,4 @@
-"""The surface correction of the bond weights on a rank's part of a body, and the halo exchange
-of the distributed set-up.
+"""The surface correction of the bond weights on a rank's part of a body.
 
 The correction (:mod:`pdfem.pd.bonds.surface`) iterates per-particle tensors C_i from the second
 moments of whole families. A rank has the whole family of each owned particle but not of its
@@ -11,8 +10,6 @@ the global set-up's bit for bit. Dimensionless weights; positions in m, volumes 
 """
 
 from __future__ import annotations
-
-import time
 
 import numba
 import numpy as np
@@ -60,14 +57,3 @@ def distributed_surface_weights(x, row_ptr, nbr, xi_len, weight, vol, exchange,
         if not last:
             exchange(C)
     return weight
-
-
-def halo_exchange(comm, plan, values: np.ndarray) -> float:
-    """Overwrite the halo entries of ``values`` with their owners' values (``plan`` a
-    :class:`~pdfem.pd.layout.halo.HaloPlan`); returns the seconds it took."""
-    t0 = time.perf_counter()
-    sends = {q: values[idx] for q, idx in plan.send.items()}
-    recvs = {q: ((len(idx),) + values.shape[1:], values.dtype) for q, idx in plan.recv.items()}
-    for q, got in comm.exchange(sends, recvs).items():
-        values[plan.recv[q]] = got
-    return time.perf_counter() - t0

@@ -1,0 +1,94 @@
+"""Sums over particles that do not depend on how the particles are spread over ranks or threads.
+
+A floating-point sum depends on the order of its terms, so a total taken as per-rank partial
+sums added over the ranks (or per-thread chunks) changes in its last bits with the partition.
+Here each process reduces its values to an exact expansion (Shewchuk 1997, "Adaptive
+precision floating-point arithmetic and fast robust geometric predicates", Discrete Comput.
+Geom. 18: the grow-expansion that Python's ``math.fsum`` uses): a few non-overlapping doubles
+whose sum is exactly the sum of the values. The expansions of all ranks are gathered and
+rounded once (:func:`math.fsum`), so the result is the correctly rounded sum of all the values:
+the same bits on 1 and N ranks, for any thread count and any order. Non-finite values fall
+back to an ordinary sum (the result is then inf or nan either way).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+MAX_PARTIALS = 64
+"""Room for the partials of one column: an expansion of finite doubles never needs more than
+about 40 (the exponent range over the mantissa width)."""
+
+
+@numba.njit(cache=True)
+def expansions(values, rows, every, out):
+    """Exact expansions of the column sums of ``values`` (n, k) over ``rows`` (indices; all
+    rows if ``every``) into ``out`` (k, MAX_PARTIALS); returns the (k,) partial counts, or -1
+    for a column with a non-finite value."""
+    k = values.shape[1]
+    count = np.zeros(k, dtype=np.int64)
+    n = values.shape[0] if every else rows.shape[0]
+    for col in range(k):
+        m = 0
+        for t in range(n):
+            x = values[t, col] if every else values[rows[t], col]
+            if not np.isfinite(x):
+                m = -1
+                break
+            i = 0
+            for q in range(m):
+                y = out[col, q]
+                if abs(x) < abs(y):
+                    x, y = y, x
+                hi = x + y
+                lo = y - (hi - x)
+                if lo != 0.0:
+                    out[col, i] = lo
+                    i += 1
+                x = hi
+            out[col, i] = x
+            m = i + 1
+        count[col] = m
+    return count
+
+
+def local_expansion(values: np.ndarray, rows: np.ndarray | None = None) -> list:
+    """This process's part of an exact sum: per column of ``values`` ((n,) or (n, k)) over
+    ``rows`` (default all), its list of partials, or None where a value is not finite."""
+    a = np.asarray(values, dtype=np.float64)
+    a2 = a.reshape(a.shape[0], -1) if a.ndim != 1 else a[:, None]
+    idx = np.zeros(0, dtype=np.int64) if rows is None else np.asarray(rows, dtype=np.int64)
+    out = np.empty((a2.shape[1], MAX_PARTIALS))
+    count = expansions(np.ascontiguousarray(a2), idx, rows is None, out)
+    return [None if c < 0 else out[col, :c].tolist() for col, c in enumerate(count)]
+
+
+def round_expansions(parts: list[list], plain: np.ndarray | float) -> np.ndarray:
+    """The correctly rounded totals of the per-process expansions ``parts`` (one list per
+    process, one entry per column); a column with a non-finite value anywhere takes ``plain``
+    (an ordinary sum of the same values)."""
+    plain = np.atleast_1d(np.asarray(plain, dtype=np.float64))
+    out = np.empty(len(parts[0]))
+    for col in range(len(out)):
+        cols = [p[col] for p in parts]
+        out[col] = plain[col] if any(c is None for c in cols) else math.fsum(
+            x for c in cols for x in c)
+    return out
+
+
+def exact_sum(values: np.ndarray, comm, rows: np.ndarray | None = None):
+    """The correctly rounded sum over all ranks of ``values`` ((n,) -> float, (n, k) -> (k,)
+    array) over ``rows`` (default every row; collective under MPI)."""
+    mine = local_expansion(values, rows)
+    parts = comm.allgather(mine)
+    if any(c is None for p in parts for c in p):
+        a = np.asarray(values, dtype=np.float64)
+        a = a if rows is None else a[np.asarray(rows, dtype=np.int64)]
+        plain = comm.allreduce_sum(a.sum(axis=0))
+    else:
+        plain = 0.0
+    total = round_expansions(parts, plain)
+    return float(total[0]) if np.ndim(values) == 1 else total.reshape(np.shape(values)[1:])
