@@ -30,8 +30,8 @@ EXACT = textwrap.dedent('''
     import numpy as np
     from pdfem.parallel.comm import world
     from pdfem.pd.body import IceBody
-    from pdfem.pd.layout.halo import DistributedIce
-    from pdfem.pd.layout.setup import distributed_body, distributed_ice
+    from pdfem.pd.layout.setup import distributed_body
+    from pdfem.pd.layout.split import split_body
     from pdfem.pd.materials.lps import IceMaterial
     from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
     from pdfem.run.parallel import warm_before_ranks
@@ -44,10 +44,11 @@ EXACT = textwrap.dedent('''
 
     def same(name, shape):
         glob = IceBody.from_shape(name, shape, mat, dx, delta)
-        local, plan, census, part = distributed_body(name, shape, mat, dx, delta, comm)
+        local, census, part = distributed_body(name, shape, mat, dx, delta, comm)
+        plan = local.layout.plan
         ijk = np.rint((glob.x0 - shape.bounds()[0]) / dx - 0.5).astype(np.int64)
-        ref = DistributedIce(glob, part.owner(ijk), comm)
-        r, p = ref.body, ref.plan
+        r = split_body(glob, part.owner(ijk), comm)
+        p = r.layout.plan
         checks = [census.n == glob.n, np.array_equal(plan.local, p.local),
                   np.array_equal(plan.owned, p.owned), np.array_equal(local.gid, r.gid)]
         for key in ("x0", "row_ptr", "nbr", "xi_len", "weight", "m", "vol"):
@@ -83,9 +84,8 @@ EXACT = textwrap.dedent('''
 
     ref = IceBody.from_shape("bar", bar, mat, d, 3.015 * d)
     regions(ref)
-    local, plan, census, part = distributed_body("bar", bar, mat, d, 3.015 * d, comm)
-    regions(local)
-    dist = distributed_ice(local, plan, comm, census.n, part.name)
+    dist, census, part = distributed_body("bar", bar, mat, d, 3.015 * d, comm)
+    regions(dist)
     dt = 0.8 * ref.stable_time_step()
     same_dt = dist.stable_time_step() == ref.stable_time_step()
     ref.start()
@@ -106,16 +106,15 @@ EXACT = textwrap.dedent('''
                      for k in ("y", "v", "f", "theta"))
             ok = ok and np.array_equal(state["broken"][mine], whole["broken"][at[mine]])
             same_state = comm.allreduce_sum(int(not ok)) == 0
-    y = dist.gather(dist.body.y)
+    y = dist.gather(dist.y)
     dmg = dist.gather(dist.damage())
     # restart from the checkpoint on a freshly set-up body: the same steps, bit for bit
-    local, plan, census, part = distributed_body("bar", bar, mat, d, 3.015 * d, comm)
-    regions(local)
-    again = distributed_ice(local, plan, comm, census.n, part.name)
+    again, census, part = distributed_body("bar", bar, mat, d, 3.015 * d, comm)
+    regions(again)
     again.restore_state(state)
     for _ in range(150):
         again.step(dt)
-    y2 = again.gather(again.body.y)
+    y2 = again.gather(again.y)
     if comm.rank == 0:
         err = np.abs(y - ref.y).max() / np.abs(ref.y - ref.x0).max()
         print(f"RUN ranks={comm.size} broken={broken} ref={broken_ref} err={err:.3e} "
@@ -149,7 +148,8 @@ MEMORY = textwrap.dedent('''
         plan = HaloPlan(None, np.ones(local.n, dtype=bool), None, {}, {})
         census = local
     else:
-        local, plan, census, part = distributed_body("block", block, mat, dx, 3.015 * dx, comm)
+        local, census, part = distributed_body("block", block, mat, dx, 3.015 * dx, comm)
+        plan = local.layout.plan
     grown = hwm() - before
     bonds = comm.allreduce_sum(np.int64(plan.owned[np.repeat(np.arange(local.n),
                                                              np.diff(local.row_ptr))].sum()))

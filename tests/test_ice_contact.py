@@ -17,6 +17,7 @@ import pytest
 from pdfem.forces.short_range import (DENSE_CELLS_PER_PARTICLE, ShortRangeContact,
                                         short_range_constant)
 from pdfem.pd.body import IceBody
+from pdfem.pd.layout.base import WholeLayout
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 
@@ -28,11 +29,10 @@ SOFT = IceMaterial(density=RHO, youngs_modulus=1.0e9, poisson_ratio=0.25)
 def cloud_body(x0, y, dx, delta, material, vol=None):
     """A stand-in with the attributes the contact reads (no bonds needed): a whole body."""
     n = x0.shape[0]
-    body = SimpleNamespace(x0=np.ascontiguousarray(x0), y=np.ascontiguousarray(y),
+    return SimpleNamespace(x0=np.ascontiguousarray(x0), y=np.ascontiguousarray(y),
                            vol=np.full(n, dx ** 3) if vol is None else vol, dx=dx, delta=delta,
-                           material=material, f=np.zeros((n, 3)), distributed=False)
-    body.global_body = body
-    return body
+                           material=material, f=np.zeros((n, 3)), layout=WholeLayout(n),
+                           n_global=n)
 
 
 def brute_force(bodies, factor=15.0):
@@ -270,20 +270,19 @@ def test_bad_input_is_refused():
 
 
 def test_split_bodies_on_one_rank_give_the_same_forces():
-    """Bodies split over one 'rank' (DistributedIce, serial communicator) take the distributed
-    search: the same forces, pair count and potential as the plain bodies, bit for bit; a NaN
-    position is refused; plain and split bodies cannot be mixed."""
+    """Bodies split over one 'rank' (a halo layout, serial communicator): the same forces,
+    pair count and potential as the whole bodies, bit for bit; a NaN position is refused."""
     from pdfem.parallel.comm import SerialComm
-    from pdfem.pd.layout.halo import DistributedIce
+    from pdfem.pd.layout.split import split_body
 
     dx = 0.01
     plain = [IceBody.from_shape(n, Box(lo, hi), ICE, dx, 3.015 * dx)
              for n, lo, hi in (("a", (0, 0, 0), (0.05, 0.06, 0.04)),
                                ("b", (0.045, 0.005, 0), (0.1, 0.065, 0.04)))]
-    split = [DistributedIce(IceBody.from_shape(b.name, Box(b.x0.min(0) - dx / 2,
-                                                           b.x0.max(0) + dx / 2), ICE, dx,
-                                               3.015 * dx), np.zeros(b.n, dtype=np.int64),
-                            SerialComm()) for b in plain]
+    split = [split_body(IceBody.from_shape(b.name, Box(b.x0.min(0) - dx / 2,
+                                                       b.x0.max(0) + dx / 2), ICE, dx,
+                                           3.015 * dx), np.zeros(b.n, dtype=np.int64),
+                        SerialComm()) for b in plain]
     rng = np.random.default_rng(3)
     for p, s in zip(plain, split):
         assert np.array_equal(p.x0, s.x0)
@@ -297,5 +296,3 @@ def test_split_bodies_on_one_rank_give_the_same_forces():
     split[1].y[2, 0] = np.inf
     with pytest.raises(FloatingPointError, match="not finite"):
         dist.add_forces()
-    with pytest.raises(ValueError, match="all ice bodies"):
-        ShortRangeContact([plain[0], split[1]])

@@ -133,26 +133,23 @@ def test_every_particle_force_kind_has_an_energy_column():
 
 def test_whole_ice_body_has_the_distributed_interface():
     body = _ice()
-    assert isinstance(body, IceParticles) and not body.distributed
+    assert isinstance(body, IceParticles) and body.n_global == body.n
     assert body.owned.all() and len(body.owned) == body.n
-    assert body.global_body is body
     index, x0, vol = body.owned_reference()
     np.testing.assert_array_equal(index, np.arange(body.n))
-    assert x0 is body.x0 and vol is body.vol
+    assert np.array_equal(x0, body.x0) and np.array_equal(vol, body.vol)
     assert set(body.frame_fields()) == {"u", "v", "damage"}
-    assert body.owned_sum(body.vol) == body.vol.sum()
+    assert body.owned_sum(body.vol) == math.fsum(body.vol)  # correctly rounded
 
 
-def test_broken_flags_kept_as_signed_weights_or_a_flag_array():
-    import dataclasses
+def test_broken_flags_kept_as_signed_weights():
     body = _ice()
     flags = np.zeros(body.n_bonds, dtype=np.uint8)
     flags[:3] = 1
     body.broken = flags
-    assert body.broken.sum() == 3 and body.flags is None and (body.weight < 0).sum() == 3
-    other = dataclasses.replace(body, flags=flags.copy())
-    other.broken = np.zeros_like(flags)
-    assert other.broken.sum() == 0 and other.flags is not None
+    assert body.broken.sum() == 3 and (body.weight < 0).sum() == 3
+    body.broken = np.zeros_like(flags)
+    assert body.broken.sum() == 0 and (body.weight > 0).all()
 
 
 def test_no_output_takes_every_writer_call_explicitly(tmp_path):

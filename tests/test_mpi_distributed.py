@@ -19,7 +19,7 @@ import pytest
 SCRIPT = textwrap.dedent('''
     import numpy as np
     from pdfem.parallel.comm import world
-    from pdfem.pd.layout.halo import DistributedIce
+    from pdfem.pd.layout.split import split_body
     from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
     from pdfem.pd.materials.lps import IceMaterial
@@ -40,14 +40,14 @@ SCRIPT = textwrap.dedent('''
     ref = build()
     dt = 0.8 * ref.stable_time_step()
     owner, stats = choose_partition(ref.x0, ref.row_ptr, ref.nbr, comm.size)
-    dist = DistributedIce(build(), owner, comm)
+    dist = split_body(build(), owner, comm)
     ref.start()
     dist.start()
     broken_ref = broken = 0
     for _ in range(steps):
         broken_ref += ref.step(dt)
         broken += dist.step(dt)
-    y = dist.gather(dist.body.y)
+    y = dist.gather(dist.y)
     d = dist.gather(dist.damage())
     if comm.rank == 0:
         scale = np.abs(ref.y - ref.x0).max()
@@ -64,7 +64,7 @@ COUPLED = textwrap.dedent('''
     from pdfem.coupling.coupler import ContactPair, Coupler
     from pdfem.fem.rigid import RigidBody
     from pdfem.parallel.comm import world
-    from pdfem.pd.layout.halo import DistributedIce
+    from pdfem.pd.layout.split import split_body
     from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
     from pdfem.pd.materials.lps import IceMaterial
@@ -97,9 +97,9 @@ COUPLED = textwrap.dedent('''
     ref = build()
     f_ref = run(ref, None)
     owner, _ = choose_partition(ref.x0, ref.row_ptr, ref.nbr, comm.size)
-    dist = DistributedIce(build(), owner, comm)
+    dist = split_body(build(), owner, comm)
     f = run(dist, comm)
-    y = dist.gather(dist.body.y)
+    y = dist.gather(dist.y)
     d = dist.gather(dist.damage())
     if comm.rank == 0:
         err_y = np.abs(y - ref.y).max() / np.abs(ref.y - ref.x0).max()

@@ -47,8 +47,8 @@ import time
 import numpy as np
 from pdfem.parallel.comm import world
 from pdfem.parallel.rcb import rcb_owners
-from pdfem.pd.layout.halo import DistributedIce
-from pdfem.pd.layout.setup import distributed_body, distributed_ice
+from pdfem.pd.layout.split import split_body
+from pdfem.pd.layout.setup import distributed_body
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.pd.failure.ice import IceFailure
@@ -72,7 +72,7 @@ def bonds_in_serial_order(dist, state, keys):
     return {k: cols[2 + n][order] for n, k in enumerate(keys)}
 
 def report(tag, dist, ref, imb):
-    y, d = dist.gather(dist.body.y), dist.gather(dist.damage())
+    y, d = dist.gather(dist.y), dist.gather(dist.damage())
     keys = ["broken"] + (["rest", "slip"] if ref.rest is not None else [])
     st = bonds_in_serial_order(dist, dist.checkpoint_state(), keys)
     R, Rr = dist.reactions(), ref.reactions()
@@ -101,7 +101,7 @@ ref = regions(IceBody.from_shape("bar", bar, mat, dx, 3.015 * dx))
 dt = 0.8 * ref.stable_time_step()
 x = ref.x0[:, 0]
 owner = np.minimum((x / x.max() * comm.size * 0.7).astype(np.int32), comm.size - 1)
-dist = DistributedIce(regions(IceBody.from_shape("bar", bar, mat, dx, 3.015 * dx)), owner, comm)
+dist = split_body(regions(IceBody.from_shape("bar", bar, mat, dx, 3.015 * dx)), owner, comm)
 ref.start(); dist.start()
 imb = [dist.imbalance()]
 for s in range(80):
@@ -123,9 +123,8 @@ def squeeze(b):
     b.fix(z > 5 * dx)
     return b
 ref = squeeze(IceBody.from_shape("blk", blk, ice, dx, 3.015 * dx, failure=law))
-local, plan, census, part = distributed_body("blk", blk, ice, dx, 3.015 * dx, comm, failure=law)
-squeeze(local)
-dist = distributed_ice(local, plan, comm, census.n)
+dist, census, part = distributed_body("blk", blk, ice, dx, 3.015 * dx, comm, failure=law)
+squeeze(dist)
 dt = 0.8 * ref.stable_time_step()
 ref.start(); dist.start()
 imb = [dist.imbalance()]
@@ -172,7 +171,7 @@ ref = IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2)
 cp_ref, pair_ref = coupled(ref, None)
 y0 = ref.x0[:, 1]
 owner = np.minimum((y0 / y0.max() * comm.size * 0.6).astype(np.int32), comm.size - 1)
-dist = DistributedIce(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
+dist = split_body(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
 cp, pair = coupled(dist, comm)
 run = SimpleNamespace(rebalance_every=20, rebalance_imbalance=0.0)
 setup = SimpleNamespace(bodies=[dist], coupler=cp)
@@ -185,7 +184,7 @@ for step in range(1, 61):
     balance.after_step(step, step * cp.dt, rows)
     f.append(pair.force.copy())
     f_ref.append(pair_ref.force.copy())
-y, dmg = dist.gather(dist.body.y), dist.gather(dist.damage())
+y, dmg = dist.gather(dist.y), dist.gather(dist.damage())
 if comm.rank == 0:
     f, f_ref = np.array(f), np.array(f_ref)
     moved = ",".join(str(k + 1) for k, r in enumerate(rows.rows) if r[2])
@@ -207,7 +206,7 @@ def halves(b):
 ref5 = halves(IceBody.from_shape("bar", bar, mat, dx, 3.015 * dx))
 x5 = ref5.x0[:, 0]
 owner5 = np.minimum((x5 / x5.max() * comm.size * 0.7).astype(np.int32), comm.size - 1)
-dist5 = DistributedIce(halves(IceBody.from_shape("bar", bar, mat, dx, 3.015 * dx)), owner5, comm)
+dist5 = split_body(halves(IceBody.from_shape("bar", bar, mat, dx, 3.015 * dx)), owner5, comm)
 src_ref, src = ShortRangeContact([ref5]), ShortRangeContact([dist5])
 dt = 0.8 * ref5.stable_time_step()
 cp5_ref = Coupler([ref5], [], [], dt, forces=[src_ref])
@@ -222,7 +221,7 @@ for step in range(1, 61):
     cp5.step()
     balance.after_step(step, step * dt, rows)
     pairs.append((src_ref.total_pairs(), src.total_pairs()))
-y = dist5.gather(dist5.body.y)
+y = dist5.gather(dist5.y)
 if comm.rank == 0:
     p = np.array(pairs)
     print(f"RESULT contact ranks={comm.size} same={np.array_equal(y, ref5.y)} "
@@ -237,7 +236,7 @@ def water(body):
     return Water([body], density=1025.0, level=0.025, g=9.81, linear_drag=50.0)
 
 ref6 = IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2)
-dist6 = DistributedIce(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
+dist6 = split_body(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
 w_ref, w = water(ref6), water(dist6)
 dt6 = 0.8 * ref6.stable_time_step()
 cp6_ref = Coupler([ref6], [], [], dt6, forces=[w_ref])
@@ -251,7 +250,7 @@ for step in range(1, 61):
     cp6_ref.step()
     cp6.step()
     balance.after_step(step, step * dt6, rows)
-y = dist6.gather(dist6.body.y)
+y = dist6.gather(dist6.y)
 lost, lost_ref = w.dissipated(), w_ref.dissipated()
 pot, pot_ref = w.potential_energy(), w_ref.potential_energy()
 if comm.rank == 0:
@@ -261,7 +260,7 @@ if comm.rank == 0:
           f"moved={sum(int(r[2]) for r in rows.rows)} layout={dist6.layout_version}")
 
 # the imbalance limit: a badly split body is re-partitioned at once, then left alone
-bad = DistributedIce(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
+bad = split_body(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)
 limit = LoadBalance(SimpleNamespace(run=SimpleNamespace(rebalance_every=0, rebalance_imbalance=1.2),
                                     water=None, file="test"),
                     SimpleNamespace(bodies=[bad], coupler=Coupler([bad], [], [], 1e-6, comm=comm)),

@@ -17,7 +17,6 @@ rebuilt when a body's owned set changes (load balancing) or on ``invalidate``. R
 
 from __future__ import annotations
 
-import dataclasses
 import re
 import shutil
 import subprocess
@@ -33,7 +32,8 @@ from pdfem.geometry.shapes import Box
 from pdfem.output import read_results
 from pdfem.parallel.comm import SerialComm
 from pdfem.pd.body import IceBody
-from pdfem.pd.layout.halo import DistributedIce
+from pdfem.pd.layout.halo import HaloLayout
+from pdfem.pd.layout.split import split_body
 from pdfem.pd.materials.lps import IceMaterial
 from test_mpi_run import CYLINDER as BASE_CYLINDER
 
@@ -54,10 +54,10 @@ def _command(ranks: int) -> list[str]:
 SCRIPT = textwrap.dedent('''
 import sys
 import numpy as np
-from pdfem.parallel.comm import world
+from pdfem.parallel.comm import SerialComm, world
 from pdfem.coupling.coupler import Coupler
 from pdfem.forces.short_range import ShortRangeContact
-from pdfem.pd.layout.halo import DistributedIce
+from pdfem.pd.layout.split import split_body
 from pdfem.parallel.partition import choose_partition
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
@@ -80,8 +80,7 @@ def run(bodies, comm, steps, dt, owner=None):
     active, energy, cross, most = [], [], 0, 0
     for _ in range(steps):
         c.step()
-        if sr._dist is not None:  # the most local (owned and ghost) particles held
-            most = max(most, sr._dist.halo.m)
+        most = max(most, sr.halo.m)  # the most local (owned and ghost) particles held
         active.append(sr.total_pairs())
         if owner is not None:  # pairs whose particles belong to different ranks
             pairs = np.concatenate([sr._pair[k * sr._cap:k * sr._cap + n]
@@ -103,11 +102,11 @@ for k, b in enumerate(ref):
         owner = comm.size - 1 - owner
     owners.append(owner)
 dt = 0.7 * min(b.stable_time_step() for b in ref)
-sr_ref, act_ref, e_ref, cross, _ = run(ref, None, steps, dt, np.concatenate(owners))
-dist = [DistributedIce(b, owner, comm) for b, owner in zip(build(), owners)]
+sr_ref, act_ref, e_ref, cross, _ = run(ref, SerialComm(), steps, dt, np.concatenate(owners))
+dist = [split_body(b, owner, comm) for b, owner in zip(build(), owners)]
 sr, act, e, _, most = run(dist, comm, steps, dt)
-ghosts = comm.allreduce_sum(sr._dist.n_ghosts)
-halo = sr._dist.halo
+ghosts = comm.allreduce_sum(sr.halo.n_ghosts)
+halo = sr.halo
 # a rank's tables are sized from its local particles (at most `most`), not from the run's n
 budget = sr.budget(most)
 local = comm.allgather((most / sr.n, sr._size <= 1.25 * most
@@ -116,7 +115,7 @@ local = comm.allgather((most / sr.n, sr._size <= 1.25 * most
 refreshes = halo.refreshes
 out = []
 for r, d in zip(ref, dist):
-    y = d.gather(d.body.y)
+    y = d.gather(d.y)
     dmg = d.gather(d.damage())
     out.append((y, dmg))
 if comm.rank == 0:
@@ -227,21 +226,21 @@ def test_cylinder_breaking_plate_on_two_ranks_matches_one(tmp_path):
 
 
 def test_halo_is_rebuilt_when_the_owned_set_changes():
-    """The rebalancer's hook: a body whose halo plan is replaced (particles moved between
-    ranks) or a call of ``invalidate`` rebuilds the contact halo at the next call, and the
-    forces stay those of the serial search (here one 'rank' owning a block compressed to
-    0.85 dx, so nearest neighbours press: Silling & Askari's 0.9 dx threshold)."""
+    """The rebalancer's hook: a body whose layout is replaced (particles moved between ranks)
+    or a call of ``invalidate`` rebuilds the contact halo at the next call, and the forces stay
+    those of the whole body (here one 'rank' owning a block compressed to 0.85 dx, so nearest
+    neighbours press: Silling & Askari's 0.9 dx threshold)."""
     mat = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3)
     body = IceBody.from_shape("b", Box((0, 0, 0), (0.06, 0.05, 0.04)), mat, 0.01, 0.03015)
     body.y[:] = 0.85 * body.x0
     ref = ShortRangeContact(body).forces()[0]
-    ice = DistributedIce(body, np.zeros(body.n, dtype=np.int64), SerialComm())
+    ice = split_body(body, np.zeros(body.n, dtype=np.int64), SerialComm())
     sr = ShortRangeContact([ice])
-    halo = sr._dist.halo
+    halo = sr.halo
     counts = []
-    for change in (None, None, "plan", None, "invalidate"):
-        if change == "plan":
-            ice.plan = dataclasses.replace(ice.plan, owned=ice.plan.owned.copy())
+    for change in (None, None, "layout", None, "invalidate"):
+        if change == "layout":
+            ice.layout = HaloLayout(ice.layout.comm, ice.layout.plan, ice.n_global, 1)
         elif change == "invalidate":
             sr.invalidate()
         f = sr.forces()[0]

@@ -119,7 +119,7 @@ def test_body_step_uses_the_fused_kernel_bit_identical_to_two_passes():
     for chunks in (1, 3):
         mat = IceMaterial(density=RHO, youngs_modulus=E, poisson_ratio=0.3, critical_stretch=2e-3)
         b = block(9, 8, 7, material=mat)
-        b._ws = kn.PairWorkspace(b.row_ptr, b.nbr, n_chunks=chunks)
+        b.workspace = kn.PairWorkspace(b.row_ptr, b.nbr, n_chunks=chunks)
         rng = np.random.default_rng(chunks)
         b.y[:] = b.x0 + 2e-3 * DX * rng.standard_normal(b.x0.shape)
         b.nofail[rng.random(b.n) < 0.05] = 1
@@ -127,9 +127,9 @@ def test_body_step_uses_the_fused_kernel_bit_identical_to_two_passes():
         w0 = b.weight.copy()  # the body negates the weights of bonds that break (SIGNED)
         nb = b.compute_forces()
         th, f = np.empty(b.n), np.empty((b.n, 3))
-        kn.dilatation(b.y, b.row_ptr, b.nbr, b.xi_len, w0, broken0, b.vol, b.m, th, b._ws)
+        kn.dilatation(b.y, b.row_ptr, b.nbr, b.xi_len, w0, broken0, b.vol, b.m, th, b.workspace)
         nb2 = kn.forces(b.y, b.row_ptr, b.nbr, b.xi_len, w0, broken0, b.vol, b.m, th, mat.K,
-                        mat.mu, b.s0, b.nofail, f, b._ws)
+                        mat.mu, b.s0, b.nofail, f, b.workspace)
         assert nb == nb2 > 0
         assert np.array_equal(b.theta, th) and np.array_equal(b.f, f)
         assert np.array_equal(b.broken, broken0)
@@ -147,9 +147,9 @@ def test_stable_time_step_is_safe_for_a_two_layer_plate(shape):
     b = block(*shape)
     mat = b.material
     true = kn.max_eigenvalue_time_step(b.x0, b.row_ptr, b.nbr, b.xi_len, b.weight, b.broken, b.vol,
-                                       b.m, mat.K, mat.mu, DX, RHO, ws=b._ws)
+                                       b.m, mat.K, mat.mu, DX, RHO, ws=b.workspace)
     sa = kn.stable_time_step(b.row_ptr, b.nbr, b.xi_len, b.weight, b.vol, b.delta, RHO, mat.K,
-                             ws=b._ws)
+                             ws=b.workspace)
     dt = b.stable_time_step()
     assert 0.4 * true < dt <= true
     if shape[2] == 2:

@@ -242,7 +242,7 @@ MPI_SCRIPT = textwrap.dedent('''
     from pdfem.parallel.comm import world
     from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
-    from pdfem.pd.layout.halo import DistributedIce
+    from pdfem.pd.layout.split import split_body
     from pdfem.pd.materials.lps import IceMaterial
 
     def build():
@@ -259,7 +259,7 @@ MPI_SCRIPT = textwrap.dedent('''
     ref = build()
     dt = 0.8 * ref.stable_time_step()
     owner, _ = choose_partition(ref.x0, ref.row_ptr, ref.nbr, comm.size)
-    dist = DistributedIce(build(), owner, comm)
+    dist = split_body(build(), owner, comm)
     ref.start()
     dist.start()
     err, scale = 0.0, 0.0

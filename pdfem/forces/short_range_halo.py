@@ -107,7 +107,7 @@ class ContactHalo:
         """The owned particles' local indices, global numbers and constants."""
         self._seen = self._plans()
         self._stale = True
-        self.own = [np.flatnonzero(b.owned) for b in self.bodies]
+        self.own = [np.flatnonzero(b.layout.owned) for b in self.bodies]
         rec = []
         for k, (b, o) in enumerate(zip(self.bodies, self.own)):
             r = np.empty((len(o), _COLUMNS))

@@ -59,7 +59,7 @@ def local_expansion(values: np.ndarray, rows: np.ndarray | None = None) -> list:
     """This process's part of an exact sum: per column of ``values`` ((n,) or (n, k)) over
     ``rows`` (default all), its list of partials, or None where a value is not finite."""
     a = np.asarray(values, dtype=np.float64)
-    a2 = a.reshape(a.shape[0], -1) if a.ndim != 1 else a[:, None]
+    a2 = a[:, None] if a.ndim == 1 else a.reshape(a.shape[0], int(np.prod(a.shape[1:])))
     idx = np.zeros(0, dtype=np.int64) if rows is None else np.asarray(rows, dtype=np.int64)
     out = np.empty((a2.shape[1], MAX_PARTIALS))
     count = expansions(np.ascontiguousarray(a2), idx, rows is None, out)
