@@ -51,10 +51,8 @@ def main() -> None:
     t0 = time.perf_counter()
     x = lattice_points(np.zeros(3), np.full(3, side * dx), dx)
     body = IceBody.from_points("block", x, ice, dx, 3.015 * dx, isotropic=True,
-                               surface_correction=True)
+                               surface_correction=True, keep_bond_length=not args.lean)
     del x
-    if args.lean:
-        body._ws = kn.PairWorkspace(body.row_ptr, body.nbr, keep_bond_length=False)
     t_setup = time.perf_counter() - t0
     rss_setup = peak_rss()
     dt = 0.5 * body.stable_time_step()

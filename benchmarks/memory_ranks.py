@@ -39,7 +39,7 @@ def worker(n: int, steps: int) -> None:
     from pdfem.geometry.shapes import Box
     from pdfem.parallel.comm import world
     from pdfem.pd.body import IceBody
-    from pdfem.pd.layout.setup import distributed_body, distributed_ice
+    from pdfem.pd.layout.setup import distributed_body
     from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
     from pdfem.run.parallel import warm_before_ranks
 
@@ -59,8 +59,7 @@ def worker(n: int, steps: int) -> None:
         body = IceBody.from_shape("block", shape, mat, dx, 3.015 * dx)
         total = body.n
     else:
-        local, plan, census, part = distributed_body("block", shape, mat, dx, 3.015 * dx, comm)
-        body = distributed_ice(local, plan, comm, census.n, part.name)
+        body, census, part = distributed_body("block", shape, mat, dx, 3.015 * dx, comm)
         total = census.n
     t_setup = time.perf_counter() - t0
     rss_setup = vm_hwm()

@@ -31,7 +31,7 @@ from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
 from pdfem.parallel.comm import world
-from pdfem.pd.layout.halo import DistributedIce
+from pdfem.pd.layout.split import split_body
 from pdfem.parallel.partition import choose_partition
 
 
@@ -68,7 +68,7 @@ def _contact_steps(args, comm) -> dict:
     dists = []
     for b in bodies:
         owner, stats = choose_partition(b.x0, b.row_ptr, b.nbr, comm.size)
-        dists.append(DistributedIce(b, owner, comm))
+        dists.append(split_body(b, owner, comm))
     sr = ShortRangeContact(dists)
     dt = 1e-7
 
@@ -89,17 +89,17 @@ def _contact_steps(args, comm) -> dict:
     sr.add_forces()
     step()  # warm-up
     for d in dists:
-        d.exchange_seconds = 0.0
+        d.layout.exchange_seconds = 0.0
     comm.allreduce_sum(0)
     t0 = time.perf_counter()
     times = np.array([step() for _ in range(args.steps)])
     wall = time.perf_counter() - t0
     pairs = sr.total_pairs()
-    walls = comm.gather((wall, times[:, 0].sum(), sr._dist.n_ghosts, times[:, 1],
-                         sum(d.exchange_seconds for d in dists)))
-    return {"walls": walls, "n_particles": sum(int(d.global_n) for d in dists),
-            "n_pairs": sum(int(d.global_body.nbr.shape[0]) for d in dists),
-            "contact_pairs": pairs, "refreshes": sr._dist.halo.refreshes}
+    walls = comm.gather((wall, times[:, 0].sum(), sr.halo.n_ghosts, times[:, 1],
+                         sum(d.layout.exchange_seconds for d in dists)))
+    return {"walls": walls, "n_particles": sum(int(d.n_global) for d in dists),
+            "n_pairs": sum(int(d.n_bonds) for d in dists),
+            "contact_pairs": pairs, "refreshes": sr.halo.refreshes}
 
 
 def main(argv=None) -> None:
@@ -125,22 +125,22 @@ def main(argv=None) -> None:
     body = plate_body(args.n)
     body.y += 1e-4 * body.x0 * np.array([1.0, 0.5, 0.2])  # a uniform strain: every bond works
     owner, stats = choose_partition(body.x0, body.row_ptr, body.nbr, comm.size)
-    dist = DistributedIce(body, owner, comm)
+    dist = split_body(body, owner, comm)
     dist.start()
     dt = 1e-7
     dist.step(dt)  # warm-up
-    dist.exchange_seconds = 0.0
+    dist.layout.exchange_seconds = 0.0
     comm.allreduce_sum(0)
     t0 = time.perf_counter()
     for _ in range(args.steps):
         dist.step(dt)
     wall = time.perf_counter() - t0
-    walls = comm.gather((wall, dist.exchange_seconds))
+    walls = comm.gather((wall, dist.layout.exchange_seconds))
     if comm.rank == 0:
         slowest = max(w for w, _ in walls) / args.steps
-        pairs = int(dist.global_body.nbr.shape[0])
+        pairs = int(dist.n_bonds)
         print(json.dumps({"ranks": comm.size, "threads": numba.get_num_threads(),
-                          "n_particles": int(dist.global_n), "n_pairs": pairs,
+                          "n_particles": int(dist.n_global), "n_pairs": pairs,
                           "step_s": slowest,
                           "exchange_s": max(e for _, e in walls) / args.steps,
                           "pair_steps_per_s": pairs / slowest,

@@ -5,7 +5,7 @@ set-up on the ranks of ``mpiexec -n K`` and its forces computed. Then, each time
 (the largest over ranks is reported):
 
 1. one velocity-Verlet step, for scale;
-2. a re-partition on the set-up's own positions (:meth:`DistributedIce.rebalance`: weighted RCB
+2. a re-partition on the set-up's own positions (:meth:`IceBody.rebalance`: weighted RCB
    plus migration; few particles change owner);
 3. the block turned rigidly by 90 degrees about z (the current positions only), so that the
    bisection cuts across another axis and about half the particles change owner, then a
@@ -36,7 +36,7 @@ def _vm_hwm() -> float:
 def main() -> None:
     from pdfem.geometry.shapes import Box
     from pdfem.parallel.comm import world
-    from pdfem.pd.layout.setup import distributed_body, distributed_ice
+    from pdfem.pd.layout.setup import distributed_body
     from pdfem.pd.materials.lps import IceMaterial
 
     ap = argparse.ArgumentParser()
@@ -48,8 +48,7 @@ def main() -> None:
     mat = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3, fracture_energy=1.0)
     box = Box((0, 0, 0), (side * dx, side * dx, side * dx))
     t0 = time.perf_counter()
-    local, plan, census, _ = distributed_body("block", box, mat, dx, 3.015 * dx, comm)
-    ice = distributed_ice(local, plan, comm, census.n)
+    ice, census, _ = distributed_body("block", box, mat, dx, 3.015 * dx, comm)
     ice.start()
     setup = time.perf_counter() - t0
     dt = 0.8 * ice.stable_time_step()
@@ -63,7 +62,7 @@ def main() -> None:
         return max(comm.allgather(time.perf_counter() - t))
 
     def owned_gids() -> set:
-        return set(ice.plan.local[ice.plan.owned].tolist())
+        return set(ice.layout.gid[ice.layout.owned].tolist())
 
     out["step_s"] = timed(lambda: ice.step(dt))
     out["peak_rss_before_gb"] = max(comm.allgather(_vm_hwm()))
@@ -73,7 +72,7 @@ def main() -> None:
     out["moved_in_place"] = int(comm.allreduce_sum(len(owned_gids() - before)))
     out["imbalance_after_in_place"] = ice.imbalance()
     c = 0.5 * side * dx
-    b = ice.body
+    b = ice
     b.y[:] = np.stack([c - (b.y[:, 1] - c), c + (b.y[:, 0] - c), b.y[:, 2]], axis=1)
     before = owned_gids()
     out["rebalance_turned_s"] = timed(ice.rebalance)
