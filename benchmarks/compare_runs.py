@@ -45,9 +45,10 @@ def shorten(case, frame_cap: float = 1.0e-3):
         case.run, end_time=2 * frame, output_interval=frame))
 
 
-def run_all(out: Path, names: list[str] | None = None) -> None:
-    """Run every case (or those whose stem is in ``names``) shortened into ``out/<key>``;
-    ``key`` is the stem, prefixed ``validation.`` for the validation cases."""
+def run_all(out: Path, names: list[str] | None = None, frame_cap: float = 1.0e-3) -> None:
+    """Run every case (or those whose stem is in ``names``) shortened to two frames of at
+    most ``frame_cap`` (s) into ``out/<key>``; ``key`` is the stem, prefixed ``validation.``
+    for the validation cases."""
     from pdfem.case.schema import load_case
     from pdfem.run.driver import run_case
 
@@ -55,7 +56,7 @@ def run_all(out: Path, names: list[str] | None = None) -> None:
         key = ("validation." if path.parent.name == "validation" else "") + path.stem
         if names and key not in names and path.stem not in names:
             continue
-        run_case(shorten(load_case(path)), out / key, quiet=True)
+        run_case(shorten(load_case(path), frame_cap), out / key, quiet=True)
 
 
 def _arrays(path: Path) -> dict[str, np.ndarray]:
@@ -107,13 +108,15 @@ def main(argv: list[str] | None = None) -> int:
     r = sub.add_parser("run")
     r.add_argument("out", type=Path)
     r.add_argument("--cases", nargs="*")
+    r.add_argument("--frame", type=float, default=1.0e-3,
+                   help="longest frame (s); the runs end after two frames")
     d = sub.add_parser("diff")
     d.add_argument("old", type=Path)
     d.add_argument("new", type=Path)
     d.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     if args.cmd == "run":
-        run_all(args.out, args.cases)
+        run_all(args.out, args.cases, args.frame)
         return 0
     report = compare(args.old, args.new)
     if args.json:

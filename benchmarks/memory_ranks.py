@@ -39,7 +39,6 @@ def worker(n: int, steps: int) -> None:
     from pdfem.geometry.shapes import Box
     from pdfem.parallel.comm import world
     from pdfem.pd.body import IceBody
-    from pdfem.pd.layout.setup import distributed_body
     from pdfem.pd.materials.lps import SEA_ICE_DEFAULTS, IceMaterial
     from pdfem.run.parallel import warm_before_ranks
 
@@ -55,12 +54,8 @@ def worker(n: int, steps: int) -> None:
     tiny.step(1e-7)
     warm_before_ranks(comm)
     t0 = time.perf_counter()
-    if comm.size == 1:
-        body = IceBody.from_shape("block", shape, mat, dx, 3.015 * dx)
-        total = body.n
-    else:
-        body, census, part = distributed_body("block", shape, mat, dx, 3.015 * dx, comm)
-        total = census.n
+    body = IceBody.from_shape("block", shape, mat, dx, 3.015 * dx, comm=comm)
+    total = body.n_global
     t_setup = time.perf_counter() - t0
     rss_setup = vm_hwm()
     dt = 0.5 * body.stable_time_step()

@@ -36,7 +36,7 @@ def _vm_hwm() -> float:
 def main() -> None:
     from pdfem.geometry.shapes import Box
     from pdfem.parallel.comm import world
-    from pdfem.pd.layout.setup import distributed_body
+    from pdfem.pd.body import IceBody
     from pdfem.pd.materials.lps import IceMaterial
 
     ap = argparse.ArgumentParser()
@@ -48,11 +48,11 @@ def main() -> None:
     mat = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3, fracture_energy=1.0)
     box = Box((0, 0, 0), (side * dx, side * dx, side * dx))
     t0 = time.perf_counter()
-    ice, census, _ = distributed_body("block", box, mat, dx, 3.015 * dx, comm)
+    ice = IceBody.from_shape("block", box, mat, dx, 3.015 * dx, comm=comm)
     ice.start()
     setup = time.perf_counter() - t0
     dt = 0.8 * ice.stable_time_step()
-    out = {"ranks": comm.size, "particles": census.n, "bonds": ice.n_bonds,
+    out = {"ranks": comm.size, "particles": ice.n_global, "bonds": ice.n_bonds,
            "setup_s": setup}
 
     def timed(fn) -> float:

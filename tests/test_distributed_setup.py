@@ -30,7 +30,7 @@ EXACT = textwrap.dedent('''
     import numpy as np
     from pdfem.parallel.comm import world
     from pdfem.pd.body import IceBody
-    from pdfem.pd.layout.setup import distributed_body
+    from pdfem.pd.layout.setup import setup_partition
     from pdfem.pd.layout.split import split_body
     from pdfem.pd.materials.lps import IceMaterial
     from pdfem.geometry.shapes import Box, ClosedSurface, Cylinder, Sphere
@@ -44,7 +44,8 @@ EXACT = textwrap.dedent('''
 
     def same(name, shape):
         glob = IceBody.from_shape(name, shape, mat, dx, delta)
-        local, census, part = distributed_body(name, shape, mat, dx, delta, comm)
+        census, part = setup_partition(shape, dx, delta, comm.size)
+        local = IceBody.from_shape(name, shape, mat, dx, delta, comm=comm)
         plan = local.layout.plan
         ijk = np.rint((glob.x0 - shape.bounds()[0]) / dx - 0.5).astype(np.int64)
         r = split_body(glob, part.owner(ijk), comm)
@@ -84,7 +85,7 @@ EXACT = textwrap.dedent('''
 
     ref = IceBody.from_shape("bar", bar, mat, d, 3.015 * d)
     regions(ref)
-    dist, census, part = distributed_body("bar", bar, mat, d, 3.015 * d, comm)
+    dist = IceBody.from_shape("bar", bar, mat, d, 3.015 * d, comm=comm)
     regions(dist)
     dt = 0.8 * ref.stable_time_step()
     same_dt = dist.stable_time_step() == ref.stable_time_step()
@@ -109,7 +110,7 @@ EXACT = textwrap.dedent('''
     y = dist.gather(dist.y)
     dmg = dist.gather(dist.damage())
     # restart from the checkpoint on a freshly set-up body: the same steps, bit for bit
-    again, census, part = distributed_body("bar", bar, mat, d, 3.015 * d, comm)
+    again = IceBody.from_shape("bar", bar, mat, d, 3.015 * d, comm=comm)
     regions(again)
     again.restore_state(state)
     for _ in range(150):
@@ -124,11 +125,11 @@ EXACT = textwrap.dedent('''
 
 MEMORY = textwrap.dedent('''
     import resource
+    from types import SimpleNamespace
     import numpy as np
     from pdfem.parallel.comm import world
     from pdfem.pd.body import IceBody
     from pdfem.pd.layout.halo import HaloPlan
-    from pdfem.pd.layout.setup import distributed_body
     from pdfem.pd.materials.lps import IceMaterial
     from pdfem.geometry.shapes import Box
     from pdfem.run.parallel import warm_before_ranks
@@ -148,8 +149,9 @@ MEMORY = textwrap.dedent('''
         plan = HaloPlan(None, np.ones(local.n, dtype=bool), None, {}, {})
         census = local
     else:
-        local, census, part = distributed_body("block", block, mat, dx, 3.015 * dx, comm)
+        local = IceBody.from_shape("block", block, mat, dx, 3.015 * dx, comm=comm)
         plan = local.layout.plan
+        census = SimpleNamespace(n=local.n_global)
     grown = hwm() - before
     bonds = comm.allreduce_sum(np.int64(plan.owned[np.repeat(np.arange(local.n),
                                                              np.diff(local.row_ptr))].sum()))

@@ -48,7 +48,6 @@ import numpy as np
 from pdfem.parallel.comm import world
 from pdfem.parallel.rcb import rcb_owners
 from pdfem.pd.layout.split import split_body
-from pdfem.pd.layout.setup import distributed_body
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.pd.failure.ice import IceFailure
@@ -123,7 +122,7 @@ def squeeze(b):
     b.fix(z > 5 * dx)
     return b
 ref = squeeze(IceBody.from_shape("blk", blk, ice, dx, 3.015 * dx, failure=law))
-dist, census, part = distributed_body("blk", blk, ice, dx, 3.015 * dx, comm, failure=law)
+dist = IceBody.from_shape("blk", blk, ice, dx, 3.015 * dx, comm=comm, failure=law)
 squeeze(dist)
 dt = 0.8 * ref.stable_time_step()
 ref.start(); dist.start()

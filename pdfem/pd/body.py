@@ -13,9 +13,9 @@ Bonds cost 16 bytes each (:class:`pdfem.pd.bonds.data.Bonds`: int32 partner, flo
 length, float32 weight whose sign marks a broken bond). Which bonds break is the body's failure
 law's decision (:mod:`pdfem.pd.failure`; default: the material's critical stretch). The strain
 energy that breaking bonds take with them is counted in ``fracture_dissipated``
-(:mod:`pdfem.pd.failure.fracture`). Builders: :meth:`IceBody.from_points` (a whole body from a
-point cloud), :func:`pdfem.pd.layout.setup.lattice_body` (a lattice-filled shape, whole or a
-rank's part), :func:`pdfem.pd.layout.split.split_body` (a rank's part of a whole body).
+(:mod:`pdfem.pd.failure.fracture`). Builders: :meth:`IceBody.from_shape` (a lattice-filled
+shape, whole or a rank's part), :meth:`IceBody.from_points` (a whole body from a point cloud),
+:func:`pdfem.pd.layout.split.split_body` (a rank's part of a whole body).
 
 One step (:meth:`IceBody.step`), with force density f (N/m^3) and density rho (kg/m^3)::
 
@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pdfem.geometry.lattice import fill
+from pdfem.parallel.comm import SerialComm
 from pdfem.pd import diagnostics
 from pdfem.pd.bonds import kernels
 from pdfem.pd.bonds.data import Bonds
@@ -53,6 +53,8 @@ from pdfem.pd.failure.fracture import FractureLedger
 from pdfem.pd.failure.strain_rate import RateTracker
 from pdfem.pd.layout import rebalance as balance
 from pdfem.pd.layout.base import Layout, WholeLayout
+from pdfem.pd.layout.blocks import layout_workspace
+from pdfem.pd.layout.setup import lattice_part
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.pd.timestep import body_stable_time_step
 
@@ -142,8 +144,8 @@ class IceBody:
                            if law.crush_friction > 0.0 else None)
         self.rates = s.get("rates", RateTracker(law, material.poisson_ratio)
                            if law.rate_dependent else None)
-        self.workspace = kernels.PairWorkspace(bonds.row_ptr, bonds.nbr,
-                                               keep_bond_length=keep_bond_length)
+        self.workspace = layout_workspace(bonds.row_ptr, bonds.nbr, self.layout,
+                                          keep_bond_length)
         self.family = build_family(bonds.row_ptr, bonds.nbr, n) if loop == "full_family" \
             else None
         self.local_external_work = 0.0  # J, this process's part
@@ -164,7 +166,7 @@ class IceBody:
 
         Parameters
         ----------
-        name, material, dx, delta, loop, failure
+        name, material, dx, delta, loop, failure, keep_bond_length
             As in :class:`IceBody`.
         x
             (N, 3) particle positions, m; renumbered into cell order.
@@ -193,23 +195,30 @@ class IceBody:
                else np.ascontiguousarray(np.asarray(volume, dtype=np.float64)[perm]))
         xi_len = bond_lengths(x0, row_ptr, nbr)
         weight = bond_weights(x0, row_ptr, nbr, xi_len, delta, dx, gain)
-        ws = kernels.PairWorkspace(row_ptr, nbr, keep_bond_length=False)
+        layout = WholeLayout(n)
+        ws = layout_workspace(row_ptr, nbr, layout, keep_bond_length=False)
         if surface_correction:
             surface_corrected_weights(x0, row_ptr, nbr, xi_len, weight, vol, ws=ws, out=weight)
         m = kernels.weighted_volume(row_ptr, nbr, xi_len, weight, vol, ws)
         return cls(name, x0, vol, material, dx, delta, Bonds(row_ptr, nbr, xi_len, weight), m,
-                   loop=loop, failure=failure, influence_gain=gain,
+                   layout=layout, loop=loop, failure=failure, influence_gain=gain,
                    keep_bond_length=keep_bond_length)
 
     @classmethod
-    def from_shape(cls, name: str, shape, material: IceMaterial, dx: float, delta: float,
-                   **kwargs) -> "IceBody":
-        """Fill ``shape`` (a :mod:`pdfem.geometry.shapes` object) with a cubic lattice of
-        spacing ``dx`` (a whole body); the bonds get the isotropic cubic influence function and
-        the surface correction by default; other keywords as in :meth:`from_points`."""
-        kwargs.setdefault("isotropic", True)
-        kwargs.setdefault("surface_correction", True)
-        return cls.from_points(name, fill(shape, dx), material, dx, delta, **kwargs)
+    def from_shape(cls, name: str, shape, material: IceMaterial, dx: float, delta: float, *,
+                   comm=SerialComm(), loop: str = "pairs", failure: FailureLaw | None = None,
+                   isotropic: bool = True, surface_correction: bool = True,
+                   keep_bond_length: bool = True) -> "IceBody":
+        """The body filling ``shape`` (a :mod:`pdfem.geometry.shapes` object) with a cubic
+        lattice of spacing ``dx``, as this process holds it: the whole body on one process,
+        else the rank's part, built without the whole body (:func:`pdfem.pd.layout.setup.
+        lattice_part`; collective). The bonds get the isotropic cubic influence function and
+        the surface correction by default; the other keywords as in :class:`IceBody`. At rest,
+        regions still to add."""
+        part = lattice_part(shape, dx, delta, comm, isotropic=isotropic,
+                            surface_correction=surface_correction)
+        return cls(name, material=material, dx=dx, delta=delta, loop=loop, failure=failure,
+                   keep_bond_length=keep_bond_length, **part)
 
     # -- arrays and counts ---------------------------------------------------------------------
     row_ptr = property(lambda self: self.bonds.row_ptr)

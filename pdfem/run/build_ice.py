@@ -19,7 +19,7 @@ from pdfem.case.ice import IceMaterialSection
 from pdfem.errors import InputError
 from pdfem.geometry.path import DisplacementPath
 from pdfem.parallel.comm import SerialComm
-from pdfem.pd.layout.setup import lattice_body
+from pdfem.pd.body import IceBody
 from pdfem.pd.failure import failure_law
 from pdfem.pd.bonds.influence import isotropy_gain
 from pdfem.pd.materials.lps import IceMaterial, tensile_from_flexural
@@ -64,7 +64,7 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>", comm=Se
         Case-file name for error messages.
     comm
         The communicator: on several ranks every rank builds only its part of the body
-        (:func:`pdfem.pd.layout.setup.lattice_body`; collective).
+        (:meth:`pdfem.pd.body.IceBody.from_shape`; collective).
 
     Returns
     -------
@@ -84,8 +84,8 @@ def build_ice_body(cfg: IceConfig, run: RunConfig, file: str = "<case>", comm=Se
         raise InputError(file, f"{cfg.field}.material.flexural_strength", str(exc)) from None
     try:
         law = failure_law(cfg.material.failure, material, cfg.horizon)
-        body = lattice_body(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon, comm,
-                            loop=run.pd_loop, failure=law)
+        body = IceBody.from_shape(cfg.name, cfg.shape, material, cfg.dx, cfg.horizon,
+                                  comm=comm, loop=run.pd_loop, failure=law)
     except ValueError as exc:
         raise InputError(file, f"{cfg.field}.shape", str(exc)) from None
     n = body.n_global

@@ -3,7 +3,7 @@
 * :func:`build_structures`: rank 0 meshes the structure models into the output directory, then
   every rank reads the same meshes (the structures are small and replicated on every rank).
 * :func:`report_partitions`: how each ice body is split over the ranks (the ice bodies are built
-  split from the start: :func:`pdfem.pd.layout.setup.lattice_body`);
+  split from the start: :meth:`pdfem.pd.body.IceBody.from_shape`);
 * :func:`warm_before_ranks`: rank 0 fills numba's kernel cache before the other ranks start.
 
 Gathering a frame to rank 0 (or keeping each rank's particles) is the ice bodies' own business
@@ -26,7 +26,6 @@ from pdfem.fem.rigid import RigidBody
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box
-from pdfem.pd.layout.setup import distributed_body
 from pdfem.pd.layout.split import split_body
 from pdfem.parallel.partition import BYTES_PER_HALO_PARTICLE, choose_partition
 
@@ -101,9 +100,7 @@ def warm_up() -> None:
     ice.kinetic_energy()
     ice.strain_energy()
     ice.gather(ice.damage())
-    local, _, _ = distributed_body("warm", Box((0, 0, 0), (0.05, 0.05, 0.05)), mat, 0.01,
-                                   0.03015, SerialComm())
-    local.stable_time_step()
+    body.stable_time_step()
 
 
 def warm_before_ranks(comm) -> None:

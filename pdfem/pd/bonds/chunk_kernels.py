@@ -123,3 +123,13 @@ def chunk_split(row_ptr, nbr, cb):
                 split[c] = i
                 break
     return split
+
+
+@numba.njit(cache=True)
+def max_reach(row_ptr, nbr, gid):
+    """The largest gid[j] - gid[i] over the bonds (i, j) (0 without bonds)."""
+    out = 0
+    for i in range(row_ptr.shape[0] - 1):
+        for k in range(row_ptr[i], row_ptr[i + 1]):
+            out = max(out, gid[nbr[k]] - gid[i])
+    return out

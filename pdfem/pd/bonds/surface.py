@@ -35,7 +35,8 @@ position-aware linear solid constitutive model for peridynamics", J. Mech. Mater
 which makes the moments isotropic with per-particle influence functions; here the correction
 is symmetrised so that it fits the one-weight-per-bond storage and costs nothing per step.
 The setup cost is a pass over the pairs per iteration (``iterations + 1`` passes), threaded
-with the chunked, deterministic pair loop of :mod:`pdfem.pd.bonds.workspace`, under the float flags
+with the blocked, deterministic pair loop of :mod:`pdfem.pd.bonds.workspace` (on a rank's part
+of a body with the halo's tensors exchanged after every pass), under the float flags
 ``FASTMATH`` of :mod:`pdfem.pd.bonds.chunk_kernels` (no FMA contraction: freshly compiled and cached
 code give the same bits).
 """
@@ -94,49 +95,44 @@ def _update_tensor(C, M, i):
 
 
 @numba.njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _corrected(x, row_ptr, nbr, xi_len, w0, vol, iterations, lo, hi, cb, ov_ptr, out):
-    """The fixed-point iteration, as a race-free chunked pair loop (:mod:`pdfem.pd.bonds.workspace`):
-    chunk c sums the moments of its rows, the j side of bonds leaving the chunk into its own
-    overflow rows, which are added in chunk order, so the result does not depend on timing."""
-    n = row_ptr.shape[0] - 1
+def corrected_pass(x, row_ptr, nbr, xi_len, w0, vol, lo, hi, cb, ov_ptr, C, M, ov, last, out):
+    """One pass of the fixed-point iteration as a race-free pair loop over the blocks
+    (:mod:`pdfem.pd.bonds.workspace`): block c sums the moments of its rows, the j side of bonds
+    leaving the block into its own overflow rows, which are added in block order; then every
+    row's tensor C is updated from its moments. With ``last``, the corrected weights go to
+    ``out`` instead (``out`` may be ``w0``: each weight is read for the last time there)."""
     nc = cb.shape[0] - 1
-    C = np.zeros((n, 6))  # xx, yy, zz, 2 xy, 2 xz, 2 yz
-    M = np.empty((n, 6))  # sum omega d d V (d = x_j - x_i): xx, yy, zz, xy, xz, yz
-    ov = np.empty((ov_ptr[nc], 6))
-    for it in range(iterations + 1):
-        last = it == iterations
-        for c in numba.prange(nc):
-            r0 = cb[c]
-            r1 = cb[c + 1]
-            base = ov_ptr[c]
-            M[r0:r1] = 0.0
-            ov[base:ov_ptr[c + 1]] = 0.0
-            for i in range(r0, r1):
-                for k in range(row_ptr[i], row_ptr[i + 1]):
-                    j = nbr[k]
-                    g, aa, bb, cc, ab, ac, bc = _bond_weight(x, i, j, C, xi_len[k], w0[k], lo,
-                                                             hi)
-                    if last:  # w0[k] is read for the last time here, so out may be w0
-                        out[k] = g
-                        continue
-                    _add_moments(M, i, g * vol[j], aa, bb, cc, ab, ac, bc)
-                    if j < r1:
-                        _add_moments(M, j, g * vol[i], aa, bb, cc, ab, ac, bc)
-                    else:
-                        _add_moments(ov, base + j - r1, g * vol[i], aa, bb, cc, ab, ac, bc)
-        if last:
-            break
-        for t in numba.prange(nc):
-            r0 = cb[t]
-            r1 = cb[t + 1]
-            for c in range(t):
-                s = cb[c + 1]
-                e = s + (ov_ptr[c + 1] - ov_ptr[c])
-                for p in range(max(s, r0), min(e, r1)):
-                    for col in range(6):
-                        M[p, col] += ov[ov_ptr[c] + p - s, col]
-            for i in range(r0, r1):
-                _update_tensor(C, M, i)
+    for c in numba.prange(nc):
+        r0 = cb[c]
+        r1 = cb[c + 1]
+        base = ov_ptr[c]
+        M[r0:r1] = 0.0
+        ov[base:ov_ptr[c + 1]] = 0.0
+        for i in range(r0, r1):
+            for k in range(row_ptr[i], row_ptr[i + 1]):
+                j = nbr[k]
+                g, aa, bb, cc, ab, ac, bc = _bond_weight(x, i, j, C, xi_len[k], w0[k], lo, hi)
+                if last:
+                    out[k] = g
+                    continue
+                _add_moments(M, i, g * vol[j], aa, bb, cc, ab, ac, bc)
+                if j < r1:
+                    _add_moments(M, j, g * vol[i], aa, bb, cc, ab, ac, bc)
+                else:
+                    _add_moments(ov, base + j - r1, g * vol[i], aa, bb, cc, ab, ac, bc)
+    if last:
+        return
+    for t in numba.prange(nc):
+        r0 = cb[t]
+        r1 = cb[t + 1]
+        for c in range(t):
+            s = cb[c + 1]
+            e = s + (ov_ptr[c + 1] - ov_ptr[c])
+            for p in range(max(s, r0), min(e, r1)):
+                for col in range(6):
+                    M[p, col] += ov[ov_ptr[c] + p - s, col]
+        for i in range(r0, r1):
+            _update_tensor(C, M, i)
 
 
 def surface_corrected_weights(
@@ -150,6 +146,7 @@ def surface_corrected_weights(
     bounds: tuple[float, float] = (0.5, 2.0),
     ws: PairWorkspace | None = None,
     out: np.ndarray | None = None,
+    exchange=None,
 ) -> np.ndarray:
     """Bond weights with the surface correction: every family's second moment made isotropic.
 
@@ -170,11 +167,16 @@ def surface_corrected_weights(
     bounds
         Smallest and largest correction factor of a bond.
     ws
-        Optional :class:`~pdfem.pd.bonds.workspace.PairWorkspace` of the pair list (its chunks thread
-        the loop; the result depends on the chunk count only at round-off).
+        Optional :class:`~pdfem.pd.bonds.workspace.PairWorkspace` of the pair list: its blocks
+        (fixed by the whole body) thread the loop and fix the order of every sum.
     out
         Optional (P,) float32 array for the result; it may be ``weight`` itself (corrected in
         place, which saves 4 bytes per pair of set-up memory).
+    exchange
+        For a rank's part of a body: overwrites the halo rows of a per-particle array with
+        their owners' values; called on the tensors C after every iteration, so each owned
+        particle sees exactly the C the whole body's iteration gives it (its halo partners'
+        families are incomplete here).
 
     Returns
     -------
@@ -188,7 +190,17 @@ def surface_corrected_weights(
         raise ValueError("out must be a C-contiguous float32 array with one entry per pair")
     ws = PairWorkspace(row_ptr, nbr) if ws is None else ws
     ws.check(row_ptr, nbr)
-    _corrected(np.ascontiguousarray(x, dtype=np.float64), row_ptr, nbr, xi_len,
-               np.ascontiguousarray(weight, dtype=np.float32), np.asarray(vol, dtype=np.float64),
-               int(iterations), float(bounds[0]), float(bounds[1]), ws.chunk_ptr, ws.ov_ptr, out)
+    n = row_ptr.shape[0] - 1
+    C = np.zeros((n, 6))  # xx, yy, zz, 2 xy, 2 xz, 2 yz
+    M = np.empty((n, 6))  # sum omega d d V (d = x_j - x_i): xx, yy, zz, xy, xz, yz
+    ov = np.empty((ws.ov_ptr[-1], 6))
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    w0 = np.ascontiguousarray(weight, dtype=np.float32)
+    vol = np.asarray(vol, dtype=np.float64)
+    for it in range(iterations + 1):
+        last = it == iterations
+        corrected_pass(x, row_ptr, nbr, xi_len, w0, vol, float(bounds[0]), float(bounds[1]),
+                       ws.chunk_ptr, ws.ov_ptr, C, M, ov, last, out)
+        if not last and exchange is not None:
+            exchange(C)
     return out

@@ -1,16 +1,23 @@
-"""Race-free, deterministic parallel loops over a unique-pair list: chunks and overflow buffers.
+"""Race-free, deterministic parallel loops over a unique-pair list: blocks and overflow buffers.
 
 The pair kernels (:mod:`pdfem.pd.bonds.pair_loop`) loop over unique bonds i < j grouped by i (CSR:
 ``row_ptr`` int64 (N+1,), ``nbr`` int32 (P,)) and add each bond's contribution to both ends.
-To do that in parallel without data races, the particles (rows) are cut into C chunks of equal
-pair count (:class:`PairWorkspace`); a ``prange`` over chunks accumulates the i side of each row
-in registers and writes the j side directly into the output when j lies in the chunk's own rows
-and otherwise into the chunk's overflow buffer (pairs point forwards, j > i, so only later rows
-can be hit from outside). A second ``prange`` over chunks adds the overflow buffers of the
-earlier chunks in fixed chunk order (:func:`add_overflow1`, :func:`add_overflow3`). The result is
-therefore bit-identical from run to run for a given chunk count (by default the number of numba
-threads). Small pair lists (fewer than ``SERIAL_BELOW_PAIRS``) get one chunk and run a serial
-build of the same kernel (:func:`twin`).
+To do that in parallel without data races, the particles (rows) are cut into *blocks*
+(:class:`PairWorkspace`); a ``prange`` over blocks accumulates the i side of each row in
+registers and writes the j side directly into the output when j lies in the block's own rows
+and otherwise into the block's overflow buffer (pairs point forwards, j > i, so only later rows
+can be hit from outside). A second ``prange`` over blocks adds the overflow buffers of the
+earlier blocks in fixed block order (:func:`add_overflow1`, :func:`add_overflow3`).
+
+The blocks are fixed ranges of *global* particle numbers (:func:`block_bounds`: a function of
+the whole body's particle and bond counts and of its bonds' reach in the numbering, never of the
+thread or rank count), and threads only share the blocks out. Each particle's sums are therefore
+taken in one fixed order: its own row's bonds in row order, then the bonds from earlier rows of
+its block in row order, then each earlier block's overflow in block order. A rank of a split
+body holds every bond of its owned particles, in the global order, so it takes each owned
+particle's sums in the same order as the whole body does: the same bits on any number of
+threads and ranks. A body with fewer than ``SERIAL_BELOW_PAIRS`` bonds is one block and runs a
+serial build of the same kernels (:func:`twin`).
 """
 
 from __future__ import annotations
@@ -25,6 +32,7 @@ from pdfem.pd.bonds.chunk_kernels import (  # noqa: F401  (re-exported: the old 
     add_overflow1,
     add_overflow3,
     chunk_split,
+    max_reach,
     pairs_forward,
     twin,
 )
@@ -34,6 +42,24 @@ from pdfem.pd.bonds.chunk_kernels import (  # noqa: F401  (re-exported: the old 
 # descheduled peer).
 SERIAL_BELOW_PAIRS = 50_000
 SERIAL_BELOW_PARTICLES = 20_000
+PAIRS_PER_BLOCK = 1 << 16
+"""Bonds per block (about 1,000 interior particles): bodies from twice this share out."""
+MAX_BLOCKS = 64
+"""Most blocks of a body: enough to balance 8 threads to 1/8 of a block."""
+
+
+def block_bounds(n_global: int, n_pairs: int, reach: int) -> np.ndarray:
+    """The first global particle number of each block and the end, (B+1,) int64: B blocks of
+    equal particle count, B = 1 below ``SERIAL_BELOW_PAIRS`` bonds, else about one per
+    ``PAIRS_PER_BLOCK`` bonds, at most ``MAX_BLOCKS`` and at most ``n_global / (2 reach)`` (a
+    block's overflow spans the reach of its bonds in the numbering, ``reach`` = the largest
+    j - i, so the overflow buffers together hold at most half a copy of the output)."""
+    if n_pairs < SERIAL_BELOW_PAIRS:
+        b = 1
+    else:
+        b = min(MAX_BLOCKS, n_pairs // PAIRS_PER_BLOCK, n_global // max(2 * int(reach), 1))
+    b = max(1, int(b))
+    return (np.arange(b + 1, dtype=np.int64) * int(n_global)) // b
 
 
 class PairWorkspace:
@@ -47,9 +73,12 @@ class PairWorkspace:
     row_ptr, nbr
         The CSR pair list (int64 (N+1,), int32 (P,)); every pair must have i < nbr[k] < N.
     n_chunks
-        Number of chunks C; default ``numba.get_num_threads()``, or 1 for fewer than
-        ``SERIAL_BELOW_PAIRS`` pairs. With C = 1 the kernels run their serial build. Results are
-        bit-identical run to run for the same C.
+        Number of blocks C of equal particle count, for tests (default: :func:`block_bounds`
+        of this pair list). With C = 1 the kernels run their serial build.
+    bounds, gid
+        The global blocks (:func:`block_bounds` of the whole body) and the global numbers of
+        the local particles (ascending), for a rank's part of a body (or a body whose blocks are
+        fixed by the whole body's figures: :mod:`pdfem.pd.layout.blocks`).
     keep_bond_length
         Let :func:`pdfem.pd.bonds.pair_loop.dilatation_and_forces` keep the current bond lengths
         between its two passes (8 bytes per pair of scratch, saves a square root per bond);
@@ -58,7 +87,7 @@ class PairWorkspace:
     Attributes
     ----------
     chunk_ptr
-        int64 (C+1,) first row of each chunk (chunks hold equal numbers of pairs).
+        int64 (C+1,) first row of each block (the local rows of the global blocks).
     split
         int64 (C,) first row of each chunk with a partner beyond the chunk; the hot loops check
         for overflow only from there on.
@@ -80,7 +109,8 @@ class PairWorkspace:
     """
 
     def __init__(self, row_ptr: np.ndarray, nbr: np.ndarray, n_chunks: int | None = None,
-                 keep_bond_length: bool = True):
+                 keep_bond_length: bool = True, bounds: np.ndarray | None = None,
+                 gid: np.ndarray | None = None):
         row_ptr = np.asarray(row_ptr)
         nbr = np.asarray(nbr)
         n = row_ptr.shape[0] - 1
@@ -92,16 +122,17 @@ class PairWorkspace:
                 "row i, and every index below N)"
             )
         P = nbr.shape[0]
-        if n_chunks is None:
-            C = 1 if P < SERIAL_BELOW_PAIRS else int(numba.get_num_threads())
-        else:
-            C = int(n_chunks)
-        C = max(1, min(C, max(n, 1)))
-        targets = (np.arange(C + 1, dtype=np.int64) * P) // C
-        cb = np.searchsorted(row_ptr, targets, side="left").astype(np.int64)
+        gid = np.arange(n, dtype=np.int64) if gid is None else np.asarray(gid)
+        if bounds is None:
+            if n_chunks is None:
+                bounds = block_bounds(n, P, max_reach(row_ptr, nbr, gid))
+            else:
+                c = max(1, min(int(n_chunks), max(n, 1)))
+                bounds = (np.arange(c + 1, dtype=np.int64) * n) // c
+        cb = np.searchsorted(gid, bounds, side="left").astype(np.int64)
         cb[0] = 0
         cb[-1] = n
-        cb = np.maximum.accumulate(cb)
+        C = cb.shape[0] - 1
         ov_len = np.zeros(C, dtype=np.int64)
         for c in range(C):
             k0, k1 = row_ptr[cb[c]], row_ptr[cb[c + 1]]

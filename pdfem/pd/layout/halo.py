@@ -20,6 +20,7 @@ import time
 import numpy as np
 
 from pdfem.parallel.exact_sum import exact_sum
+from pdfem.pd.layout.base import WholeLayout
 
 
 @dataclasses.dataclass
@@ -142,3 +143,11 @@ class HaloLayout:
         for idx, vals in parts:
             out[idx] = vals
         return out
+
+
+def make_layout(comm, plan: HaloPlan, n_global: int, partition: str = ""):
+    """The layout of a part from a set-up: a :class:`HaloLayout`, or on one process (the part
+    is the whole body) a :class:`~pdfem.pd.layout.base.WholeLayout`."""
+    if comm.size == 1:
+        return WholeLayout(n_global)
+    return HaloLayout(comm, plan, n_global, partition=partition)

@@ -1,4 +1,4 @@
-"""Distributed set-up of a lattice-filled ice body: each rank builds only its part.
+"""Set-up of a lattice-filled ice body: each process builds only its part (all of it on one).
 
 The global set-up (:func:`pdfem.pd.layout.split.split_body` of a whole
 :class:`~pdfem.pd.body.IceBody`) builds the whole body on every rank and keeps its part, so
@@ -17,12 +17,13 @@ bond array:
    local pair list is the serial one restricted to the local particles, in the same order;
 4. weighs the bonds (:func:`pdfem.pd.bonds.influence.bond_weights`, per bond), applies the surface
    correction with the halo's correction tensors exchanged from their owners after every
-   iteration (:mod:`pdfem.pd.layout.surface`), and computes the weighted volume m of its
-   owned particles, the halo's m exchanged from their owners.
+   iteration (:func:`pdfem.pd.bonds.surface.surface_corrected_weights`), and computes the
+   weighted volume m of its owned particles, the halo's m exchanged from their owners.
 
-Every owned particle sees its whole family in the serial order, so the local arrays are the
-global set-up's local arrays exactly (with one numba thread; with several, the pair loops' chunks
-differ and sums agree to round-off, as for the global set-up). Units: SI.
+Every owned particle sees its whole family in the serial order, and the pair loops sum over
+blocks fixed by the whole body (:mod:`pdfem.pd.layout.blocks`), so the local arrays are the
+whole body's local arrays exactly, on any number of ranks and threads. On one process this is
+the whole body (:meth:`IceBody.from_shape <pdfem.pd.body.IceBody.from_shape>`). Units: SI.
 """
 
 from __future__ import annotations
@@ -33,12 +34,12 @@ import numpy as np
 from pdfem.geometry.lattice import lattice_plane
 from pdfem.parallel.box_partition import BoxPartition, choose_box_partition
 from pdfem.pd.bonds import kernels
-from pdfem.pd.body import IceBody
 from pdfem.pd.bonds.geometry import bond_lengths
 from pdfem.pd.bonds.data import Bonds
-from pdfem.pd.layout.halo import HaloLayout, HaloPlan
+from pdfem.pd.layout.blocks import layout_workspace
+from pdfem.pd.layout.halo import HaloPlan, make_layout
 from pdfem.pd.layout.census import cell_offsets, halo_planes, lattice_census, plane_mask
-from pdfem.pd.layout.surface import distributed_surface_weights
+from pdfem.pd.bonds.surface import surface_corrected_weights
 from pdfem.pd.bonds.influence import bond_weights, isotropy_gain
 from pdfem.pd.bonds.search import cell_pairs
 
@@ -160,26 +161,40 @@ def setup_partition(shape, dx: float, delta: float, n_parts: int):
     return census, choose_box_partition(census.marginals, n_parts, halo_planes(delta, dx) - 1)
 
 
-def distributed_body(name: str, shape, material, dx: float, delta: float, comm, *,
-                     loop: str = "pairs", failure=None, census=None,
-                     part: BoxPartition | None = None):
-    """This rank's part of the body that :meth:`IceBody.from_shape
-    <pdfem.pd.body.IceBody.from_shape>` would build (isotropic weights, surface correction),
-    built without the global body. Collective.
+def lattice_part(shape, dx: float, delta: float, comm, *, isotropic: bool = True,
+                 surface_correction: bool = True, census=None,
+                 part: BoxPartition | None = None) -> dict:
+    """This process's part of the body filling ``shape`` with a cubic lattice of spacing
+    ``dx`` and horizon ``delta`` (m), built without the whole body (the whole body on one
+    process). Collective.
+
+    Parameters
+    ----------
+    shape
+        A :mod:`pdfem.geometry.shapes` object.
+    dx, delta
+        Lattice spacing and horizon (m).
+    comm
+        The communicator.
+    isotropic
+        Weigh the bonds with the cubic influence function (:func:`pdfem.pd.bonds.influence.
+        isotropy_gain`); False: w = 1.
+    surface_correction
+        Correct the weights near free surfaces (:mod:`pdfem.pd.bonds.surface`).
+    census, part
+        The lattice census and box partition, if already made (:func:`setup_partition`).
 
     Returns
     -------
-    body
-        The rank's :class:`~pdfem.pd.body.IceBody` (owned and halo particles, a
-        :class:`~pdfem.pd.layout.halo.HaloLayout`), at rest, regions still to add.
-    census
-        The :class:`~pdfem.pd.layout.census.LatticeCensus` (``census.n`` particles).
-    part
-        The :class:`~pdfem.parallel.box_partition.BoxPartition`.
+    dict
+        The geometric arguments of :class:`~pdfem.pd.body.IceBody`: ``x0`` (m), ``vol``
+        (m^3), ``bonds``, ``m`` (m^5), ``layout`` (a :class:`~pdfem.pd.layout.base.WholeLayout`
+        on one process, else a :class:`~pdfem.pd.layout.halo.HaloLayout`) and
+        ``influence_gain``.
     """
     if census is None or part is None:
         census, part = setup_partition(shape, dx, delta, comm.size)
-    gain = isotropy_gain(delta / dx)
+    gain = isotropy_gain(delta / dx) if isotropic else 0.0
     x, gid, ijk = candidates(shape, census, part, comm.rank, halo_planes(delta, dx))
     owner = part.owner(ijk)
     del ijk
@@ -191,25 +206,13 @@ def distributed_body(name: str, shape, material, dx: float, delta: float, comm, 
     vol = np.full(n, dx ** 3)
     xi_len = bond_lengths(x, row_ptr, nbr)
     weight = bond_weights(x, row_ptr, nbr, xi_len, float(delta), float(dx), gain)
-    layout = HaloLayout(comm, plan, census.n, partition=f"{part.name} (distributed set-up)")
-    distributed_surface_weights(x, row_ptr, nbr, xi_len, weight, vol, layout.exchange)
-    m = kernels.weighted_volume(row_ptr, nbr, xi_len, weight, vol,
-                                kernels.PairWorkspace(row_ptr, nbr, keep_bond_length=False))
+    layout = make_layout(comm, plan, census.n, f"{part.name} (distributed set-up)")
+    ws = layout_workspace(row_ptr, nbr, layout, keep_bond_length=False)
+    if surface_correction:
+        surface_corrected_weights(x, row_ptr, nbr, xi_len, weight, vol, ws=ws, out=weight,
+                                  exchange=layout.exchange)
+    m = kernels.weighted_volume(row_ptr, nbr, xi_len, weight, vol, ws)
     layout.exchange(m)
     layout.exchange_seconds = 0.0
-    body = IceBody(name, x, vol, material, dx, delta, Bonds(row_ptr, nbr, xi_len, weight), m,
-                   layout=layout, loop=loop, failure=failure, influence_gain=gain)
-    return body, census, part
-
-
-def lattice_body(name: str, shape, material, dx: float, delta: float, comm, *,
-                 loop: str = "pairs", failure=None):
-    """The ice body filling ``shape`` with a cubic lattice of spacing ``dx`` (isotropic weights,
-    surface correction), as this process holds it: the whole body on one process
-    (:meth:`IceBody.from_shape <pdfem.pd.body.IceBody.from_shape>`), else the rank's part from
-    the distributed set-up (:func:`distributed_body`). At rest, regions still to add.
-    Collective."""
-    if comm.size == 1:
-        return IceBody.from_shape(name, shape, material, dx, delta, loop=loop, failure=failure)
-    return distributed_body(name, shape, material, dx, delta, comm, loop=loop,
-                            failure=failure)[0]
+    return {"x0": x, "vol": vol, "bonds": Bonds(row_ptr, nbr, xi_len, weight), "m": m,
+            "layout": layout, "influence_gain": gain}
