@@ -258,7 +258,7 @@ class IceBody:
 
     def counts(self) -> tuple[int, int, int]:
         """Particles, bonds and broken bonds of the whole body (collective)."""
-        broken = self.bonds.broken()[self.counted_bonds()].sum(dtype=np.int64)
+        broken = self.bonds.broken_flags()[self.counted_bonds()].sum(dtype=np.int64)
         return self.n_global, self.n_bonds, int(self.layout.allsum(broken))
 
     def broken_arg(self) -> np.ndarray:
@@ -268,7 +268,7 @@ class IceBody:
     @property
     def broken(self) -> np.ndarray:
         """(P,) uint8 broken flags, 1 = broken (a copy: assign to change them)."""
-        return self.bonds.broken()
+        return self.bonds.broken_flags()
 
     @broken.setter
     def broken(self, flags: np.ndarray) -> None:

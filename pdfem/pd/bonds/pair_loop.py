@@ -47,6 +47,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pdfem.pd.bonds.data import SIGNED, Bonds, LawArrays, Particles
 from pdfem.pd.failure.crushed_shear import shear_kernel_args
 from pdfem.pd.bonds.lps_law import force_coefficients, stretch_limits
 from pdfem.pd.bonds.pair_step_kernels import dilatation_pairs, forces_pairs, forces_pairs_law
@@ -72,8 +73,20 @@ def rest_arg(rest: np.ndarray | None, per_pair: np.ndarray) -> tuple[np.ndarray,
         raise ValueError(f"rest must be a C-contiguous float32 array of shape {per_pair.shape}")
     return rest, True
 
-#: Pass as ``broken`` to mean "bond k is broken iff weight[k] < 0" (read-only by convention).
-SIGNED = np.zeros(0, dtype=np.uint8)
+_NO_F = np.zeros((0, 3))  # "no force output" (the dilatation pass)
+_NO_FLAGS = np.zeros(0, dtype=np.uint8)  # "no no-fail flags" (the dilatation pass)
+
+
+def bond_tuple(row_ptr, nbr, xi_len, weight, broken) -> Bonds:
+    """The kernels' :class:`~pdfem.pd.bonds.data.Bonds`, checked (``broken``: uint8 flags or
+    :data:`SIGNED`)."""
+    check_broken(broken, nbr)
+    return Bonds(row_ptr, nbr, xi_len, check_weight(weight, nbr), broken)
+
+
+def particle_tuple(y, vol, m, theta, f=_NO_F, nofail=_NO_FLAGS) -> Particles:
+    """The kernels' :class:`~pdfem.pd.bonds.data.Particles` (``y``, ``f`` C-contiguous)."""
+    return Particles(c_contiguous(y, "y"), vol, m, theta, c_contiguous(f, "f_out"), nofail)
 
 
 def plain_law(s0, granular: bool) -> bool:
@@ -84,19 +97,17 @@ def plain_law(s0, granular: bool) -> bool:
             and lim[4] == -np.inf and lim[5] == 0.0)
 
 
-def _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail, f_out, rbuf,
-                use_r, rest, granular, crush_yield, owned, shear) -> int:
+def _force_pass(ws, bonds, P, s0, rbuf, use_r, rest, granular, crush_yield, owned,
+                shear) -> int:
     """The force pass after :func:`~pdfem.pd.bonds.lps_law.force_coefficients`: the plain
     critical-stretch kernel, or the general one for other laws (compiled only when used)."""
     if plain_law(s0, granular):
-        return int(forces_pairs(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol,
-                                ws.coef, wt, float(stretch_limits(s0)[0]), nofail, ws.chunk_ptr,
-                                ws.split, ws.ov_ptr, ws.ov, ws.counts, f_out, rbuf, use_r))
-    return int(forces_pairs_law(ws.parallel, y, row_ptr, nbr, xi_len, broken, signed, vol,
-                                ws.coef, ws.aux, wt, nofail, ws.chunk_ptr, ws.split, ws.ov_ptr,
-                                ws.ov, ws.counts, f_out, rbuf, use_r, rest, granular,
-                                float(crush_yield), owned, ws.crush, stretch_limits(s0),
-                                *shear_kernel_args(shear)))
+        return int(forces_pairs(ws.parallel, bonds, P, ws.blocks, ws.coef,
+                                float(stretch_limits(s0)[0]), rbuf, use_r))
+    slip, y0, params = shear_kernel_args(shear)
+    law = LawArrays(ws.coef, ws.aux, stretch_limits(s0), float(crush_yield), rest, owned,
+                    ws.crush, slip, y0, params)
+    return int(forces_pairs_law(ws.parallel, bonds, P, ws.blocks, law, rbuf, use_r, granular))
 
 
 def check_broken(broken: np.ndarray, per_pair: np.ndarray) -> bool:
@@ -167,8 +178,8 @@ def family_sum(
     """
     ws = workspace_for(ws, row_ptr, nbr)
     out = np.empty(ws.n)
-    family_sum_pairs(ws.parallel, row_ptr, nbr, xi_len, np.ascontiguousarray(values, np.float64),
-                     check_weight(weight, nbr), int(mode), ws.chunk_ptr, ws.ov_ptr, ws.ov, out)
+    family_sum_pairs(ws.parallel, Bonds(row_ptr, nbr, xi_len, check_weight(weight, nbr)),
+                     np.ascontiguousarray(values, np.float64), int(mode), ws.blocks, out)
     return out
 
 
@@ -232,10 +243,9 @@ def dilatation(
         Optional :class:`PairWorkspace` for this pair list.
     """
     ws = workspace_for(ws, row_ptr, nbr)
-    dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                     check_broken(broken, nbr), vol, m, check_weight(weight, nbr), ws.chunk_ptr,
-                     ws.split, ws.ov_ptr, ws.ov,
-                     theta_out, _NO_R, False)
+    bonds = bond_tuple(row_ptr, nbr, xi_len, weight, broken)
+    dilatation_pairs(ws.parallel, bonds, particle_tuple(y, vol, m, theta_out), ws.blocks, _NO_R,
+                     False)
 
 
 def forces(
@@ -321,10 +331,9 @@ def forces(
     owned = _ALL_ROWS if owned is None else owned
     force_coefficients(ws.parallel_particles, m, INTACT if m_now is None else m_now, theta, K,
                        mu, UNIT_STRENGTH if strength is None else strength, ws.coef, ws.aux)
-    nb = _force_pass(ws, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                     check_broken(broken, nbr), vol, check_weight(weight, nbr), s0, nofail,
-                     c_contiguous(f_out, "f_out"), _NO_R, False, rest, granular, crush_yield,
-                     owned, shear)
+    nb = _force_pass(ws, bond_tuple(row_ptr, nbr, xi_len, weight, broken),
+                     particle_tuple(y, vol, m, theta, f_out, nofail), s0, _NO_R, False, rest,
+                     granular, crush_yield, owned, shear)
     ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
     return nb
 
@@ -375,18 +384,15 @@ def dilatation_and_forces(
     ws.check(row_ptr, nbr)
     rbuf = ws.bond_length_buffer() if ws.keep_bond_length else _NO_R
     keep = rbuf.shape[0] > 0
-    wt = check_weight(weight, nbr)
-    signed = check_broken(broken, nbr)
+    bonds = bond_tuple(row_ptr, nbr, xi_len, weight, broken)
     rest, granular = rest_arg(rest, nbr)
     owned = _ALL_ROWS if owned is None else owned
-    dilatation_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken, signed, vol,
-                     m, wt, ws.chunk_ptr, ws.split, ws.ov_ptr, ws.ov, theta_out, rbuf, keep)
+    P = particle_tuple(y, vol, m, theta_out, f_out, nofail)
+    dilatation_pairs(ws.parallel, bonds, P, ws.blocks, rbuf, keep)
     if between is not None:
         between(theta_out)
     force_coefficients(ws.parallel_particles, m, INTACT if m_now is None else m_now, theta_out,
                        K, mu, UNIT_STRENGTH if strength is None else strength, ws.coef, ws.aux)
-    nb = _force_pass(ws, y, row_ptr, nbr, xi_len, broken, signed, vol, wt, s0, nofail,
-                     c_contiguous(f_out, "f_out"), rbuf, keep, rest, granular, crush_yield, owned,
-                     shear)
+    nb = _force_pass(ws, bonds, P, s0, rbuf, keep, rest, granular, crush_yield, owned, shear)
     ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
     return nb

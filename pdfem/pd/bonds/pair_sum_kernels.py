@@ -7,7 +7,9 @@ its ends: :func:`family_sum_pairs` (weighted volume and the time-step sums),
 :func:`damage_pairs` (broken fraction of the initial bonds), and
 :func:`contact_bond_energy_pairs` (the energy stored in crushed bonds). Float flags: ``FASTMATH`` of
 :mod:`pdfem.pd.bonds.chunk_kernels` (no FMA contraction, so the code compiled in this process and the
-code loaded from numba's cache give the same bits).
+code loaded from numba's cache give the same bits). The kernels take the named tuples of
+:mod:`pdfem.pd.bonds.data` and take their arrays out before the ``prange`` (numba loses writes
+through tuples there: :mod:`pdfem.pd.bonds.pair_step_kernels`).
 """
 
 from __future__ import annotations
@@ -21,8 +23,10 @@ from pdfem.pd.bonds.lps_law import (bond_length, crushed_bond_energy, deviatoric
 
 
 @twin()
-def family_sum_pairs(row_ptr, nbr, xi_len, vol, wt, mode, cb, ov_ptr, ov, out):
+def family_sum_pairs(bonds, vol, mode, B, out):
     """out_i = sum_j g(|xi|) omega vol_j over all bonds, g = |xi|^2, 1/|xi|, |xi|, 1 (mode 0..3)."""
+    row_ptr, nbr, xi_len, wt = bonds.row_ptr, bonds.nbr, bonds.xi_len, bonds.weight
+    cb, ov_ptr, ov = B.ptr, B.ov_ptr, B.ov
     C = cb.shape[0] - 1
     for c in prange(C):
         r0 = cb[c]
@@ -58,9 +62,13 @@ def family_sum_pairs(row_ptr, nbr, xi_len, vol, wt, mode, cb, ov_ptr, ov, out):
 
 
 @twin()
-def energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, vol, m, theta, K, mu, wt,
-                 cb, ov_ptr, ov, W):
+def energy_pairs(bonds, P, K, mu, B, W):
     """W_i = K theta_i^2 / 2 + (15 mu / (2 m_i)) sum_j omega e_d^2 V_j over unbroken bonds."""
+    row_ptr, nbr, xi_len, wt, broken = bonds.row_ptr, bonds.nbr, bonds.xi_len, bonds.weight, \
+        bonds.broken
+    signed = broken.shape[0] == 0
+    y, vol, m, theta = P.y, P.vol, P.m, P.theta
+    cb, ov_ptr, ov = B.ptr, B.ov_ptr, B.ov
     C = cb.shape[0] - 1
     for c in prange(C):
         r0 = cb[c]
@@ -100,8 +108,11 @@ def energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, vol, m, theta, K, mu, 
 
 
 @twin(fastmath=False)
-def damage_pairs(row_ptr, nbr, broken, signed, wt, cb, ov_ptr, ov, nb, deg):
+def damage_pairs(bonds, B, nb, deg):
     """nb_i = broken fraction of particle i's initial bonds (deg: scratch for the degrees)."""
+    row_ptr, nbr, wt, broken = bonds.row_ptr, bonds.nbr, bonds.weight, bonds.broken
+    signed = broken.shape[0] == 0
+    cb, ov_ptr, ov = B.ptr, B.ov_ptr, B.ov
     C = cb.shape[0] - 1
     for c in prange(C):
         r0 = cb[c]
@@ -117,7 +128,7 @@ def damage_pairs(row_ptr, nbr, broken, signed, wt, cb, ov_ptr, ov, nb, deg):
             cnt = 0.0
             for k in range(U64(row_ptr[i]), U64(row_ptr[i + 1])):
                 j = U64(nbr[k])
-                if signed:  # (``wt`` is empty unless signed: no is_broken(signed, wt[k], ...))
+                if signed:
                     b = 1.0 if wt[k] < 0.0 else 0.0
                 else:
                     b = 1.0 if broken[k] != 0 else 0.0
@@ -138,12 +149,15 @@ def damage_pairs(row_ptr, nbr, broken, signed, wt, cb, ov_ptr, ov, nb, deg):
 
 
 @numba.njit(cache=True)
-def contact_bond_energy_pairs(y, row_ptr, nbr, xi_len, broken, signed, wt, rest, vol, m, mu,
-                              owned, slip, kappa):
+def contact_bond_energy_pairs(bonds, P, rest, mu, owned, slip, kappa):
     """Total energy (J) stored in the crushed bonds (:func:`~pdfem.pd.bonds.lps_law.
     crushed_bond_energy`, ``rest`` not NaN) in the rows i with ``owned[i]`` (all rows if
     ``owned`` is empty), summed serially in bond order; with ``slip`` (flat (3P,), m) also
     that of their shear springs, kappa b w V_i V_j |s|^2 / 2 (:mod:`pdfem.pd.failure.crushed_shear`)."""
+    row_ptr, nbr, xi_len, wt, broken = bonds.row_ptr, bonds.nbr, bonds.xi_len, bonds.weight, \
+        bonds.broken
+    signed = broken.shape[0] == 0
+    y, vol, m = P.y, P.vol, P.m
     total = 0.0
     c = 15.0 * mu
     every = owned.shape[0] == 0

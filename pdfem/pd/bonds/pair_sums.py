@@ -9,11 +9,15 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pdfem.pd.bonds.pair_loop import rest_arg, check_broken, check_weight
+from pdfem.pd.bonds.data import Bonds
+from pdfem.pd.bonds.pair_loop import (bond_tuple, check_broken, check_weight, particle_tuple,
+                                      rest_arg)
 from pdfem.pd.bonds.pair_sum_kernels import contact_bond_energy_pairs, damage_pairs, energy_pairs
 from pdfem.pd.bonds.workspace import c_contiguous, workspace_for
 
 _NO_SLIP = np.zeros(0, dtype=np.float32)  # "no shear springs" (read-only by convention)
+_NO_THETA = np.zeros(0)  # "no dilatation needed" (read-only by convention)
+_NO_LENGTHS = np.zeros(0)  # "no bond lengths needed" (read-only by convention)
 
 if TYPE_CHECKING:
     from pdfem.pd.bonds.workspace import PairWorkspace
@@ -44,10 +48,8 @@ def strain_energy(
     """
     ws = workspace_for(ws, row_ptr, nbr)
     W = np.empty(ws.n)
-    energy_pairs(ws.parallel, c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                 check_broken(broken, nbr), vol, m, theta,
-                 float(K), float(mu), check_weight(weight, nbr), ws.chunk_ptr, ws.ov_ptr, ws.ov,
-                 W)
+    energy_pairs(ws.parallel, bond_tuple(row_ptr, nbr, xi_len, weight, broken),
+                 particle_tuple(y, vol, m, theta), float(K), float(mu), ws.blocks, W)
     return W
 
 
@@ -73,10 +75,9 @@ def contact_bond_energy(
     of their shear springs (:mod:`pdfem.pd.failure.crushed_shear`)."""
     rest, _ = rest_arg(rest, nbr)
     mask = np.zeros(0, dtype=np.bool_) if owned is None else np.asarray(owned, dtype=np.bool_)
-    return float(contact_bond_energy_pairs(c_contiguous(y, "y"), row_ptr, nbr, xi_len, broken,
-                                           check_broken(broken, nbr), check_weight(weight, nbr),
-                                           rest, vol, m, float(mu), mask,
-                                           _NO_SLIP if slip is None else slip.reshape(-1),
+    return float(contact_bond_energy_pairs(bond_tuple(row_ptr, nbr, xi_len, weight, broken),
+                                           particle_tuple(y, vol, m, _NO_THETA), rest, float(mu),
+                                           mask, _NO_SLIP if slip is None else slip.reshape(-1),
                                            float(kappa)))
 
 
@@ -116,8 +117,8 @@ def damage(
     signed = check_broken(broken, nbr)
     if signed:
         check_weight(weight, nbr)
-    damage_pairs(ws.parallel, row_ptr, nbr, broken, signed, weight, ws.chunk_ptr, ws.ov_ptr,
-                 ws.ov, out, deg)
+    damage_pairs(ws.parallel, Bonds(row_ptr, nbr, _NO_LENGTHS, weight, broken), ws.blocks, out,
+                 deg)
     return out
 
 

@@ -47,6 +47,7 @@ import numba
 import numpy as np
 
 from pdfem.pd.bonds.chunk_kernels import FASTMATH
+from pdfem.pd.bonds.data import Bonds
 from pdfem.pd.bonds.workspace import PairWorkspace
 
 
@@ -95,12 +96,19 @@ def _update_tensor(C, M, i):
 
 
 @numba.njit(cache=True, parallel=True, fastmath=FASTMATH)
-def corrected_pass(x, row_ptr, nbr, xi_len, w0, vol, lo, hi, cb, ov_ptr, C, M, ov, last, out):
+def corrected_pass(x, bonds, vol, clip, blocks, state, last, out):
     """One pass of the fixed-point iteration as a race-free pair loop over the blocks
     (:mod:`pdfem.pd.bonds.workspace`): block c sums the moments of its rows, the j side of bonds
     leaving the block into its own overflow rows, which are added in block order; then every
     row's tensor C is updated from its moments. With ``last``, the corrected weights go to
-    ``out`` instead (``out`` may be ``w0``: each weight is read for the last time there)."""
+    ``out`` instead (``out`` may be the weights: each is read for the last time there).
+    ``clip`` = (lo, hi) bounds of the factor, ``blocks`` = (ptr, ov_ptr), ``state`` = (C, M,
+    ov) the tensors, moments and overflow rows (taken out of the tuples before the ``prange``:
+    numba loses writes through tuples there)."""
+    row_ptr, nbr, xi_len, w0 = bonds.row_ptr, bonds.nbr, bonds.xi_len, bonds.weight
+    lo, hi = clip
+    cb, ov_ptr = blocks
+    C, M, ov = state
     nc = cb.shape[0] - 1
     for c in numba.prange(nc):
         r0 = cb[c]
@@ -199,8 +207,9 @@ def surface_corrected_weights(
     vol = np.asarray(vol, dtype=np.float64)
     for it in range(iterations + 1):
         last = it == iterations
-        corrected_pass(x, row_ptr, nbr, xi_len, w0, vol, float(bounds[0]), float(bounds[1]),
-                       ws.chunk_ptr, ws.ov_ptr, C, M, ov, last, out)
+        corrected_pass(x, Bonds(row_ptr, nbr, xi_len, w0), vol,
+                       (float(bounds[0]), float(bounds[1])), (ws.chunk_ptr, ws.ov_ptr), (C, M, ov),
+                       last, out)
         if not last and exchange is not None:
             exchange(C)
     return out

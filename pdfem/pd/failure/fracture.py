@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from pdfem.pd.failure.fracture_kernels import first_rows, released_energy, seen_bits
-from pdfem.pd.bonds.pair_loop import SIGNED
+from pdfem.pd.bonds.data import SIGNED, Particles
 
 _ALL = np.zeros(0, dtype=np.bool_)  # "every particle is owned" (read-only by convention)
 
@@ -69,8 +69,7 @@ class FractureLedger:
         else:
             cb, counts = np.array([0, body.n], dtype=np.int64), np.ones(1, dtype=np.int64)
         mat = body.material
-        energy, counted = released_energy(body.y, b.row_ptr, b.nbr, b.xi_len, SIGNED, True,
-                                          b.weight, body.vol, body.m, float(mat.K),
-                                          float(mat.mu), owned, self._seen, self._first, cb,
-                                          counts)
+        parts = Particles(body.y, body.vol, body.m, body.theta, body.f, body.nofail)
+        energy, counted = released_energy(b, parts, float(mat.K), float(mat.mu), owned,
+                                          self._seen, self._first, cb, counts)
         return float(energy), int(counted)

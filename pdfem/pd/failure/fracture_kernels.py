@@ -66,10 +66,12 @@ def seen_bits(row_ptr, nbr, broken, signed, wt):
 
 
 @numba.njit(**_JIT)
-def _mark_hits(row_ptr, nbr, broken, signed, wt, seen, cb, counts, owned, hit):
+def _mark_hits(bonds, seen, cb, counts, owned, hit):
     """Mark the ends of the new broken bonds in the rows of chunks with counts > 0; returns
     (number of new bonds, of them those in ``owned`` rows (all if size 0), smallest and
     largest hit particle)."""
+    row_ptr, nbr, wt, broken = bonds.row_ptr, bonds.nbr, bonds.weight, bonds.broken
+    signed = broken.shape[0] == 0
     new = 0
     counted = 0
     all_owned = owned.shape[0] == 0
@@ -93,8 +95,10 @@ def _mark_hits(row_ptr, nbr, broken, signed, wt, seen, cb, counts, owned, hit):
 
 
 @numba.njit(**_JIT)
-def _mark_seen(row_ptr, broken, signed, wt, seen, cb, counts):
+def _mark_seen(bonds, seen, cb, counts):
     """Set the bits of every bond broken now in the rows of chunks with counts > 0."""
+    row_ptr, wt, broken = bonds.row_ptr, bonds.weight, bonds.broken
+    signed = broken.shape[0] == 0
     for c in range(cb.shape[0] - 1):
         if counts[c] == 0:
             continue
@@ -104,12 +108,15 @@ def _mark_seen(row_ptr, broken, signed, wt, seen, cb, counts):
 
 
 @numba.njit(**_JIT)
-def _hit_sums(y2, row_ptr, nbr, xi_len, broken, signed, wt, vol, seen, hit, r0, r1, theta,
-              dev, acc):
+def _hit_sums(bonds, P, seen, hit, rows, theta, dev, acc):
     """Over the bonds in rows r0..r1-1 with a hit end, before (column 0) and after (column 1)
     breaking, add into ``acc`` (N, 2): the dilatation sums sum omega l e V, or with ``dev``
     the deviatoric sums sum omega e_d^2 V with the dilatations ``theta`` (N, 2)."""
-    y = y2.reshape(y2.size)
+    row_ptr, nbr, xi_len, wt, broken = bonds.row_ptr, bonds.nbr, bonds.xi_len, bonds.weight, \
+        bonds.broken
+    signed = broken.shape[0] == 0
+    y, vol = P.y.reshape(P.y.size), P.vol
+    r0, r1 = rows
     for i in range(r0, r1):
         hi_ = hit[i] != 0
         yi0 = y[3 * i]
@@ -146,15 +153,14 @@ def _hit_sums(y2, row_ptr, nbr, xi_len, broken, signed, wt, vol, seen, hit, r0, 
 
 
 @numba.njit(**_JIT)
-def released_energy(y, row_ptr, nbr, xi_len, broken, signed, wt, vol, m, K, mu, owned, seen,
-                    first_row, cb, counts):
+def released_energy(bonds, P, K, mu, owned, seen, first_row, cb, counts):
     """Energy (J) released by the bonds that broke since ``seen`` was last updated, over the
     hit particles that are ``owned`` (size 0: all), and the number of those bonds in ``owned``
     rows (each bond of a split body counted on one rank); marks the bonds in ``seen``."""
-    n = row_ptr.shape[0] - 1
+    m = P.m
+    n = bonds.row_ptr.shape[0] - 1
     hit = np.zeros(n, dtype=np.uint8)
-    new, counted, lo, hi = _mark_hits(row_ptr, nbr, broken, signed, wt, seen, cb, counts, owned,
-                                      hit)
+    new, counted, lo, hi = _mark_hits(bonds, seen, cb, counts, owned, hit)
     if new == 0:
         return 0.0, 0
     r0 = lo
@@ -163,21 +169,19 @@ def released_energy(y, row_ptr, nbr, xi_len, broken, signed, wt, vol, m, K, mu, 
             r0 = min(r0, first_row[p])
     acc = np.zeros((n, 2))
     theta = np.zeros((n, 2))
-    _hit_sums(y, row_ptr, nbr, xi_len, broken, signed, wt, vol, seen, hit, r0, hi + 1, theta,
-              False, acc)
+    _hit_sums(bonds, P, seen, hit, (r0, hi + 1), theta, False, acc)
     for p in range(lo, hi + 1):
         if hit[p] != 0:
             for col in range(2):
                 theta[p, col] = dilatation_of(acc[p, col], m[p])
                 acc[p, col] = 0.0
-    _hit_sums(y, row_ptr, nbr, xi_len, broken, signed, wt, vol, seen, hit, r0, hi + 1, theta,
-              True, acc)
+    _hit_sums(bonds, P, seen, hit, (r0, hi + 1), theta, True, acc)
     total = 0.0
     all_owned = owned.shape[0] == 0
     for p in range(lo, hi + 1):
         if hit[p] != 0 and (all_owned or owned[p]):
             before = energy_density(K, mu, theta[p, 0], acc[p, 0], m[p])
             after = energy_density(K, mu, theta[p, 1], acc[p, 1], m[p])
-            total += (before - after) * vol[p]
-    _mark_seen(row_ptr, broken, signed, wt, seen, cb, counts)
+            total += (before - after) * P.vol[p]
+    _mark_seen(bonds, seen, cb, counts)
     return total, counted
