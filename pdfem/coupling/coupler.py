@@ -35,6 +35,15 @@ acts. Energy: the coupler keeps the work of the contact impulses on the ice (at 
 the particles hit the surface with) and on each structure (its kinetic-energy change
 ``v . J + J^2 / (2 m)`` at the impulse's instant; for a prescribed motion ``v . J``, the work
 its drive does); minus their sum is the energy the contacts dissipated. Units: s, m, N, N s, J.
+
+The coupler keeps one record per structure (:class:`StructureRecord`: its surface motion, its
+pending impulse, its contact pairs, its facet loads, the contact work on it) and one per ice
+body (:class:`BodyRecord`: its particle masses and global numbers, its pairs); each structure
+says itself how its surface moves over a substep (:mod:`pdfem.fem.surface_motion`: predicted
+or prescribed), so the coupler never asks which kind it holds. The two step variants share the
+same phases: drift and contact (:meth:`Coupler._contact`), hand-over of the impulses
+(:meth:`Coupler._hand_over`), their action on the structures (:meth:`Coupler._apply_impulses`)
+and the end of the ice step (:meth:`Coupler._finish_ice_step`).
 """
 
 from __future__ import annotations
@@ -47,6 +56,7 @@ import numpy as np
 from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.facet_loads import FacetLoads, collect_facet_loads
 from pdfem.coupling.impulse_work import ImpulseWork
+from pdfem.parallel.comm import SerialComm
 
 
 @dataclass
@@ -62,12 +72,37 @@ class ContactPair:
     contacts: int = 0            # particle contacts in the last coupling step
 
 
-def _global_numbers(body) -> np.ndarray:
-    """(N,) global particle numbers of a body's local particles (-1 for those it does not own):
-    the order in which the contacts' impulses are summed onto the structure."""
-    ids = np.full(len(body.v), -1, dtype=np.int64)
-    ids[body.owned] = body.owned_reference()[0]
-    return ids
+class StructureRecord:
+    """What the coupler keeps for one structure: its surface motion over the substeps, the
+    contact impulses pending on its surface nodes (N s), its contact pairs, its facet loads and
+    the work of the contact loads on it (J)."""
+
+    def __init__(self, structure, pairs: list[ContactPair]) -> None:
+        self.structure = structure
+        self.motion = structure.surface_motion()
+        self.impulse = np.zeros((len(structure.surface_points()), 3))
+        self.pairs = pairs
+        self.facet_loads = FacetLoads(structure)
+        self.contact_work = 0.0
+        self.end = None  # (end positions, velocity) of the surface over the current substep
+
+
+class BodyRecord:
+    """What the coupler keeps for one ice body: its particle masses (kg) and global numbers
+    (-1 for particles it does not own: the order in which the contacts' impulses are summed
+    onto the structure), and its contact pairs."""
+
+    def __init__(self, body, pairs: list[ContactPair]) -> None:
+        self.body = body
+        self.pairs = pairs
+        self.particles_moved()
+
+    def particles_moved(self) -> None:
+        """Masses and global numbers of the body's local particles, anew."""
+        b = self.body
+        self.mass = b.material.density * b.vol
+        self.ids = np.full(len(b.v), -1, dtype=np.int64)
+        self.ids[b.owned] = b.owned_reference()[0]
 
 
 def substep_counts(ice_step: float, structure_step: float, substeps: int = 0):
@@ -107,7 +142,8 @@ class Coupler:
         ``compute_forces``, ``end_step``, ``y``, ``v``, ``f``, ``vol``, ``material.density``,
         ``gravity``, ``owned``).
     structures
-        The structures (elastic or rigid), each a contact surface with ``step(dt)``.
+        The structures (:class:`pdfem.fem.base.Structure`), each a contact surface with
+        ``step(dt)`` and a ``surface_motion()``.
     pairs
         The contact pairs.
     coupling_step
@@ -119,16 +155,15 @@ class Coupler:
         gravity and short-range contact between ice particles): after the bond forces of each
         ice step, each adds its force density to the bodies' ``f``, in list order.
     comm
-        With ice bodies split over MPI ranks (:class:`pdfem.pd.layout.halo.DistributedIce`):
-        the communicator over which the contact impulses are gathered and summed in global
-        particle order (the serial order), so every rank advances the replicated structures
-        identically and as the serial run does. Contact
-        is resolved for each body's ``owned`` particles (all of them for a whole body).
+        The communicator (:mod:`pdfem.parallel.comm`; one process: its serial stand-in): the
+        contact impulses are gathered over it and summed in global particle order (the serial
+        order), so every process advances the replicated structures identically. Contact is
+        resolved for each body's ``owned`` particles.
     """
 
     def __init__(self, bodies: list, structures: list, pairs: list[ContactPair],
                  coupling_step: float, ice_substeps: int = 1, structure_substeps: int = 1,
-                 forces=(), comm=None):
+                 forces=(), comm=SerialComm()):
         if ice_substeps < 1 or structure_substeps < 1:
             raise ValueError("substep counts must be >= 1")
         self.bodies = list(bodies)
@@ -139,60 +174,56 @@ class Coupler:
         self.structure_substeps = int(structure_substeps)
         self.forces = list(forces)
         self.comm, self.time = comm, 0.0
-        self._pairs_of = {id(b): [p for p in self.pairs if p.body is b] for b in self.bodies}
-        self.particles_moved()
-        # N s, contact impulses on each structure's surface nodes in the current coupling step
-        self._impulse = {id(s): np.zeros((len(s.surface_points()), 3)) for s in self.structures}
-        # J, work of the contact loads on each structure (as it moves under them)
-        self.contact_work = {id(s): 0.0 for s in self.structures}
+        self.body_records = [BodyRecord(b, [p for p in self.pairs if p.body is b])
+                             for b in self.bodies]
+        self.records = [StructureRecord(s, [p for p in self.pairs if p.structure is s])
+                        for s in self.structures]
         self.contact_work_on_ice = 0.0  # J
-        # per structure: contact loads per facet of its surface (pressure, load patches)
-        self.facet_loads = {id(s): FacetLoads(s) for s in self.structures}
+
+    def record(self, structure) -> StructureRecord:
+        """The record of ``structure``."""
+        return next(r for r in self.records if r.structure is structure)
 
     def particles_moved(self) -> None:
-        """Per-particle masses (kg) and global numbers of the bodies' local particles, anew."""
-        self._mass = {id(b): b.material.density * b.vol for b in self.bodies}
-        self._ids = {id(b): _global_numbers(b) for b in self.bodies}
+        """Per-particle masses (kg) and global numbers of the bodies' local particles, anew
+        (after a re-partition)."""
+        for r in self.body_records:
+            r.particles_moved()
 
     @property
     def contact_dissipated(self) -> float:
         """Energy (J) lost in contacts so far: minus the work of the contact impulses on the
         ice and on the structures. The contact of Eq. (5) is perfectly plastic particle by
         particle; this loss shrinks as the ice is refined."""
-        on_ice = self.contact_work_on_ice
-        if self.comm is not None:
-            on_ice = self.comm.allreduce_sum(on_ice)
-        return -(on_ice + sum(self.contact_work.values()))
+        on_ice = self.comm.allreduce_sum(self.contact_work_on_ice)
+        return -(on_ice + sum(r.contact_work for r in self.records))
 
     def checkpoint_state(self) -> dict[str, np.ndarray | float]:
         """The coupler's own state, for a checkpoint: ``time`` (s), per structure (in order)
-        ``load_<k>`` (the pending contact load, N per surface node) and ``contact_work_<k>``
-        (J), ``contact_work_on_ice`` (J), and per pair (in order) ``force_<k>`` (N),
-        ``moment_<k>`` (N m), ``contacts_<k>`` and ``total_impulse_<k>`` (N s); per structure
-        its facet loads (:meth:`pdfem.coupling.facet_loads.FacetLoads.checkpoint_state`) as
-        ``facets_<k>_<key>``.
+        ``contact_work_<k>`` (J) and its facet loads
+        (:meth:`pdfem.coupling.facet_loads.FacetLoads.checkpoint_state`) as
+        ``facets_<k>_<key>``, ``contact_work_on_ice`` (J), and per pair (in order) ``force_<k>``
+        (N), ``moment_<k>`` (N m), ``contacts_<k>`` and ``total_impulse_<k>`` (N s).
 
-        With a communicator (ice split over ranks) every rank must call it: the counters each
-        rank keeps for its own particles (contact work on the ice, total impulses) are summed
-        over ranks, and each rank's part is kept in ``<key>_ranks`` so that a restart on as
-        many ranks continues bit for bit."""
+        Every process must call it: the counters each keeps for its own particles (contact
+        work on the ice, total impulses) are summed over the processes, and each one's part is
+        kept in ``<key>_ranks`` so that a restart on as many ranks continues bit for bit."""
         out: dict[str, np.ndarray | float] = {"time": self.time,
                                               "contact_work_on_ice": self.contact_work_on_ice}
-        for k, s in enumerate(self.structures):
-            out[f"contact_work_{k}"] = self.contact_work[id(s)]
-            for key, v in self.facet_loads[id(s)].checkpoint_state().items():
+        for k, r in enumerate(self.records):
+            out[f"contact_work_{k}"] = r.contact_work
+            for key, v in r.facet_loads.checkpoint_state().items():
                 out[f"facets_{k}_{key}"] = v
         for k, p in enumerate(self.pairs):
             out[f"force_{k}"] = p.force.copy()
             out[f"moment_{k}"] = p.moment.copy()
             out[f"contacts_{k}"] = p.contacts
             out[f"total_impulse_{k}"] = p.contact.total_impulse.copy()
-        if self.comm is not None:
-            for key in self._rank_local_keys():
-                parts = self.comm.gather(out[key])
-                out[key] = self.comm.allreduce_sum(out[key])
-                if parts is not None:
-                    out[f"{key}_ranks"] = np.array(parts)
+        for key in self._rank_local_keys():
+            parts = self.comm.gather(out[key])
+            out[key] = self.comm.allreduce_sum(out[key])
+            if parts is not None:
+                out[f"{key}_ranks"] = np.array(parts)
         return out
 
     def _rank_local_keys(self) -> list[str]:
@@ -203,7 +234,7 @@ class Coupler:
         """Restore a state from :meth:`checkpoint_state` exactly (same structures and pairs, same
         order). A state written on another number of ranks gives rank 0 the totals."""
         state = dict(state)
-        rank, size = (0, 1) if self.comm is None else (self.comm.rank, self.comm.size)
+        rank, size = self.comm.rank, self.comm.size
         for key in self._rank_local_keys():
             parts = state.get(f"{key}_ranks")
             if parts is not None and len(parts) == size:
@@ -212,12 +243,12 @@ class Coupler:
                 state[key] = np.zeros_like(np.asarray(state[key], dtype=np.float64))
         self.time = float(state["time"])
         self.contact_work_on_ice = float(state["contact_work_on_ice"])
-        for k, s in enumerate(self.structures):
-            self.contact_work[id(s)] = float(state[f"contact_work_{k}"])
+        for k, r in enumerate(self.records):
+            r.contact_work = float(state[f"contact_work_{k}"])
             prefix = f"facets_{k}_"
             facets = {key[len(prefix):]: v for key, v in state.items() if key.startswith(prefix)}
             if facets:  # (a checkpoint written before the facet loads existed has none)
-                self.facet_loads[id(s)].restore_state(facets)
+                r.facet_loads.restore_state(facets)
         for k, p in enumerate(self.pairs):
             p.force = np.array(state[f"force_{k}"], dtype=np.float64)
             p.moment = np.array(state[f"moment_{k}"], dtype=np.float64)
@@ -233,142 +264,134 @@ class Coupler:
 
     def step(self) -> int:
         """Advance everything by one coupling step; return the number of bonds broken."""
-        for s in self.structures:
-            self._impulse[id(s)][:] = 0.0
+        for r in self.records:
+            r.impulse[:] = 0.0
         for p in self.pairs:
             p.contacts = 0
-        pair_impulse = [np.zeros_like(self._impulse[id(p.structure)]) for p in self.pairs]
+        pair_impulse = [np.zeros_like(self.record(p.structure).impulse) for p in self.pairs]
         if self.ice_substeps == 1:
             broken = self._step_with_structure_substeps(pair_impulse)
         else:
             broken = self._step_with_ice_substeps(pair_impulse)
         D = self.dt
         for p, impulse in zip(self.pairs, pair_impulse):
-            if self.comm is not None:
-                p.contacts = int(self.comm.allreduce_sum(p.contacts))
+            p.contacts = int(self.comm.allreduce_sum(p.contacts))
             p.force = impulse.sum(axis=0) / D
             p.moment = np.cross(p.structure.surface_points(), impulse).sum(axis=0) / D
-        collect_facet_loads(self.facet_loads, self.pairs, D)
+        collect_facet_loads(self.records, D)
         self.time += D
         return broken
 
+    def _set_surfaces(self, starts: dict, normals: bool = True) -> None:
+        """Every pair's contact meets its structure's surface of the current substep (its
+        record's ``end``, from ``starts[id(structure)]``)."""
+        for p in self.pairs:
+            r = self.record(p.structure)
+            if normals:
+                p.contact.set_surface(*r.end, start=starts[id(r)])
+            else:
+                p.contact.set_surface(*r.end, normals=False, start=starts[id(r)])
+
+    def _contact(self, rec: BodyRecord, y_old, u, h: float, work, t_sub: float) -> None:
+        """Resolve the contacts of body ``rec`` that drifted from ``y_old`` with the velocity
+        ``u`` over ``h`` (s); their impulses go into the pairs and the work ledger ``work``;
+        with ``u`` other than the body's ``v``, the impulses also change ``v``."""
+        body = rec.body
+        for p in rec.pairs:
+            c = p.contact.resolve(body.y, y_old, u, rec.mass, h, active=body.owned,
+                                  ids=rec.ids)
+            p.contacts += c.contacts
+            work.add(c.particle_impulse, t_sub)
+            if u is not body.v:
+                np.add(body.v, c.particle_impulse / rec.mass[:, None], out=body.v)
+
     def _step_with_structure_substeps(self, pair_impulse: list) -> int:
         """One ice step of D whose drift is taken in the structures' substeps: before each
-        structure substep the particles drift over it and meet the surface predicted from the
-        structure's state at the substep's start, and the impulses act on both at that
-        instant (the ice's bond forces stay those of the step's start)."""
+        structure substep the particles drift over it and meet each surface as its structure
+        says it moves (predicted from its state at the substep's start, or prescribed), and
+        the impulses act on both at that instant (the ice's bond forces stay those of the
+        step's start)."""
         D, n = self.dt, self.structure_substeps
         h = D / n
         works = [ImpulseWork(b) for b in self.bodies]
         olds = [b.begin_step(D, keep_old=True) for b in self.bodies]
-        kicks = {}
+        kicks = []
         for b, y_old, work in zip(self.bodies, olds, works):
             b.y[:] = y_old                       # the drift is taken below, in n parts
-            kicks[id(b)] = b.v - work.v0         # the first half kick, D/2 a_t
+            kicks.append(b.v - work.v0)          # the first half kick, D/2 a_t
         for j in range(n):
-            ends, starts = {}, {}
-            for s in self.structures:
-                p0 = s.surface_points().copy()
-                starts[id(s)] = p0
-                if s.prescribed_motion:          # known motion: the substep is taken first
-                    s.step(h)
-                    ends[id(s)] = (s.surface_points().copy(), (s.surface_points() - p0) / h)
-                else:                            # predicted from its state now
-                    v0 = s.surface_velocities().copy()
-                    ends[id(s)] = (p0 + h * v0, v0)
-            for p in self.pairs:
-                p.contact.set_surface(*ends[id(p.structure)], normals=j == 0,
-                                      start=starts[id(p.structure)])
-            for body, work in zip(self.bodies, works):
+            starts = {}
+            for r in self.records:
+                p0, end, velocity = r.motion.over(h)
+                starts[id(r)], r.end = p0, (end, velocity)
+            self._set_surfaces(starts, normals=j == 0)
+            for rec, work, kick in zip(self.body_records, works, kicks):
+                body = rec.body
                 y = body.y                       # in place: the body keeps its array
                 before = y.copy()
                 # the velocity of substep j: v_t + a_t (j + 1/2) h, so that a contact stops
                 # the particle's velocity of that instant (not the mid-step velocity of the
                 # whole step, off by O(D a)); the positions at the step's end are Verlet's
-                u = body.v if n == 1 else body.v + kicks[id(body)] * ((2 * j + 1) / n - 1.0)
+                u = body.v if n == 1 else body.v + kick * ((2 * j + 1) / n - 1.0)
                 y += h * u
-                for p in self._pairs_of[id(body)]:
-                    m = self._mass[id(body)]
-                    c = p.contact.resolve(body.y, before, u, m, h, active=body.owned,
-                                          ids=self._ids[id(body)])
-                    p.contacts += c.contacts
-                    work.add(c.particle_impulse, j * h)
-                    if u is not body.v:
-                        np.add(body.v, c.particle_impulse / m[:, None], out=body.v)
-            self._hand_over(pair_impulse, {k: e[1] for k, e in ends.items()})
+                self._contact(rec, before, u, h, work, j * h)
+            self._hand_over(pair_impulse)
             self._apply_impulses()
-            for s in self.structures:
-                if not s.prescribed_motion:
-                    s.step(h)
+            for r in self.records:
+                r.motion.after(h)
         broken = self._finish_ice_step(D)
         self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies))
         self._after_breaking(broken)
         return broken
 
     def _step_with_ice_substeps(self, pair_impulse: list) -> int:
-        """``ice_substeps`` ice steps against the structures' surfaces predicted from their
-        state at the coupling step's start (prescribed motions: taken); the impulses of each
-        ice step act on the structures at once, at the coupling step's start, and they move
-        on with that velocity; then one structure step."""
+        """``ice_substeps`` ice steps against the structures' surfaces as each says it moves
+        over the coupling step (predicted from its state at each substep's start, or
+        prescribed); the impulses of each ice step act on the structures at once, and they
+        move on with that velocity; then one structure step."""
         D = self.dt
         h = D / self.ice_substeps
-        known, pos = {}, {}
-        for s in self.structures:
-            pos[id(s)] = s.surface_points().copy()
-            if s.prescribed_motion:
-                s.step(D)
-                known[id(s)] = (pos[id(s)], s.surface_points() - pos[id(s)])
+        for r in self.records:
+            r.motion.begin(D)
         broken = 0
         for k in range(self.ice_substeps):
             frac = (k + 1) / self.ice_substeps
-            ends, starts = {}, dict(pos)
-            for s in self.structures:
-                if s.prescribed_motion:
-                    p0, dp = known[id(s)]
-                    ends[id(s)] = (p0 + frac * dp, dp / D)
-                else:
-                    v = s.surface_velocities().copy()
-                    ends[id(s)] = (pos[id(s)] + h * v, v)
-                pos[id(s)] = ends[id(s)][0]
-            for p in self.pairs:
-                p.contact.set_surface(*ends[id(p.structure)], start=starts[id(p.structure)])
+            starts = {}
+            for r in self.records:
+                start, end, velocity = r.motion.sample(h, frac)
+                starts[id(r)], r.end = start, (end, velocity)
+            self._set_surfaces(starts)
             works = [ImpulseWork(b) for b in self.bodies]
             olds = [b.begin_step(h, keep_old=True) for b in self.bodies]
-            for body, y_old, work in zip(self.bodies, olds, works):
-                for p in self._pairs_of[id(body)]:
-                    c = p.contact.resolve(body.y, y_old, body.v, self._mass[id(body)], h,
-                                          active=body.owned, ids=self._ids[id(body)])
-                    p.contacts += c.contacts
-                    work.add(c.particle_impulse, 0.0)
-            self._hand_over(pair_impulse, {key: e[1] for key, e in ends.items()})
+            for rec, y_old, work in zip(self.body_records, olds, works):
+                self._contact(rec, y_old, rec.body.v, h, work, 0.0)
+            self._hand_over(pair_impulse)
             self._apply_impulses()
             now = self._finish_ice_step(h)
             self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies))
             self._after_breaking(now)
             broken += now
-        for s in self.structures:
-            if not s.prescribed_motion:
-                s.step(D)
+        for r in self.records:
+            r.motion.after(D)
         return broken
 
     def _apply_impulses(self) -> None:
-        """Give each responding structure its pending impulses now (a velocity jump) and book
-        their work."""
-        for s in self.structures:
-            if not s.prescribed_motion and self._impulse[id(s)].any():
-                self.contact_work[id(s)] += s.apply_surface_impulse(self._impulse[id(s)])
-                self._impulse[id(s)][:] = 0.0
+        """Give each structure its pending impulses now (a velocity jump of a structure that
+        responds; nothing for a prescribed motion) and book their work."""
+        for r in self.records:
+            if r.impulse.any():
+                r.contact_work += r.motion.respond(r.impulse)
+                r.impulse[:] = 0.0
 
-    def _hand_over(self, pair_impulse: list, velocity: dict) -> None:
+    def _hand_over(self, pair_impulse: list) -> None:
         """Take the impulses of the contacts just resolved (summed over ranks) into the pairs'
         totals and the structures' pending impulses; book the work of prescribed motions (at
-        their surface velocity ``velocity``)."""
+        their surface velocity of the substep)."""
         for p, total in zip(self.pairs, pair_impulse):
-            k = id(p.structure)
-            impulse = p.contact.take_impulse(None if self.comm is None else self.comm.allgather)
-            if p.structure.prescribed_motion:
-                self.contact_work[k] += float(np.sum(impulse * velocity[k]))
-            self._impulse[k] += impulse
+            r = self.record(p.structure)
+            impulse = p.contact.take_impulse(self.comm.allgather)
+            r.contact_work += r.motion.drive_work(impulse, r.end[1])
+            r.impulse += impulse
             total += impulse
 
     def _after_breaking(self, broken: int) -> None:
@@ -395,6 +418,6 @@ class Coupler:
     def structure_load(self, structure) -> tuple[np.ndarray, np.ndarray, int]:
         """Force (N), moment (N m, about the origin) and particle contacts of the last coupling
         step on ``structure``, summed over its contact pairs."""
-        ps = [p for p in self.pairs if p.structure is structure]
+        ps = self.record(structure).pairs
         return (sum((p.force for p in ps), np.zeros(3)), sum((p.moment for p in ps), np.zeros(3)),
                 sum(p.contacts for p in ps))

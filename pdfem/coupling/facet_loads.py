@@ -98,19 +98,18 @@ class FacetLoads:
         self.since = float(state["since"])
 
 
-def collect_facet_loads(facet_loads: dict, pairs: list, step: float) -> None:
-    """End of a coupling step of ``step`` s: hand each structure's :class:`FacetLoads`
-    (``facet_loads[id(structure)]``) the facet impulses of its contact pairs, summed in pair
+def collect_facet_loads(records: list, step: float) -> None:
+    """End of a coupling step of ``step`` s: hand each structure's :class:`FacetLoads` (its
+    coupler record's ``facet_loads``) the facet impulses of its contact pairs, summed in pair
     order (:meth:`pdfem.coupling.contact.SurfaceContact.take_facet_impulse`)."""
-    sums = {k: (np.zeros((fl.n_facets, 3)), np.zeros(fl.n_facets))
-            for k, fl in facet_loads.items()}
-    for p in pairs:
-        impulse, normal = p.contact.take_facet_impulse()
-        total, total_normal = sums[id(p.structure)]
-        total += impulse
-        total_normal += normal
-    for k, (impulse, normal) in sums.items():
-        facet_loads[k].add_step(impulse, normal, step)
+    for r in records:
+        fl = r.facet_loads
+        total, total_normal = np.zeros((fl.n_facets, 3)), np.zeros(fl.n_facets)
+        for p in r.pairs:
+            impulse, normal = p.contact.take_facet_impulse()
+            total += impulse
+            total_normal += normal
+        fl.add_step(total, total_normal, step)
 
 
 class FacetLoadSource:
@@ -127,9 +126,8 @@ class FacetLoadSource:
     @classmethod
     def of_run(cls, setup, per_rank: bool) -> list:
         """One source per structure with a contact surface in a contact pair."""
-        touched = {id(p.structure) for p in setup.coupler.pairs}
-        return [cls(fl, setup.coupler) for k, fl in setup.coupler.facet_loads.items()
-                if fl.n_facets and k in touched]
+        return [cls(r.facet_loads, setup.coupler) for r in setup.coupler.records
+                if r.facet_loads.n_facets and r.pairs]
 
     def output_mesh(self) -> tuple[np.ndarray, np.ndarray, str]:
         """The contact surface's reference nodes (m) and triangles."""

@@ -28,6 +28,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from pdfem.fem.surface import SurfaceBody
+from pdfem.fem.surface_motion import PredictedSurface
 
 
 ENERGY_TERMS = ("load_work", "support_work", "damping_dissipated", "kinetic_correction")
@@ -41,8 +42,16 @@ class Structure(SurfaceBody, ABC):
 
     prescribed_motion: bool = False
     """True when the structure moves as prescribed, whatever the loads (a rigid indenter): the
-    work of the contact loads on it is then energy supplied to the ice from outside, not energy
-    the structure stores. False for a structure that responds to its loads."""
+    work of the contact loads on it is then energy supplied to the ice from outside (the energy
+    balance's ``rigid_body_work``), not energy the structure stores. False for a structure that
+    responds to its loads."""
+
+    def surface_motion(self):
+        """How the contact surface moves over the substeps of a coupled step
+        (:mod:`pdfem.fem.surface_motion`): by default predicted from the structure's state,
+        the structure stepping after the contacts; a prescribed motion returns a
+        :class:`~pdfem.fem.surface_motion.PrescribedSurface`."""
+        return PredictedSurface(self)
 
     shaft = None
     """Shaft and blade loads of a rotating structure (:mod:`pdfem.fem.shaft_loads`), else None."""

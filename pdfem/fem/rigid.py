@@ -25,6 +25,8 @@ import os
 
 import numpy as np
 
+from pdfem.fem.surface_motion import PrescribedSurface
+
 from pdfem.fem.mesh import load_mesh, read_msh_groups
 from pdfem.fem.base import Structure
 from pdfem.fem.surface import orient_outward, split_quads
@@ -197,6 +199,10 @@ class RigidBody(Structure):
         self._update_pose()
 
     prescribed_motion = True
+
+    def surface_motion(self) -> PrescribedSurface:
+        """The surface moves as prescribed: the body steps first, whatever the contacts."""
+        return PrescribedSurface(self)
 
     def stable_time_step(self) -> float:
         """A rigid body imposes no step limit: ``inf``."""

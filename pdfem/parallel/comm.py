@@ -21,6 +21,8 @@ class SerialComm:
 
     rank = 0
     size = 1
+    failures_shared = True
+    """A failure this process meets is met by the whole run (nobody waits in a collective)."""
 
     def allreduce_sum(self, value):
         return value
@@ -45,6 +47,10 @@ class SerialComm:
 
 class MPIComm:
     """mpi4py's COMM_WORLD behind the same interface as :class:`SerialComm`."""
+
+    failures_shared = False
+    """A failure one rank meets (a non-finite position, a runaway particle of its own) may not
+    be met by the others at the same point, so no collective may follow it (no last frame)."""
 
     def __init__(self, comm) -> None:
         self.comm = comm

@@ -199,7 +199,6 @@ def build(case: Case, out: Path, comm, say, steps: tuple[float, int, int] | None
         sub = f" (structures subcycle: {n_st} steps of {dt / n_st:.3e} s)"
     say(f"  coupling step {dt:.3e} s{sub}, {nsteps:,} steps to {end:g} s")
     forces = build_forces(case, bodies)
-    coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st, forces,
-                      comm if comm.size > 1 else None)
+    coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st, forces, comm)
     return Setup(bodies, structures, pairs, forces, coupler, probes, dt, n_ice, n_st, nsteps,
                  stable, *counts, reference=reference)

@@ -86,7 +86,8 @@ class EnergyBalance:
              "structure_kinetic_correction": sum(t["kinetic_correction"] for t in terms),
              "structure_strain": sum(x.strain_energy() for x in s),
              "structure_potential": sum(x.potential_energy() for x in s),
-             "rigid_body_work": -sum(c.contact_work[id(x)] for x in s if x.prescribed_motion),
+             "rigid_body_work": -sum(r.contact_work for r in c.records
+                                     if r.structure.prescribed_motion),
              "load_work": sum(t["load_work"] for t in terms),
              "support_work": sum(t["support_work"] for t in terms),
              "damping_dissipated": sum(t["damping_dissipated"] for t in terms),

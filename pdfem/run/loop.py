@@ -1,12 +1,21 @@
-"""The coupled time loop of a run: coupling steps, output, blow-up checks, checkpoints.
+"""The coupled time loop of a run: a coupling step, then the after-step tasks.
 
 :func:`run_loop` is the second of the driver's three steps (:mod:`pdfem.run.driver`). Every
-coupling step it advances the coupler, writes the step's history rows and checks the motion for
-a blow-up (:class:`pdfem.run.blowup.BlowupMonitor`), and every check interval and every frame
-the energy balance (energy created stops the run); every ``output_interval`` it writes a frame; every ``checkpoint_interval_steps`` steps or
-``checkpoint_interval_minutes`` of wall time it writes a checkpoint
-(:func:`pdfem.run.checkpoint.write_checkpoint`). Under MPI it measures the load balance of the
-split ice bodies every step and re-partitions them when due (:class:`pdfem.run.balance.LoadBalance`).
+coupling step it advances the coupler, then runs the after-step tasks in order, each on its
+own schedule:
+
+1. :class:`Histories`: the step's history rows (every step, :meth:`pdfem.run.outputs.Outputs.step`);
+2. the load balance of split ice bodies (:class:`pdfem.run.balance.LoadBalance`; under MPI);
+3. :class:`MotionCheck`: runaway motion and NaN (:class:`pdfem.run.blowup.BlowupMonitor`, every
+   check interval, and at every frame);
+4. :class:`EnergyCheck`: energy created (every check interval between frames);
+5. :class:`Frames`: a results frame every ``output_interval`` and at the last step, with its
+   energy check;
+6. :class:`Checkpoints`: every ``checkpoint_interval_steps`` steps or
+   ``checkpoint_interval_minutes`` of wall time (:func:`pdfem.run.checkpoint.write_checkpoint`);
+7. :class:`ProgressTask`: the progress line.
+
+A task is an object with ``after_step(s)`` taking the :class:`Step` just taken.
 """
 
 from __future__ import annotations
@@ -42,6 +51,123 @@ class LoopResult:
     energy: dict | None = None  # the energy row of the last frame (J)
 
 
+@dataclass
+class Step:
+    """The coupling step just taken: its number, end time (s), whether it is the last and
+    whether a frame is due."""
+
+    number: int
+    t: float
+    last: bool
+    frame: bool
+
+
+class Histories:
+    """The history rows of every coupling step."""
+
+    def __init__(self, outputs) -> None:
+        self.outputs = outputs
+
+    def after_step(self, s: Step) -> None:
+        self.outputs.step(s.t)
+
+
+class Balance:
+    """The load balance of split ice bodies after every step (:mod:`pdfem.run.balance`)."""
+
+    def __init__(self, balance: LoadBalance, outputs) -> None:
+        self.balance, self.outputs = balance, outputs
+
+    def after_step(self, s: Step) -> None:
+        self.balance.after_step(s.number, s.t, self.outputs.writer)
+
+
+class MotionCheck:
+    """Runaway motion and NaN, every check interval (the monitor's own schedule)."""
+
+    def __init__(self, monitor) -> None:
+        self.monitor = monitor
+
+    def after_step(self, s: Step) -> None:
+        self.monitor.check_motion(s.t, s.number)
+
+
+class EnergyCheck:
+    """Energy created, every check interval between frames (a frame checks its own)."""
+
+    def __init__(self, monitor, outputs) -> None:
+        self.monitor, self.outputs = monitor, outputs
+
+    def after_step(self, s: Step) -> None:
+        if self.monitor.due(s.number) and not s.frame:
+            self.monitor.check_energy(s.t, s.number, self.outputs.energy.row())
+
+
+class Frames:
+    """A results frame every ``output_interval`` (s) and at the last step, each with the
+    motion and energy checks."""
+
+    def __init__(self, outputs, monitor, interval: float, state: LoopState, t0: float) -> None:
+        self.outputs, self.monitor, self.interval = outputs, monitor, interval
+        self.frames, self.next_output = state.frames, state.next_output
+        self.last_time = t0          # s, time of the last frame written
+        self.energy: dict | None = None
+
+    def due(self, t: float, last: bool) -> bool:
+        """Whether the step ending at ``t`` (s) writes a frame."""
+        return t >= self.next_output * (1 - 1e-9) or last
+
+    def after_step(self, s: Step) -> None:
+        if not s.frame:
+            return
+        self.monitor.check_motion(s.t, s.number, force=True)
+        e = self.outputs.frame(s.t)
+        self.last_time = s.t
+        self.frames += 1
+        while self.next_output <= s.t * (1 + 1e-9):
+            self.next_output += self.interval
+        self.energy = e
+        self.monitor.check_energy(s.t, s.number, e)
+
+
+class Checkpoints:
+    """A checkpoint every ``every`` steps and every ``minutes`` of wall time (rank 0's clock
+    decides for all ranks), never at the last step."""
+
+    def __init__(self, case, setup, outputs, frames: Frames, path: Path, comm,
+                 broken) -> None:
+        run = case.run
+        self.every, self.minutes = run.checkpoint_interval_steps, run.checkpoint_interval_minutes
+        self.case, self.setup, self.outputs, self.frames = case, setup, outputs, frames
+        self.path, self.comm, self.broken = path, comm, broken
+        self.last = time.monotonic()
+
+    def after_step(self, s: Step) -> None:
+        due = bool(self.every) and s.number % self.every == 0
+        if self.minutes and not due:
+            due = self.comm.bcast(time.monotonic() - self.last >= 60 * self.minutes)
+        if s.last or not due:
+            return
+        st, out = self.setup, self.outputs
+        out.flush()
+        write_checkpoint(self.path, self.case.text,
+                         DriverState(s.number, s.t, st.dt, st.n_ice, st.n_st,
+                                     self.frames.next_output, self.frames.frames, self.broken(),
+                                     out.energy.initial, out.writer.history_rows()),
+                         st.bodies, st.structures, st.coupler, self.comm)
+        self.last = time.monotonic()
+
+
+class ProgressTask:
+    """The progress line after every step."""
+
+    def __init__(self, bar) -> None:
+        self.bar = bar
+
+    def after_step(self, s: Step) -> None:
+        self.bar.update(s.t, s.number)
+
+
 def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
              ckpt_path: Path, say=lambda s: None) -> LoopResult:
     """Take the steps ``state.first`` .. ``setup.nsteps`` (see the module docstring); ``say``
@@ -50,18 +176,19 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
     Raises
     ------
     InstabilityError
-        The run blew up; a last frame at the failure is written when the state is still finite
-        (serial runs), and the message says what the results file holds.
+        The run blew up; a last frame at the failure is written when every process meets the
+        failure at the same point and the state is still finite, and the message says what
+        the results file holds.
     """
-    run, coupler, dt = case.run, setup.coupler, setup.dt
-    every, minutes = run.checkpoint_interval_steps, run.checkpoint_interval_minutes
-    frames, next_out, broken = state.frames, state.next_output, state.broken
-    last_checkpoint = time.monotonic()
+    coupler, dt = setup.coupler, setup.dt
+    broken = state.broken
     step = state.first - 1
     t = step * dt
-    last_frame = t
-    energy = None
-    balance = LoadBalance(case, setup, comm, say)
+    frames = Frames(outputs, monitor, case.run.output_interval, state, t)
+    tasks = [Histories(outputs), Balance(LoadBalance(case, setup, comm, say), outputs),
+             MotionCheck(monitor), EnergyCheck(monitor, outputs), frames,
+             Checkpoints(case, setup, outputs, frames, ckpt_path, comm, lambda: broken),
+             ProgressTask(bar)]
     try:
         for step in range(state.first, setup.nsteps + 1):
             t = step * dt
@@ -70,36 +197,13 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
             except FloatingPointError as exc:
                 monitor.check_motion(t, step, force=True)
                 raise InstabilityError(f"at t = {t:.6e} s (step {step:,}): {exc}") from None
-            outputs.step(t)
-            balance.after_step(step, t, outputs.writer)
-            monitor.check_motion(t, step)
-            frame = t >= next_out * (1 - 1e-9) or step == setup.nsteps
-            if monitor.due(step) and not frame:  # the balance every check interval
-                monitor.check_energy(t, step, outputs.energy.row())
-            if frame:
-                monitor.check_motion(t, step, force=True)
-                e = outputs.frame(t)
-                last_frame = t
-                frames += 1
-                while next_out <= t * (1 + 1e-9):
-                    next_out += run.output_interval
-                energy = e
-                monitor.check_energy(t, step, e)
-            due = bool(every) and step % every == 0
-            if minutes and not due:  # rank 0's clock decides for all ranks
-                due = comm.bcast(time.monotonic() - last_checkpoint >= 60 * minutes)
-            if step < setup.nsteps and due:
-                outputs.flush()
-                write_checkpoint(ckpt_path, case.text,
-                                 DriverState(step, t, dt, setup.n_ice, setup.n_st, next_out,
-                                             frames, broken, outputs.energy.initial,
-                                             outputs.writer.history_rows()),
-                                 setup.bodies, setup.structures, coupler, comm)
-                last_checkpoint = time.monotonic()
-            bar.update(t, step)
+            last = step == setup.nsteps
+            s = Step(step, t, last, frames.due(t, last))
+            for task in tasks:
+                task.after_step(s)
     except InstabilityError as exc:
         note = ""
-        if comm.size == 1 and t > last_frame and _finite_state(setup):
+        if comm.failures_shared and t > frames.last_time and _finite_state(setup):
             try:
                 outputs.frame(t)
                 note = f", the last at the failure, t = {t:.6e} s"
@@ -108,7 +212,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
         outputs.close()
         raise InstabilityError(f"{exc}. The results so far are kept: {outputs.writer.path} "
                                f"({outputs.writer.n_frames} frames{note})") from None
-    return LoopResult(step, frames, broken, energy)
+    return LoopResult(step, frames.frames, broken, frames.energy)
 
 
 def _finite_state(setup) -> bool:
