@@ -126,9 +126,24 @@ def test_panel_pulse_reaches_the_ship_through_its_supports(tmp_path):
     assert abs(e["residual"][-1]) <= 1e-6 * e["supplied"][-1]
 
 
-def test_attached_to_must_name_a_ship_listed_before(tmp_path):
-    """``attached_to`` naming no ship before the structure is refused naming the file, the field
-    and what is valid; with a motion it is refused by the schema."""
+def test_attached_structures_follow_their_ship_by_name():
+    """A structure riding on a ship is stepped right after it, wherever the case lists the ship
+    (the ship must reach t + h first: pdfem/fem/attached_frame.py); other structures keep
+    the case order."""
+    from types import SimpleNamespace as S
+
+    from pdfem.run.build_structures import stepping_order
+
+    cfgs = [S(name="panel", attached_to="hull"), S(name="wall", attached_to=None),
+            S(name="hull", attached_to=None), S(name="deck", attached_to="hull")]
+    assert stepping_order(cfgs) == [1, 2, 0, 3]
+    ordered = [S(name="hull", attached_to=None), S(name="panel", attached_to="hull")]
+    assert stepping_order(ordered) == [0, 1]
+
+
+def test_attached_to_must_name_a_ship(tmp_path):
+    """``attached_to`` naming no ship of the case is refused naming the file, the field and
+    what is valid; with a motion it is refused by the schema."""
     from pdfem.case.schema import parse_case
     from pdfem.errors import InputError
     from pdfem.run.build_structures import build_all

@@ -11,7 +11,8 @@ since its previous step, ice impulses included), in body axes::
 
     f = -m [ R^T a_G + w_b' x r + w_b x (w_b x r) + 2 w_b x u_e' ],    w_b = R^T w.
 
-Ordering: the ship must be listed before the structure that rides on it, so in every
+Ordering: the ship steps before the structure that rides on it (the builder puts it first,
+:func:`pdfem.run.build_structures.build_all`), so in every
 (sub)step the ship has reached ``t + h`` when the structure steps to ``t + h`` (its inertial
 loads use the ship's state at the step's end, as a moving frame's do); the acceleration is the
 ship's mean over that step (a lag of half a step).
@@ -109,7 +110,7 @@ class AttachedStructure(FrameStructure):
     *args, **kwargs
         As for :class:`pdfem.fem.structure.ElasticStructure`.
     ship
-        The ship it is attached to (listed before it in the run).
+        The ship it is attached to (stepped before it in the run).
     """
 
     def __init__(self, *args, ship: Ship, **kwargs):

@@ -87,20 +87,19 @@ line here (builder errors: :class:`ValueError` or :class:`OSError` for a bad mes
 
 
 def _ship_of(cfg: StructureConfig, ships: dict, file: str) -> Ship:
-    """The ship an elastic structure is attached to, among the ships built before it."""
+    """The ship an elastic structure is attached to, by name among the case's ships."""
     if cfg.attached_to not in ships:
         raise InputError(file, f"{cfg.field}.attached_to", "a structure rides on a ship "
-                         "(kind = \"ship\") listed before it in the case file; there is no such "
-                         "ship before this structure (ships listed before it: "
-                         f"{', '.join(ships) or 'none'})", cfg.attached_to)
+                         "(kind = \"ship\") of the case; there is no ship of that name (the "
+                         f"case's ships: {', '.join(ships) or 'none'})", cfg.attached_to)
     return ships[cfg.attached_to]
 
 
 def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
                     remesh: bool = True, ships: dict | None = None) -> Structure:
     """Build the structure that ``cfg`` describes with the builder of its kind
-    (:data:`STRUCTURE_KINDS`; ``remesh``: see :func:`structure_mesh`); ``ships``: the ships
-    built before it by name (the one a structure is ``attached_to``).
+    (:data:`STRUCTURE_KINDS`; ``remesh``: see :func:`structure_mesh`); ``ships``: the case's
+    ships by name (the one a structure is ``attached_to``).
 
     Raises
     ------
@@ -120,11 +119,27 @@ def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
         raise InputError(file, f"{cfg.field}.mesh", f"{exc} (mesh file {path})") from None
 
 
+def stepping_order(configs) -> list[int]:
+    """Indices of the case's structures in the order they are stepped: case order, except that
+    a structure listed before the ship it rides on (``attached_to``) comes right after it (in
+    every (sub)step the ship must step first: :mod:`pdfem.fem.attached_frame`)."""
+    order: list[int] = []
+    for k, cfg in enumerate(configs):
+        if cfg.attached_to is None or any(configs[q].name == cfg.attached_to for q in order):
+            order.append(k)
+        for q, other in enumerate(configs):  # riders listed before this ship follow it
+            if q < k and other.attached_to == cfg.name and q not in order:
+                order.append(q)
+    return order
+
+
 def build_all(configs, out_dir: Path, file: str = "<case>", remesh: bool = True) -> list:
-    """The case's structures in order (:func:`build_structure`), each seeing those before it."""
-    built, ships = [], {}
-    for cfg in configs:
-        built.append(build_structure(cfg, out_dir, file, remesh, ships))
-        if cfg.kind == "ship":
-            ships[cfg.name] = built[-1]
-    return built
+    """The case's structures (:func:`build_structure`) in :func:`stepping_order`; a structure
+    attached to a ship finds it by name wherever the case lists it."""
+    built, ships = {}, {}
+    free = [k for k, cfg in enumerate(configs) if cfg.attached_to is None]
+    for k in free + [k for k in range(len(configs)) if k not in free]:
+        built[k] = build_structure(configs[k], out_dir, file, remesh, ships)
+        if configs[k].kind == "ship":
+            ships[configs[k].name] = built[k]
+    return [built[k] for k in stepping_order(configs)]
