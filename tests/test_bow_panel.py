@@ -1,4 +1,4 @@
-"""The icebreaker's elastic bow panel (models/bow_panel.py, pdfem/fem/attached_frame.py,
+"""The icebreaker's elastic bow panel (models/bow_panel.py, pdfem/motion/attached_frame.py,
 docs/icebreaking.md): towed with the rigid hull through level ice, and riding on a free ship.
 SI units. References: Newton's third law at the contact (the impulse the ice receives from the
 panel is minus the panel's), the energy balance of the run, and the momentum balance of ship +
@@ -128,7 +128,7 @@ def test_panel_pulse_reaches_the_ship_through_its_supports(tmp_path):
 
 def test_attached_structures_follow_their_ship_by_name():
     """A structure riding on a ship is stepped right after it, wherever the case lists the ship
-    (the ship must reach t + h first: pdfem/fem/attached_frame.py); other structures keep
+    (the ship must reach t + h first: pdfem/motion/attached_frame.py); other structures keep
     the case order."""
     from types import SimpleNamespace as S
 
@@ -166,8 +166,8 @@ def test_frame_path_kink_keeps_the_nodes_world_velocity(tmp_path):
     step over the kink the supported nodes take the frame's new velocity, the free nodes keep
     their world velocity (0, to the elastic response of one step: < 5 % of the jump), and the drive's work is
     the kinetic-energy change of the elastic motion (1/2 m_free 0.5^2)."""
-    from pdfem.fem.moving_frame import MovingFrame
-    from pdfem.fem.rotating import FrameStructure
+    from pdfem.motion.moving_frame import MovingFrame
+    from pdfem.motion.frame_structure import FrameStructure
     from pdfem.fem.elasticity import ElasticMaterial
 
     case = load_case(CASES / "icebreaker_panel_tiny.toml")

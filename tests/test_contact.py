@@ -12,7 +12,7 @@ import pytest
 
 from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.facets import closest_point_on_triangle
-from pdfem.fem.rigid import RigidBody
+from pdfem.motion.rigid import RigidBody
 
 
 def _segment_closest(p, a, b):

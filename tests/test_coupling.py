@@ -314,7 +314,7 @@ def test_bar_impact_on_a_rigid_wall_follows_elastic_wave_theory():
     lasts 2 L / c with c = sqrt(E / rho), the wall force is rho c A v meanwhile, and the
     total impulse on the wall equals the bar's momentum change (momentum conservation, to
     round-off). Duration and mean force within 5 %."""
-    from pdfem.fem.rigid import RigidBody
+    from pdfem.motion.rigid import RigidBody
 
     dx, n_side, length, v0 = 0.005, 4, 0.3, 1.0
     side = n_side * dx

@@ -15,7 +15,7 @@ import pytest
 
 from pdfem.fem.elasticity import ElasticMaterial, surface_load
 from pdfem.fem.mesh import load_mesh
-from pdfem.fem.rigid import rotation_matrix
+from pdfem.motion.rigid import rotation_matrix
 from pdfem.fem.structure import ElasticStructure
 from pdfem.fem.surface import ContactSurface
 

@@ -18,7 +18,7 @@ import pytest
 from conftest import write_box
 from pdfem.fem.base import Structure
 from pdfem.fem.elasticity import ElasticMaterial
-from pdfem.fem.rigid import RigidBody
+from pdfem.motion.rigid import RigidBody
 from pdfem.fem.structure import ElasticStructure
 from pdfem.forces.base import ParticleForce
 from pdfem.forces.gravity import Gravity

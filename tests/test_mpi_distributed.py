@@ -62,7 +62,7 @@ COUPLED = textwrap.dedent('''
     import numpy as np
     from pdfem.coupling.contact import SurfaceContact
     from pdfem.coupling.coupler import ContactPair, Coupler
-    from pdfem.fem.rigid import RigidBody
+    from pdfem.motion.rigid import RigidBody
     from pdfem.parallel.comm import world
     from pdfem.pd.layout.split import split_body
     from pdfem.parallel.partition import choose_partition

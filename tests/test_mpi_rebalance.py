@@ -140,7 +140,7 @@ report("crush", dist, ref, imb)
 from types import SimpleNamespace
 from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.coupler import ContactPair, Coupler
-from pdfem.fem.rigid import RigidBody
+from pdfem.motion.rigid import RigidBody
 from pdfem.run.balance import LoadBalance
 
 mat2 = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3, fracture_energy=2.0)

@@ -23,7 +23,7 @@ import pytest
 
 from pdfem.case.loader import load_case
 from pdfem.cli.main import main
-from pdfem.fem.rigid import RigidBody, rotation_matrix
+from pdfem.motion.rigid import RigidBody, rotation_matrix
 from pdfem.geometry.path import DisplacementPath
 from pdfem.geometry.shapes import Box
 from pdfem.output import read_results

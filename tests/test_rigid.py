@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from pdfem.fem.rigid import RigidBody, read_surface, rotation_matrix
+from pdfem.motion.rigid import RigidBody, read_surface, rotation_matrix
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.mesh import load_mesh
 from pdfem.fem.structure import ElasticStructure

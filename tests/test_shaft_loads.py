@@ -1,4 +1,4 @@
-"""Shaft and blade loads of a rotating elastic structure (:mod:`pdfem.fem.shaft_loads`) and their
+"""Shaft and blade loads of a rotating elastic structure (:mod:`pdfem.motion.shaft_loads`) and their
 post-processing (:mod:`pdfem.post.shaft`).
 
 References: the moment of a force F about an axis at lever arm r, torque = F r (statics); the
@@ -18,8 +18,8 @@ import pytest
 import scipy.sparse.linalg as spla
 
 from pdfem.fem.elasticity import ElasticMaterial
-from pdfem.fem.moving_frame import MovingFrame
-from pdfem.fem.rotating import FrameStructure
+from pdfem.motion.moving_frame import MovingFrame
+from pdfem.motion.frame_structure import FrameStructure
 from pdfem.meshing.runner import mesh_model
 from pdfem.post.shaft import plot_shaft, shaft_figures, shaft_lines
 from pdfem.validation.case import Outcome, load_validation_case, run_and_read

@@ -17,9 +17,9 @@ import pytest
 
 from pdfem.case.schema import load_case
 from pdfem.errors import InputError
-from pdfem.fem.hydrostatics import hydrostatics
-from pdfem.fem.rigid import read_msh_groups, read_surface, rotation_matrix
-from pdfem.fem.ship import Ship
+from pdfem.motion.hydrostatics import hydrostatics
+from pdfem.motion.rigid import read_msh_groups, read_surface, rotation_matrix
+from pdfem.motion.ship import Ship
 from pdfem.fem.surface import orient_outward
 from pdfem.models import icebreaker
 from pdfem.output import read_results

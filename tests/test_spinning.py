@@ -1,4 +1,4 @@
-"""Elastic structures in a moving frame (:mod:`pdfem.fem.rotating`, :mod:`pdfem.fem.moving_frame`).
+"""Elastic structures in a moving frame (:mod:`pdfem.motion.frame_structure`, :mod:`pdfem.motion.moving_frame`).
 
 References: the radial stress of a bar spinning about its root, rho omega^2 (R^2 - r^2) / 2,
 from equilibrium d sigma / dr = -rho omega^2 r with a free tip (Timoshenko & Goodier 1970,
@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from pdfem.fem.elasticity import ElasticMaterial
-from pdfem.fem.moving_frame import MovingFrame
-from pdfem.fem.rotating import FrameStructure
+from pdfem.motion.moving_frame import MovingFrame
+from pdfem.motion.frame_structure import FrameStructure
 from pdfem.fem.structure import ElasticStructure
 from pdfem.meshing.runner import mesh_model
 from pdfem.validation.case import Outcome, load_validation_case, run_and_read

@@ -8,8 +8,8 @@ the energy balance, a mesh check, checkpoints, and a line for the start-up repor
 calls only these methods, so it never asks which kind of structure it holds.
 
 Implementations: :class:`pdfem.fem.structure.ElasticStructure` (linear-elastic FE, explicit)
-and :class:`pdfem.fem.rigid.RigidBody` (prescribed rigid motion) and
-:class:`pdfem.fem.ship.Ship` (a free-floating rigid hull).
+and :class:`pdfem.motion.rigid.RigidBody` (prescribed rigid motion) and
+:class:`pdfem.motion.ship.Ship` (a free-floating rigid hull).
 
 Adding a kind
 -------------
@@ -54,7 +54,7 @@ class Structure(SurfaceBody, ABC):
         return PredictedSurface(self)
 
     shaft = None
-    """Shaft and blade loads of a rotating structure (:mod:`pdfem.fem.shaft_loads`), else None."""
+    """Shaft and blade loads of a rotating structure (:mod:`pdfem.motion.shaft_loads`), else None."""
 
     # -- time stepping -------------------------------------------------------------------------
     @abstractmethod

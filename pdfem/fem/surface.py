@@ -1,7 +1,7 @@
 """The contact surface of a structure: the interface that the contact code sees.
 
 Elastic structures (:class:`pdfem.fem.structure.ElasticStructure`) and rigid bodies
-(:class:`pdfem.fem.rigid.RigidBody`) expose the same surface interface, :class:`ContactSurface`:
+(:class:`pdfem.motion.rigid.RigidBody`) expose the same surface interface, :class:`ContactSurface`:
 current positions and velocities of the surface nodes, triangles over them with outward unit
 normals, and an accumulator for the nodal contact forces (N) they receive, with its total force
 and moment. :class:`SurfaceBody` implements the force bookkeeping and the normals once for both.

@@ -1,7 +1,7 @@
 """Load patches of a triangulated surface mesh: which contact triangles lie on each other group.
 
 A rigid body or a ship is read from the contact group of a surface mesh
-(:func:`pdfem.fem.rigid.read_surface`). The file's other surface groups (a hull's ``bow``,
+(:func:`pdfem.motion.rigid.read_surface`). The file's other surface groups (a hull's ``bow``,
 ``shoulder``, ``midship``, ...) name parts of that surface; each becomes a load patch whose
 force history the run writes (:mod:`pdfem.coupling.facet_loads`). A contact triangle belongs
 to a group when the group has a triangle (or half of a quadrilateral) on the same three points,

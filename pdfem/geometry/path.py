@@ -5,7 +5,7 @@ displacement is interpolated linearly between points, equals the first point's b
 holds the last point's after the last time. The velocity is the slope of the segment holding
 ``t`` (right-continuous: at a point's time it is the slope of the segment that starts there;
 zero before the first and from the last point on). Used by ice regions
-(:mod:`pdfem.pd.constraints`) and rigid bodies (:mod:`pdfem.fem.rigid`). Units: s, m, m/s.
+(:mod:`pdfem.pd.constraints`) and rigid bodies (:mod:`pdfem.motion.rigid`). Units: s, m, m/s.
 """
 
 from __future__ import annotations

@@ -44,7 +44,7 @@ UNITS: dict[str, str] = {
     "position": "m", "rotation": "rad", "velocity": "m/s", "angular_velocity": "rad/s",
     "hydrostatic_force": "N", "hydrostatic_moment": "N m",
     **{k: "N m" for k in ("ice_torque", "shaft_torque", "spindle_torque", "bending_out_of_plane",
-                          "bending_in_plane")},  # shaft/<name>[.<blade>], pdfem.fem.shaft_loads
+                          "bending_in_plane")},  # shaft/<name>[.<blade>], pdfem.motion.shaft_loads
     "thrust": "N", "ice_force": "N", "force_blade": "N", "shaft_power": "W", "shaft_work": "J",
     "ice_work": "J", "energy_change": "J", "shaft_angular_impulse": "N m s",
     "ice_angular_impulse": "N m s", "angular_momentum_change": "kg m^2/s", "max_von_mises": "Pa",

@@ -42,7 +42,7 @@ def history_table(results: dict) -> tuple[list[str], np.ndarray]:
     names : list of str
         ``"time [s]"`` then one name per column, ``<group>/<key>[_x|_y|_z] [<unit>]``, e.g.
         ``loads/panel/force_x [N]``; groups in the order loads, contacts, monitors, shaft
-        loads (:mod:`pdfem.fem.shaft_loads`), ship motions.
+        loads (:mod:`pdfem.motion.shaft_loads`), ship motions.
     table : numpy.ndarray
         (K, len(names)) values; rows are the union of the groups' step times (the same
         steps in a file from :func:`pdfem.run.driver.run_case`), NaN where a group has no row.

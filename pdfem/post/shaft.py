@@ -4,7 +4,7 @@ frequency, and the summary figures (docs/rotating_structures.md, "Shaft and blad
 
 Reads the histories ``shaft/<name>`` and ``shaft/<name>.blade<k>`` that a run writes every
 coupling step for an elastic structure with a rotating ``motion``
-(:mod:`pdfem.fem.shaft_loads`). The shaft speed is the slope of ``frame_angle`` at the end of
+(:mod:`pdfem.motion.shaft_loads`). The shaft speed is the slope of ``frame_angle`` at the end of
 the run; the number of blades Z is the number of blade histories; the blade passing frequency
 is ``Z rpm / 60`` (Hz). SI units: N, N m, s, Hz, Pa, m; angles shown in degrees.
 """

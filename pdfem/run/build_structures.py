@@ -13,14 +13,14 @@ from pathlib import Path
 
 from pdfem.case.schema import StructureConfig
 from pdfem.errors import InputError
-from pdfem.fem.attached_frame import AttachedStructure
+from pdfem.motion.attached_frame import AttachedStructure
 from pdfem.fem.base import Structure
 from pdfem.fem.elasticity import ElasticMaterial
-from pdfem.fem.moving_frame import MovingFrame
-from pdfem.fem.rigid import RigidBody
-from pdfem.fem.ship import Ship
+from pdfem.motion.moving_frame import MovingFrame
+from pdfem.motion.rigid import RigidBody
+from pdfem.motion.ship import Ship
 from pdfem.geometry.path import DisplacementPath
-from pdfem.fem.rotating import FrameStructure
+from pdfem.motion.frame_structure import FrameStructure
 from pdfem.fem.structure import ElasticStructure
 from pdfem.output.files import inside
 from pdfem.run.mesh_groups import check_groups
@@ -122,7 +122,7 @@ def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
 def stepping_order(configs) -> list[int]:
     """Indices of the case's structures in the order they are stepped: case order, except that
     a structure listed before the ship it rides on (``attached_to``) comes right after it (in
-    every (sub)step the ship must step first: :mod:`pdfem.fem.attached_frame`)."""
+    every (sub)step the ship must step first: :mod:`pdfem.motion.attached_frame`)."""
     order: list[int] = []
     for k, cfg in enumerate(configs):
         if cfg.attached_to is None or any(configs[q].name == cfg.attached_to for q in order):

@@ -186,7 +186,7 @@ class MonitorSource(Source):
 
 class ShaftSource(Source):
     """A rotating structure's shaft and blade loads every coupling step (``shaft/<name>`` and
-    ``shaft/<name>.<blade>``, :mod:`pdfem.fem.shaft_loads`)."""
+    ``shaft/<name>.<blade>``, :mod:`pdfem.motion.shaft_loads`)."""
 
     def __init__(self, structure) -> None:
         self.shaft, self.name = structure.shaft, structure.name

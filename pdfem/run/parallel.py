@@ -22,7 +22,7 @@ from pdfem.coupling.coupler import ContactPair, Coupler
 from pdfem.forces.short_range import ShortRangeContact
 from pdfem.forces.short_range_kernels import in_box, sparse_table
 from pdfem.run.build_structures import build_all
-from pdfem.fem.rigid import RigidBody
+from pdfem.motion.rigid import RigidBody
 from pdfem.pd.body import IceBody
 from pdfem.pd.materials.lps import IceMaterial
 from pdfem.geometry.shapes import Box

@@ -10,7 +10,6 @@ compare the two.
 from __future__ import annotations
 
 import numba
-import numpy as np
 from numba import prange
 
 from pdfem.pd.bonds.chunk_kernels import FASTMATH, U64, fma

@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pdfem.pd.bonds.data import SIGNED, Bonds, LawArrays, Particles
+from pdfem.pd.bonds.data import SIGNED, Bonds, LawArrays, Particles  # noqa: F401 (SIGNED: API)
 from pdfem.pd.failure.crushed_shear import shear_kernel_args
 from pdfem.pd.bonds.lps_law import force_coefficients, stretch_limits
 from pdfem.pd.bonds.pair_step_kernels import dilatation_pairs, forces_pairs, forces_pairs_law

@@ -13,7 +13,7 @@ from pdfem.pd.bonds.data import Bonds
 from pdfem.pd.bonds.pair_loop import (bond_tuple, check_broken, check_weight, particle_tuple,
                                       rest_arg)
 from pdfem.pd.bonds.pair_sum_kernels import contact_bond_energy_pairs, damage_pairs, energy_pairs
-from pdfem.pd.bonds.workspace import c_contiguous, workspace_for
+from pdfem.pd.bonds.workspace import workspace_for
 
 _NO_SLIP = np.zeros(0, dtype=np.float32)  # "no shear springs" (read-only by convention)
 _NO_THETA = np.zeros(0)  # "no dilatation needed" (read-only by convention)

@@ -22,22 +22,10 @@ serial build of the same kernels (:func:`twin`).
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from pdfem.pd.bonds.chunk_kernels import chunk_split, max_reach, pairs_forward
 from pdfem.pd.bonds.data import Blocks
-
-from pdfem.pd.bonds.chunk_kernels import (  # noqa: F401  (re-exported: the old home of these names)
-    FASTMATH,
-    U64,
-    Twin,
-    add_overflow1,
-    add_overflow3,
-    chunk_split,
-    max_reach,
-    pairs_forward,
-    twin,
-)
 
 # Below these sizes the kernels run their serial build: a parallel region costs more than the
 # work, and a lot more when the machine is oversubscribed (the threads wait at a barrier for a

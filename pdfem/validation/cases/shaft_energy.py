@@ -1,7 +1,7 @@
 """Energy and angular momentum of a blade held at constant speed by its shaft while it strikes
 an ice block (``shaft_energy.toml``; docs/rotating_structures.md, "Shaft and blade loads").
 
-From the history ``shaft/bar`` (every coupling step, :mod:`pdfem.fem.shaft_loads`):
+From the history ``shaft/bar`` (every coupling step, :mod:`pdfem.motion.shaft_loads`):
 
 * energy: the work of the shaft (its torque through the clamped root, and the Rayleigh mass
   damping it drives, on the frame's velocity) plus the work of the ice's contact impulses (on

@@ -1,6 +1,6 @@
 """Free 6-DOF ship hull in calm water (``ship_rest.toml``, ``ship_heave.toml``,
 ``ship_pitch.toml``): no drift at rest, and the heave and pitch natural periods against the
-hydrostatic estimates (:class:`pdfem.fem.ship.Ship`, docs/ship.md). SI units.
+hydrostatic estimates (:class:`pdfem.motion.ship.Ship`, docs/ship.md). SI units.
 
 Measured from the ship's motion history (``motions/<name>``, every coupling step): the drift is
 the largest distance of the centre of gravity from its start (m, absolute tolerance 1 mm); a

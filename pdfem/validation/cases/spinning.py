@@ -2,7 +2,7 @@
 the rise of its first flapwise frequency with speed (``spinning_bar_southwell.toml``).
 
 The bar (along x from the root face x = 0 to the tip x = R) is solved in a frame turning about
-the z axis through its root (:class:`pdfem.fem.rotating.FrameStructure`). Once the speed is held
+the z axis through its root (:class:`pdfem.motion.frame_structure.FrameStructure`). Once the speed is held
 and the ramp's vibration has died out, equilibrium along the bar, d sigma / dr = -rho omega^2 r
 with a free tip, gives the radial stress
 
@@ -16,7 +16,7 @@ constraint disturbs the stress over about one bar depth, and from the tip where 
 The value is the station ratio sigma / sigma_rr furthest from 1; the reference is 1.
 
 Flapwise frequency: the lowest mode bending along the axis (z) of K + K_sigma - spin softening
-with the lumped mass (:meth:`pdfem.fem.rotating.FrameStructure.rotating_stiffness`) at the
+with the lumped mass (:meth:`pdfem.motion.frame_structure.FrameStructure.rotating_stiffness`) at the
 case's speed, against Southwell's omega_f^2 = omega_0^2 + 1.193 omega^2 with the Euler-Bernoulli
 omega_0 = 1.8751^2 / L^2 sqrt(E I / (rho A)).
 SI units throughout.
@@ -36,7 +36,7 @@ from pdfem.case import Case
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.structure import ElasticStructure
 from pdfem.fem.modes import generalized_modes
-from pdfem.fem.rotating import FrameStructure
+from pdfem.motion.frame_structure import FrameStructure
 from pdfem.run.build_structures import build_structure
 from pdfem.validation.case import Outcome, ValidationCase, replace_structure, unchanged
 

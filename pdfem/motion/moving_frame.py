@@ -30,12 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pdfem.geometry.path import DisplacementPath
-
-
-def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """(3, 3) rotation by ``angle`` (rad) about the unit ``axis`` (Rodrigues)."""
-    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+from pdfem.motion.rotation import axis_rotation
 
 
 @dataclass(frozen=True)
@@ -98,7 +93,7 @@ class MovingFrame:
         w = np.asarray(self.angular_velocity, dtype=np.float64)
         V = np.asarray(self.velocity, dtype=np.float64)
         speed = float(np.linalg.norm(w))
-        R = _rotation(w / speed, speed * S) if speed > 0.0 else np.eye(3)
+        R = axis_rotation(w / speed, speed * S) if speed > 0.0 else np.eye(3)
         c, c_dot = V * S, s * V
         if self.path is not None:
             p = DisplacementPath(self.path)

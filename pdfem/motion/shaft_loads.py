@@ -2,7 +2,7 @@
 the shaft's torque, work and angular impulse, per-blade forces, spindle torque and root bending
 moments, and the largest von Mises stress (docs/rotating_structures.md, "Shaft and blade loads").
 
-A :class:`ShaftLoads` belongs to a :class:`pdfem.fem.rotating.FrameStructure` whose frame turns
+A :class:`ShaftLoads` belongs to a :class:`pdfem.motion.frame_structure.FrameStructure` whose frame turns
 (shaft axis ``n`` = the unit ``angular_velocity`` through ``center``). It is fed by two hooks:
 
 * every contact impulse ``J`` (world axes, on the contact-surface nodes) at the instant it is
@@ -135,7 +135,7 @@ class ShaftLoads:
     Parameters
     ----------
     structure
-        A :class:`pdfem.fem.rotating.FrameStructure` whose frame turns (non-zero
+        A :class:`pdfem.motion.frame_structure.FrameStructure` whose frame turns (non-zero
         ``angular_velocity``).
     """
 

@@ -15,7 +15,7 @@ with ``w_mid`` the angular velocity of ``L`` at the attitude rotated by ``h w / 
 midpoint predictor, so the rotation is second-order accurate like the translation).
 
 ``F = m g + F_hydrostatic + thrust R e_x`` and ``M`` the hydrostatic moment about ``c``
-(:func:`pdfem.fem.hydrostatics.hydrostatics`: the pressure rho g (level - z) integrated over the
+(:func:`pdfem.motion.hydrostatics.hydrostatics`: the pressure rho g (level - z) integrated over the
 part of each triangle below the water surface, recomputed every step, not linearised). The ice
 acts through :meth:`apply_surface_impulse` (a jump of ``v`` and ``L`` by the resultant impulse
 and its moment about ``c``; its work, the kinetic-energy change, is booked by the coupler). For
@@ -33,48 +33,17 @@ Not modelled: radiation damping, added mass and viscous forces of the hull, wave
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
 from pdfem.errors import InputError
 from pdfem.fem.base import Structure
-from pdfem.fem.hydrostatics import hydrostatics
-from pdfem.fem.rigid import read_surface
+from pdfem.motion.hydrostatics import hydrostatics
+from pdfem.motion.rigid import read_surface
 from pdfem.fem.surface_patches import surface_patches
 from pdfem.fem.surface import orient_outward
-
-
-def quaternion_matrix(q: np.ndarray) -> np.ndarray:
-    """(3, 3) rotation matrix of a unit quaternion ``(w, x, y, z)``."""
-    w, x, y, z = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-
-
-def rotation_quaternion(rotation_vector) -> np.ndarray:
-    """Unit quaternion of a rotation vector (axis times angle, rad)."""
-    r = np.asarray(rotation_vector, dtype=np.float64).reshape(3)
-    a = float(np.linalg.norm(r))
-    if a == 0.0:
-        return np.array([1.0, 0.0, 0.0, 0.0])
-    return np.concatenate([[math.cos(a / 2)], math.sin(a / 2) * r / a])
-
-
-def quaternion_product(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Hamilton product ``p q`` (the rotation q, then p)."""
-    w1, v1, w2, v2 = p[0], p[1:], q[0], q[1:]
-    return np.concatenate([[w1 * w2 - v1 @ v2], w1 * v2 + w2 * v1 + np.cross(v1, v2)])
-
-
-def rotation_vector(q: np.ndarray) -> np.ndarray:
-    """Rotation vector (rad; axis times angle in [0, pi]) of a unit quaternion."""
-    q = q if q[0] >= 0 else -q
-    s = float(np.linalg.norm(q[1:]))
-    if s == 0.0:
-        return np.zeros(3)
-    return 2.0 * math.atan2(s, q[0]) * q[1:] / s
+from pdfem.motion.rotation import (quaternion_matrix, quaternion_product, rotation_quaternion,
+                                   rotation_vector)
 
 
 class Ship(Structure):
@@ -147,7 +116,7 @@ class Ship(Structure):
         self.thrust, self.surge_speed, self.ramp_time = float(thrust), surge_speed, ramp_time
         self.time = 0.0
         self.thrust_work = self.surge_work = 0.0
-        # structures riding on the hull (pdfem.fem.attached_frame): their support impulses (N s,
+        # structures riding on the hull (pdfem.motion.attached_frame): their support impulses (N s,
         # world, summed) and work (J); the mean accelerations of the last step (m/s^2, rad/s^2)
         self.attached_impulse, self.attached_work = np.zeros(3), 0.0
         self.external_impulse = np.zeros(3)   # N s: gravity, water, thrust, held surge

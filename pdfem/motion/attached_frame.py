@@ -1,8 +1,8 @@
 """An elastic structure riding on a free ship: its frame is the ship's pose, and the load it
 carries reaches the ship through its supports (an elastic bow panel, docs/icebreaking.md).
 
-:class:`ShipFrame` has the interface of :class:`pdfem.fem.moving_frame.MovingFrame` with the
-kinematics read from a :class:`pdfem.fem.ship.Ship` instead of prescribed: a material point
+:class:`ShipFrame` has the interface of :class:`pdfem.motion.moving_frame.MovingFrame` with the
+kinematics read from a :class:`pdfem.motion.ship.Ship` instead of prescribed: a material point
 with mesh position X (the hull's mesh coordinates) and elastic displacement u_e (ship body
 axes) is at ``x = c + R (X - c_G + u_e)``, with c the ship's centre of gravity, R its attitude
 and c_G its centre of gravity in the mesh. The inertial loads on the elastic motion use the
@@ -17,7 +17,7 @@ Ordering: the ship steps before the structure that rides on it (the builder puts
 loads use the ship's state at the step's end, as a moving frame's do); the acceleration is the
 ship's mean over that step (a lag of half a step).
 
-:class:`AttachedStructure` is a :class:`pdfem.fem.rotating.FrameStructure` in such a frame.
+:class:`AttachedStructure` is a :class:`pdfem.motion.frame_structure.FrameStructure` in such a frame.
 The ship's mass includes the structure (its rigid motion is the ship's); the structure's
 elastic motion adds the momentum ``P_e = sum m R u_e'`` (world axes). After every step the
 structure gives the ship, at each node, the impulse of the external loads it received since
@@ -36,8 +36,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pdfem.fem.rotating import FrameStructure
-from pdfem.fem.ship import Ship, rotation_vector
+from pdfem.motion.frame_structure import FrameStructure
+from pdfem.motion.rotation import rotation_vector
+from pdfem.motion.ship import Ship
 
 
 class ShipFrame:

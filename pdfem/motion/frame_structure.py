@@ -2,7 +2,7 @@
 blade or bar (docs/rotating_structures.md).
 
 :class:`FrameStructure` is an :class:`pdfem.fem.structure.ElasticStructure` whose displacement
-DOFs are the elastic displacement u_e relative to a :class:`pdfem.fem.moving_frame.MovingFrame`,
+DOFs are the elastic displacement u_e relative to a :class:`pdfem.motion.moving_frame.MovingFrame`,
 in frame axes. Each step adds the frame's inertial loads (centrifugal on r = X - c0 + u_e, so
 with spin softening; Coriolis; Euler and translation during the ramp) and the stress
 stiffening of the centrifugal prestress (-s^2 K_sigma u_e) to the applied loads,
@@ -16,7 +16,7 @@ The drive holds the frame's motion whatever the loads, so the work it does on th
 motion is part of ``support_work``: the work of the inertial loads (trapezoid rule, as the
 integrator counts every force) minus the work of the contact impulses on the frame's own
 velocity (the drive absorbs it). With it the structure's balance closes to round-off.
-When the frame turns, ``shaft`` (:class:`pdfem.fem.shaft_loads.ShaftLoads`) records the contact
+When the frame turns, ``shaft`` (:class:`pdfem.motion.shaft_loads.ShaftLoads`) records the contact
 impulses and the shaft's torque every step (shaft torque, thrust, blade loads).
 SI units throughout.
 """
@@ -26,9 +26,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from pdfem.fem.moving_frame import MovingFrame
-from pdfem.fem.shaft_loads import ShaftLoads
-from pdfem.fem.stress_stiffening import centrifugal_stiffness
+from pdfem.motion.moving_frame import MovingFrame
+from pdfem.motion.shaft_loads import ShaftLoads
+from pdfem.motion.stress_stiffening import centrifugal_stiffness
 from pdfem.fem.structure import ElasticStructure
 
 
@@ -43,7 +43,7 @@ class FrameStructure(ElasticStructure):
         The frame's motion (rotation about a fixed axis through its centre, translation, ramp).
     stress_stiffening
         Add the geometric stiffness of the centrifugal prestress, s(t)^2 K_sigma
-        (:mod:`pdfem.fem.stress_stiffening`); default True.
+        (:mod:`pdfem.motion.stress_stiffening`); default True.
     """
 
     def __init__(self, *args, frame: MovingFrame, stress_stiffening: bool = True, **kwargs):

@@ -31,21 +31,7 @@ from pdfem.fem.mesh import load_mesh, read_msh_groups
 from pdfem.fem.base import Structure
 from pdfem.fem.surface import orient_outward, split_quads
 from pdfem.fem.surface_patches import surface_patches
-
-
-def rotation_matrix(rotation_vector) -> np.ndarray:
-    """Rotation matrix of a rotation vector (axis times angle in rad), by Rodrigues' formula.
-
-    ``R = I + sin(a) K + (1 - cos(a)) K^2`` with ``a = |r|`` and ``K`` the cross-product matrix
-    of the unit axis ``r / a``.
-    """
-    r = np.asarray(rotation_vector, dtype=np.float64).reshape(3)
-    a = float(np.linalg.norm(r))
-    if a == 0.0:
-        return np.eye(3)
-    k = r / a
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + math.sin(a) * K + (1.0 - math.cos(a)) * (K @ K)
+from pdfem.motion.rotation import rotation_matrix
 
 
 def read_surface(path: str | os.PathLike, group: str = "contact") -> tuple[np.ndarray, np.ndarray]:

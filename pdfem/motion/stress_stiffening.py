@@ -23,7 +23,7 @@ import skfem
 from pdfem.fem.static import static_displacement
 
 if TYPE_CHECKING:
-    from pdfem.fem.moving_frame import MovingFrame
+    from pdfem.motion.moving_frame import MovingFrame
     from pdfem.fem.structure import ElasticStructure
 
 
