@@ -1,7 +1,7 @@
 """Parametric propeller: Z elastic blades of NACA 00xx sections on a rigid hub, with named groups
 per blade (root, leading edge, trailing edge, tip, face, back) for loads and supports.
 
-Geometry (SI: m, rad; the laws are in ``models/_propeller_sections.py``). The shaft axis is x;
+Geometry (SI: m, rad; the laws are in ``models/propeller_sections.py``). The shaft axis is x;
 a point at radius r and angle psi around the shaft (from +z toward +y) is
 (x, r sin psi, r cos psi). Blade k (k = 1..Z) has its reference line at
 psi_k = 2 pi (k - 1) / Z (blade 1 along +z, as ``models/propeller_blade.py``). The leading edges
@@ -39,7 +39,7 @@ import numpy as np
 
 from pdfem.meshing import (MeshReport, check_parameters, finish_mesh, generate_mesh, gmsh_session, require,
                            require_element_budget, require_positive, require_range, set_mesh_size)
-from pdfem.models import _propeller_sections as sec
+from pdfem.models import propeller_sections as sec
 from pdfem.models.propeller_blade import _second_order
 
 #: name -> (default, unit, description)

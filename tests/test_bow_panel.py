@@ -181,7 +181,7 @@ def test_frame_path_kink_keeps_the_nodes_world_velocity(tmp_path):
     dt = 2e-6
     for _ in range(5):                                # to t = 1e-5 s, the kink in the last step
         st.step(dt)
-    r, v = st._relative()
+    r, v = st.relative_motion()
     _, world = frame.to_world(st.solver.time, r, v)
     fixed = st.group_nodes("fixed")
     free = np.setdiff1d(np.arange(st.n_nodes), fixed)

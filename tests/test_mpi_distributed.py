@@ -63,7 +63,7 @@ COUPLED = textwrap.dedent('''
     from pdfem.coupling.contact import SurfaceContact
     from pdfem.coupling.coupler import ContactPair, Coupler
     from pdfem.motion.rigid import RigidBody
-    from pdfem.parallel.comm import world
+    from pdfem.parallel.comm import SerialComm, world
     from pdfem.pd.layout.split import split_body
     from pdfem.parallel.partition import choose_partition
     from pdfem.pd.body import IceBody
@@ -95,7 +95,7 @@ COUPLED = textwrap.dedent('''
 
     comm = world()
     ref = build()
-    f_ref = run(ref, None)
+    f_ref = run(ref, SerialComm())
     owner, _ = choose_partition(ref.x0, ref.row_ptr, ref.nbr, comm.size)
     dist = split_body(build(), owner, comm)
     f = run(dist, comm)

@@ -45,7 +45,7 @@ import pytest
 SCRIPT = textwrap.dedent('''
 import time
 import numpy as np
-from pdfem.parallel.comm import world
+from pdfem.parallel.comm import SerialComm, world
 from pdfem.parallel.rcb import rcb_owners
 from pdfem.pd.layout.split import split_body
 from pdfem.pd.body import IceBody
@@ -167,7 +167,7 @@ def coupled(body, c):
     return cp, pair
 
 ref = IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2)
-cp_ref, pair_ref = coupled(ref, None)
+cp_ref, pair_ref = coupled(ref, SerialComm())
 y0 = ref.x0[:, 1]
 owner = np.minimum((y0 / y0.max() * comm.size * 0.6).astype(np.int32), comm.size - 1)
 dist = split_body(IceBody.from_shape("plate", plate, mat2, d2, 3.015 * d2), owner, comm)

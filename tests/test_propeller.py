@@ -20,7 +20,7 @@ from scipy.integrate import quad
 
 from pdfem.case import load_case
 from pdfem.meshing import check_parameters
-from pdfem.models import _propeller_sections as sec
+from pdfem.models import propeller_sections as sec
 from pdfem.models import propeller
 from pdfem.validation.case import case_path
 from pdfem.validation.cases import milling

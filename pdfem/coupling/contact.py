@@ -43,6 +43,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -53,10 +54,61 @@ from pdfem.coupling.facets import FACE, FacetTopology, closest_point_on_triangle
 from pdfem.coupling.nodal_impulse import ContactRecords
 
 
+class GridArrays(NamedTuple):
+    """The facet grid's arrays (:class:`pdfem.coupling.facet_grid.FacetGrid`)."""
+
+    cell_start: np.ndarray
+    cell_facets: np.ndarray
+    origin: np.ndarray
+    inv_h: float
+    dims: np.ndarray
+
+
+class SurfaceArrays(NamedTuple):
+    """A contact surface now: node positions ``pts`` (m), triangles, their edges, the face,
+    edge and vertex pseudo-normals and the boundary flags (:mod:`pdfem.coupling.facets`)."""
+
+    pts: np.ndarray
+    tri: np.ndarray
+    tri_edges: np.ndarray
+    face_n: np.ndarray
+    edge_n: np.ndarray
+    vert_n: np.ndarray
+    boundary_edge: np.ndarray
+    boundary_node: np.ndarray
+
+
+class SurfaceState(NamedTuple):
+    """The surface's node positions now and at the drift's start (m), velocities (m/s),
+    inverse masses (1/kg), the contacts' share of each node and the triangles."""
+
+    pts: np.ndarray
+    pts0: np.ndarray
+    vel: np.ndarray
+    invm: np.ndarray
+    share: np.ndarray
+    tri: np.ndarray
+
+
+class Drift(NamedTuple):
+    """The particles' positions after and before the drift (m), their velocities (m/s) and
+    masses (kg)."""
+
+    y: np.ndarray
+    y_old: np.ndarray
+    v: np.ndarray
+    mass: np.ndarray
+
+
 @numba.njit(parallel=True, cache=True)
-def _detect(y, active, cell_start, cell_facets, origin, inv_h, dims, pts, tri, tri_edges,
-            face_n, edge_n, vert_n, boundary_edge, boundary_node, reach, facet, weight, normal):
-    """For each active particle: the facet it is behind (or -1), weights, contact normal."""
+def _detect(y, active, grid, surface, reach, facet, weight, normal):
+    """For each active particle: the facet it is behind (or -1), weights, contact normal (the
+    tuples' arrays taken out before the ``prange``: numba loses writes through tuples there)."""
+    cell_start, cell_facets, origin = grid.cell_start, grid.cell_facets, grid.origin
+    inv_h, dims = grid.inv_h, grid.dims
+    pts, tri, tri_edges = surface.pts, surface.tri, surface.tri_edges
+    face_n, edge_n, vert_n = surface.face_n, surface.edge_n, surface.vert_n
+    boundary_edge, boundary_node = surface.boundary_edge, surface.boundary_node
     n = y.shape[0]
     nyz = dims[1] * dims[2]
     r2 = reach * reach
@@ -136,8 +188,7 @@ def _shares(facet, weight, tri, share):
 
 
 @numba.njit(cache=True)
-def _respond(facet, weight, y, y_old, v, mass, dt, pts, pts0, vel, invm, share, tri, friction,
-             particle_impulse, totals):
+def _respond(facet, weight, ice, dt, surface, friction, particle_impulse, totals):
     """Give each contacting particle and the surface point it hit their impulse (Eq. 5 with the
     structure's inertia, module docstring); move the particle with its corrected velocity.
 
@@ -147,8 +198,12 @@ def _respond(facet, weight, y, y_old, v, mass, dt, pts, pts0, vel, invm, share, 
     on how they are split over MPI ranks. ``totals`` accumulates: [0:3] impulse to the
     structure (N s), [3] contacts; ``particle_impulse`` gets each particle's impulse (N s;
     rows of other particles are left alone). The structure's nodal share is summed apart, in
-    global particle order (:mod:`pdfem.coupling.nodal_impulse`).
+    global particle order (:mod:`pdfem.coupling.nodal_impulse`). ``ice``: a :class:`Drift`,
+    ``surface``: a :class:`SurfaceState`.
     """
+    y, y_old, v, mass = ice.y, ice.y_old, ice.v, ice.mass
+    pts, pts0, vel, invm, share, tri = (surface.pts, surface.pts0, surface.vel, surface.invm,
+                                        surface.share, surface.tri)
     inv_dt = 1.0 / dt
     for i in range(facet.shape[0]):
         f = facet[i]
@@ -286,6 +341,15 @@ class SurfaceContact:
             self._normals = pseudo_normals(self._points, self.topology)
         self.grid.update(self._points)
 
+    def _grid_arrays(self) -> GridArrays:
+        g = self.grid
+        return GridArrays(g.cell_start, g.cell_facets, g.origin, g.inv_h, g.dims)
+
+    def _surface_arrays(self) -> SurfaceArrays:
+        t, nr = self.topology, self._normals
+        return SurfaceArrays(self._points, t.triangles, t.tri_edges, nr[0], nr[1], nr[2],
+                             t.boundary_edge, t.boundary_node)
+
     def _buffers(self, n: int) -> None:
         if self._facet is None or len(self._facet) != n:
             self._facet = np.empty(n, dtype=np.int32)
@@ -326,21 +390,20 @@ class SurfaceContact:
             active = np.ones(n, dtype=np.bool_)
         if ids is None:
             ids = np.arange(n)
-        g, t, nr = self.grid, self.topology, self._normals
-        _detect(y, active, g.cell_start, g.cell_facets, g.origin, g.inv_h, g.dims, self._points,
-                t.triangles, t.tri_edges, nr[0], nr[1], nr[2], t.boundary_edge, t.boundary_node,
-                self.search_radius, self._facet, self._weight, self._normal)
+        t = self.topology
+        _detect(y, active, self._grid_arrays(), self._surface_arrays(), self.search_radius,
+                self._facet, self._weight, self._normal)
         counts = np.zeros(len(self._points), dtype=np.int64)
         _shares(self._facet, self._weight, t.triangles, counts)
         share = np.asarray(self.reduce(counts), dtype=np.float64) / SHARE_UNIT
         totals = np.zeros(4)
         per_particle = np.zeros((n, 3))
-        _respond(self._facet, self._weight, y, y_old, v, mass, float(dt), self._points,
-                 self._start, self._velocities, self.inverse_mass, share, t.triangles, self.friction,
-                 per_particle, totals)
+        _respond(self._facet, self._weight, Drift(y, y_old, v, mass), float(dt),
+                 SurfaceState(self._points, self._start, self._velocities, self.inverse_mass,
+                              share, t.triangles), self.friction, per_particle, totals)
         hit = np.flatnonzero(per_particle.any(axis=1))
         facets = self._facet[hit]
-        normal = np.einsum("ij,ij->i", per_particle[hit], nr[0][facets])  # pressing, N s
+        normal = np.einsum("ij,ij->i", per_particle[hit], self._normals[0][facets])  # pressing
         self.records.add(ids[hit], facets, self._weight[hit], per_particle[hit], normal)
         impulse = totals[:3].copy()
         self.total_impulse += impulse
@@ -366,11 +429,9 @@ class SurfaceContact:
         """(N,) bool: particles behind the surface within the search radius (no changes made)."""
         n = len(y)
         self._buffers(n)
-        g, t, nr = self.grid, self.topology, self._normals
         _detect(np.ascontiguousarray(y, dtype=np.float64), np.ones(n, dtype=np.bool_),
-                g.cell_start, g.cell_facets, g.origin, g.inv_h, g.dims, self._points, t.triangles,
-                t.tri_edges, nr[0], nr[1], nr[2], t.boundary_edge, t.boundary_node,
-                self.search_radius, self._facet, self._weight, self._normal)
+                self._grid_arrays(), self._surface_arrays(), self.search_radius, self._facet,
+                self._weight, self._normal)
         return self._facet >= 0
 
 

@@ -30,14 +30,14 @@ def make_probe(structure, point) -> Probe:
     """A probe of an :class:`pdfem.fem.structure.ElasticStructure` at ``point`` (m)."""
     s = structure
     point = np.asarray(point, dtype=np.float64).reshape(3)
-    node = int(np.argmin(np.linalg.norm(s._x0 - point, axis=1)))
+    node = int(np.argmin(np.linalg.norm(s.node_points - point, axis=1)))
     t = s.mesh.mesh.t
-    centres = s._x0[t].mean(axis=0)  # (Ne, 3)
+    centres = s.node_points[t].mean(axis=0)  # (Ne, 3)
     element = int(np.argmin(np.linalg.norm(centres - point, axis=1)))
     dofs = s.basis.element_dofs[:, element]
     grad = np.empty((9, len(dofs)))
-    sub = skfem.Basis(s.mesh.mesh, s._stress_basis.elem, quadrature=(
-        s._stress_basis.X, s._stress_basis.W), elements=np.array([element]))
+    sub = skfem.Basis(s.mesh.mesh, s.stress_basis.elem, quadrature=(
+        s.stress_basis.X, s.stress_basis.W), elements=np.array([element]))
     for k in range(len(dofs)):
         e = np.zeros(s.dofmap.n_dofs)
         e[dofs[k]] = 1.0

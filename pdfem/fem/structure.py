@@ -112,8 +112,8 @@ class ElasticStructure(AppliedLoads, Structure):
         if prescribed:
             self.solver.prescribe(prescribed_values(self.solver.fixed, self.dofmap,
                                                     self.group_nodes, prescribed))
-        self._x0 = self.space.points
-        self._stress_basis = centre_basis(mesh, self.space.element)
+        self.node_points = self.space.points
+        self.stress_basis = centre_basis(mesh, self.space.element)
         self._volumes = element_volumes(mesh)
         faces = (mesh.group_facets(contact_group) if contact_group is not None
                  else np.zeros((0, 3), dtype=np.int32))
@@ -158,7 +158,7 @@ class ElasticStructure(AppliedLoads, Structure):
     @property
     def points(self) -> np.ndarray:
         """(Nn, 3) reference FE node coordinates (m)."""
-        return self._x0
+        return self.node_points
 
     @property
     def n_nodes(self) -> int:
@@ -238,7 +238,7 @@ class ElasticStructure(AppliedLoads, Structure):
     def surface_points(self) -> np.ndarray:
         """(Ns, 3) current positions of the contact-surface nodes (m)."""
         u = self.dofmap.to_nodal(self.solver.u)
-        return self._x0[self.surface_nodes] + u[self.surface_nodes]
+        return self.node_points[self.surface_nodes] + u[self.surface_nodes]
 
     def surface_velocities(self) -> np.ndarray:
         """(Ns, 3) current velocities of the contact-surface nodes (m/s)."""
@@ -287,7 +287,7 @@ class ElasticStructure(AppliedLoads, Structure):
 
     def stresses(self) -> np.ndarray:
         """(Ne, 3, 3) element stress tensors (Pa), at the element centres."""
-        return element_stress(self._stress_basis, self.solver.u, self.material)
+        return element_stress(self.stress_basis, self.solver.u, self.material)
 
     def von_mises(self) -> np.ndarray:
         """(Ne,) von Mises stress per element (Pa)."""

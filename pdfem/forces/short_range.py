@@ -85,6 +85,10 @@ from pdfem.forces.base import ParticleForce
 from pdfem.forces.short_range_halo import ContactHalo
 from pdfem.forces.short_range_kernels import (
     NO_SHIFT,
+    Constants,
+    Found,
+    Grid,
+    Table,
     add_owned,
     cells,
     counted_pairs,
@@ -283,17 +287,16 @@ class ShortRangeContact(ParticleForce):
         if self._pair.shape[0] < n_chunks * self._cap:
             self._pair = np.empty((n_chunks * self._cap, 2), dtype=np.int32)
             self._val = np.empty((n_chunks * self._cap, 4))
-        args = (perm, h.x0, h.vol, h.stiffness, h.radius, h.body, self.cell_size)
+        table = Table(ys, ijks, keys, buckets, start, ub, perm)
+        consts = Constants(h.x0, h.vol, h.stiffness, h.radius, h.body)
+        grid = Grid(self.cell_size, dims, fold, self.distance_factor, self.radius_factor)
         while True:
             par = n >= SERIAL_BELOW_PARTICLES
+            found = Found(chunk_ptr, self._cap, self._pair, self._val, counts)
             if self.dense:
-                find_dense(par, ys, buckets, start, ub, *args, fold, self.distance_factor,
-                           self.radius_factor, chunk_ptr, self._cap, self._pair, self._val,
-                           counts)
+                find_dense(par, table, consts, grid, found)
             else:
-                find_folded(par, ys, ijks, keys, buckets, start, ub, *args, dims, fold,
-                            self.distance_factor, self.radius_factor, chunk_ptr, self._cap,
-                            self._pair, self._val, counts)
+                find_folded(par, table, consts, grid, found)
             most = int(counts.max())
             if most <= self._cap:
                 break

@@ -16,6 +16,7 @@ contact halo (:mod:`pdfem.forces.short_range_halo`).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -23,6 +24,54 @@ from numba import prange
 
 from pdfem.geometry.cell_hash import HALF_STENCIL_COLUMNS, cell_id, cell_index, forward_column
 from pdfem.pd.bonds.chunk_kernels import twin
+
+
+class Table(NamedTuple):
+    """The particles sorted into the cell table: positions ``ys`` (n, 3) m, lattice indices
+    ``ijks`` and keys ``keys`` of their cells (folded grids), their buckets, the table
+    (``start``, or the sparse ``ub`` with ``start``) and ``perm`` (sorted -> local index)."""
+
+    ys: np.ndarray
+    ijks: np.ndarray
+    keys: np.ndarray
+    buckets: np.ndarray
+    start: np.ndarray
+    ub: np.ndarray
+    perm: np.ndarray
+
+
+class Constants(NamedTuple):
+    """Per local particle: reference position ``x0`` (m), volume (m^3), contact constant k
+    (N/m^7), radius dx / 2 (m) and body number."""
+
+    x0: np.ndarray
+    vol: np.ndarray
+    stiff: np.ndarray
+    rad: np.ndarray
+    body: np.ndarray
+
+
+class Grid(NamedTuple):
+    """The cell side ``h`` (m), cells per axis ``dims``, buckets per axis ``fold`` and Silling &
+    Askari's distance and radius factors."""
+
+    h: float
+    dims: np.ndarray
+    fold: np.ndarray
+    dist_factor: float
+    rad_factor: float
+
+
+class Found(NamedTuple):
+    """Where the found pairs go: chunk c (rows ``chunk_ptr[c]:chunk_ptr[c+1]`` of the sorted
+    particles) into slots ``[c cap, (c+1) cap)`` of ``pair`` (i, j) and ``val`` (force on i N,
+    potential J), its count into ``counts[c]``."""
+
+    chunk_ptr: np.ndarray
+    cap: int
+    pair: np.ndarray
+    val: np.ndarray
+    counts: np.ndarray
 
 NOT_FINITE = ("ice particle positions are not finite (NaN or Inf): the run has become "
               "unstable")
@@ -136,16 +185,23 @@ def interact(i, j, px, py, pz, d2, x0, vol, stiff, rad, body, dist_factor, rad_f
 
 
 @twin(fastmath=False)
-def find_dense(ys, buckets, start, ub, perm, x0, vol, stiff, rad, body, h, fold, dist_factor,
-               rad_factor, chunk_ptr, cap, pair, val, counts):
+def find_dense(table, consts, grid, found):
     """Pairs on a dense grid padded by one empty cell on every side, per chunk of sorted
     positions, into the chunk's slots ``[c*cap, (c+1)*cap)``.
 
     The forward half stencil of a particle's cell is five contiguous runs of sorted positions:
     the own cell after the particle and the cell +z; the three cells +y; and the three columns
     of three cells +x. The runs' bounds are looked up once per cell, in the full table
-    ``start`` or in a sparse one (``ub`` not empty, :func:`first_at`).
+    ``start`` or in a sparse one (``ub`` not empty, :func:`first_at`). The named tuples
+    (:class:`Table`, :class:`Constants`, :class:`Grid`, :class:`Found`) are taken apart
+    attribute by attribute before the ``prange``: numba loses writes through tuples inside it,
+    and through arrays taken out of a tuple by unpacking (measured).
     """
+    ys, buckets, start, ub, perm = table.ys, table.buckets, table.start, table.ub, table.perm
+    x0, vol, stiff, rad, body = consts.x0, consts.vol, consts.stiff, consts.rad, consts.body
+    h, fold, dist_factor, rad_factor = grid.h, grid.fold, grid.dist_factor, grid.rad_factor
+    chunk_ptr, cap, pair, val = found.chunk_ptr, found.cap, found.pair, found.val
+    counts = found.counts
     h2 = h * h
     nz = fold[2]
     nyz = fold[1] * fold[2]
@@ -185,13 +241,19 @@ def find_dense(ys, buckets, start, ub, perm, x0, vol, stiff, rad, body, h, fold,
 
 
 @twin(fastmath=False)
-def find_folded(ys, ijks, keys, buckets, start, ub, perm, x0, vol, stiff, rad, body, h, dims,
-                fold, dist_factor, rad_factor, chunk_ptr, cap, pair, val, counts):
+def find_folded(table, consts, grid, found):
     """:func:`find_dense` for a folded grid: buckets hold several cells, told apart by key.
 
     Each particle scans the buckets of its 27 neighbour cells that come at or after its own
     bucket, from the sorted position after its own on, and only the particles of the cell asked
     for, so each pair is seen once, from the particle earlier in sorted order."""
+    ys, ijks, keys, buckets = table.ys, table.ijks, table.keys, table.buckets
+    start, ub, perm = table.start, table.ub, table.perm
+    x0, vol, stiff, rad, body = consts.x0, consts.vol, consts.stiff, consts.rad, consts.body
+    h, dims, fold = grid.h, grid.dims, grid.fold
+    dist_factor, rad_factor = grid.dist_factor, grid.rad_factor
+    chunk_ptr, cap, pair, val = found.chunk_ptr, found.cap, found.pair, found.val
+    counts = found.counts
     h2 = h * h
     C = chunk_ptr.shape[0] - 1
     for c in prange(C):

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from pdfem.forces.base import ParticleForce
-from pdfem.forces.water_kernels import (added_mass_forces, buoyancy_potential, drag_work,
+from pdfem.forces.water_kernels import (Sea, added_mass_forces, buoyancy_potential, drag_work,
                                        water_forces)
 
 
@@ -81,14 +81,15 @@ class Water(ParticleForce):
         self.added_mass = float(added_mass)
         self._drags = self.linear_drag > 0.0 or self.drag_coefficient > 0.0
         self._state = [_BodyWater(b) for b in self.bodies]
+        self._sea = Sea(self.level, self.density, self.g, self.current, self.linear_drag,
+                        self.drag_coefficient)
 
     def add_forces(self) -> None:
         """Add buoyancy and drag (N/m^3) into the bodies' ``f``; count the drag's work since the
         last call."""
         for b, s in zip(self.bodies, self._state):
-            water_forces(b.y, b.v, b.vol, s.owned, self.level, self.density, self.g,
-                         float(b.material.density), self.current, self.linear_drag,
-                         self.drag_coefficient, b.f, s.drag)
+            water_forces(b.y, b.v, b.vol, s.owned, self._sea, float(b.material.density), b.f,
+                         s.drag)
             if self.added_mass:
                 added_mass_forces(b.y, b.vol, s.owned, self.level, self.density,
                                   float(b.material.density), self.added_mass,

@@ -11,6 +11,8 @@ acts on the relative velocity ``u = v - current`` with the force density
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
 import numpy as np
 
@@ -40,8 +42,21 @@ def buoyancy_depth(z: float, a: float, level: float) -> float:
     return 0.5 * a + (bottom - z)
 
 
+class Sea(NamedTuple):
+    """The water: surface z ``level`` (m), ``density`` (kg/m^3), gravity magnitude ``g``
+    (m/s^2, acting down z), ``current`` (3,) water velocity (m/s), linear drag rate
+    ``linear_drag`` (1/s) and quadratic drag coefficient ``drag_coefficient`` (-)."""
+
+    level: float
+    density: float
+    g: float
+    current: np.ndarray
+    linear_drag: float
+    drag_coefficient: float
+
+
 @numba.njit(cache=True)
-def water_forces(y, v, vol, owned, level, rho_w, g, rho_ice, current, c_lin, cd, f, drag):
+def water_forces(y, v, vol, owned, sea, rho_ice, f, drag):
     """Add buoyancy and drag (N/m^3) into ``f`` for the owned particles; write the drag part
     into ``drag`` ((n, 3), zero elsewhere).
 
@@ -53,16 +68,15 @@ def water_forces(y, v, vol, owned, level, rho_w, g, rho_ice, current, c_lin, cd,
         (n,) particle volumes (m^3); the cell side is ``vol^(1/3)``.
     owned
         (n,) uint8, 1 for the particles this rank answers for.
-    level, rho_w, g, rho_ice
-        Water surface z (m), water density (kg/m^3), gravity magnitude (m/s^2, acting down
-        z), ice density (kg/m^3).
-    current
-        (3,) water velocity (m/s).
-    c_lin, cd
-        Linear drag rate (1/s) and quadratic drag coefficient (-).
+    sea
+        The water (:class:`Sea`).
+    rho_ice
+        Ice density (kg/m^3).
     f, drag
         (n, 3) force density (added into) and the drag force density (written), N/m^3.
     """
+    level, rho_w, g, current = sea.level, sea.density, sea.g, sea.current
+    c_lin, cd = sea.linear_drag, sea.drag_coefficient
     for i in range(y.shape[0]):
         drag[i, 0] = 0.0
         drag[i, 1] = 0.0

@@ -143,7 +143,7 @@ class AttachedStructure(FrameStructure):
         self._f_load, self._R = f_load, R.copy()
         p = self._elastic_momentum()
         j = self._pending - (p - self._p)
-        x, _ = self.frame.to_world(t_new, self._relative()[0], np.zeros_like(p))
+        x, _ = self.frame.to_world(t_new, self.relative_motion()[0], np.zeros_like(p))
         self.ship.apply_attached_impulse(x, j)
         self._p, self._pending = p, np.zeros_like(p)
 

@@ -49,9 +49,9 @@ class FrameStructure(ElasticStructure):
     def __init__(self, *args, frame: MovingFrame, stress_stiffening: bool = True, **kwargs):
         super().__init__(*args, **kwargs)
         self.frame = frame
-        self._r0 = self._x0 - np.asarray(frame.center, dtype=np.float64)
-        self._node_mass = self.dofmap.to_nodal(self.solver.m)[:, 0].copy()
-        self.K_sigma = (centrifugal_stiffness(self, frame, self._r0, self._node_mass)
+        self._r0 = self.node_points - np.asarray(frame.center, dtype=np.float64)
+        self.node_mass = self.dofmap.to_nodal(self.solver.m)[:, 0].copy()
+        self.K_sigma = (centrifugal_stiffness(self, frame, self._r0, self.node_mass)
                         if stress_stiffening and np.any(frame.angular_velocity) else None)
         self.inertial_work = 0.0     # J, work of the inertial loads on u_e
         self.drive_impulse_work = 0.0  # J, work of contact impulses on the frame's velocity
@@ -60,15 +60,15 @@ class FrameStructure(ElasticStructure):
         self.shaft = ShaftLoads(self) if np.any(frame.angular_velocity) else None
 
     # ------------------------------------------------------------------ frame kinematics
-    def _relative(self) -> tuple[np.ndarray, np.ndarray]:
+    def relative_motion(self) -> tuple[np.ndarray, np.ndarray]:
         """(Nn, 3) r = X - c0 + u_e (m) and u_e' (m/s), frame axes."""
         return (self._r0 + self.dofmap.to_nodal(self.solver.u),
                 self.dofmap.to_nodal(self.solver.v))
 
     def _inertial_dofs(self, t: float) -> np.ndarray:
         """Inertial loads (N, DOF vector, frame axes) at time ``t`` (s) on the current state."""
-        r, v = self._relative()
-        f = self.dofmap.to_dofs(self.frame.inertial_force(t, r, v, self._node_mass))
+        r, v = self.relative_motion()
+        f = self.dofmap.to_dofs(self.frame.inertial_force(t, r, v, self.node_mass))
         if self.K_sigma is not None:
             f -= self.frame.speed_factor(t)[0] ** 2 * (self.K_sigma @ self.solver.u)
         return f
@@ -79,7 +79,7 @@ class FrameStructure(ElasticStructure):
         (for the frequencies of the spinning structure, e.g. flapwise bending)."""
         f = self.frame.state(self.solver.time if t is None else t)
         w = f["w"]
-        soft = self._node_mass[:, None, None] * (np.dot(w, w) * np.eye(3) - np.outer(w, w))
+        soft = self.node_mass[:, None, None] * (np.dot(w, w) * np.eye(3) - np.outer(w, w))
         n = self.n_nodes
         rows = self.dofmap.nodal_dofs.T                  # (Nn, 3) DOF of (node, component)
         ii = np.repeat(rows, 3, axis=1).ravel()
@@ -128,13 +128,13 @@ class FrameStructure(ElasticStructure):
     # ------------------------------------------------------------------ contact interface
     def surface_points(self) -> np.ndarray:
         """(Ns, 3) true positions (m, world) of the contact-surface nodes."""
-        r, v = self._relative()
+        r, v = self.relative_motion()
         x, _ = self.frame.to_world(self.solver.time, r[self.surface_nodes], v[self.surface_nodes])
         return x
 
     def surface_velocities(self) -> np.ndarray:
         """(Ns, 3) true velocities (m/s, world) of the contact-surface nodes."""
-        r, v = self._relative()
+        r, v = self.relative_motion()
         _, w = self.frame.to_world(self.solver.time, r[self.surface_nodes], v[self.surface_nodes])
         return w
 
@@ -148,7 +148,7 @@ class FrameStructure(ElasticStructure):
         which move with the frame, ``v_frame . J``); the part ``v_frame . J`` goes to the drive
         (``support_work``)."""
         j = np.asarray(impulse, dtype=np.float64).reshape(-1, 3)
-        r, _ = self._relative()
+        r, _ = self.relative_motion()
         vf = self.frame.frame_velocity(self.solver.time, r[self.surface_nodes])
         drive = float(np.sum(vf * j))   # supports too: the frame carries them into the ice
         work = super().apply_surface_impulse(j @ self.rotation())
@@ -161,16 +161,16 @@ class FrameStructure(ElasticStructure):
     def total_displacement(self) -> np.ndarray:
         """(Nn, 3) displacement (m, world) from the reference configuration, x - X: the
         frame's motion plus the elastic part."""
-        r, v = self._relative()
+        r, v = self.relative_motion()
         x, _ = self.frame.to_world(self.solver.time, r, v)
-        return x - self._x0
+        return x - self.node_points
 
     def output_fields(self) -> dict[str, np.ndarray]:
         """``u`` (Nn, 3) total displacement x - X (m, world), ``u_elastic`` (m, frame axes),
         ``v`` true velocity (m/s, world), ``von_mises`` (Ne,) Pa from u_elastic."""
-        r, v = self._relative()
+        r, v = self.relative_motion()
         x, w = self.frame.to_world(self.solver.time, r, v)
-        return {"u": x - self._x0, "u_elastic": self.displacement(), "v": w,
+        return {"u": x - self.node_points, "u_elastic": self.displacement(), "v": w,
                 "von_mises": self.von_mises()}
 
     def frame_history(self) -> dict[str, float | np.ndarray]:

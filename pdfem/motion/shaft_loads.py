@@ -166,7 +166,7 @@ class ShaftLoads:
         self._held_comp = comp[self._held]
         self._all_nodes = np.arange(structure.n_nodes)
         self._cells = structure.cells                             # (Ne, k) FE nodes
-        self._grad = gradient_operator(structure._stress_basis)  # u -> du_i/dx_j at centres
+        self._grad = gradient_operator(structure.stress_basis)  # u -> du_i/dx_j at centres
         self._root_rows = [np.flatnonzero(np.isin(self._held_nodes, root)) for root in self._roots]
         self._r0 = r0                                             # m, X - c0
         n = len(structure.surface_nodes)
@@ -239,17 +239,17 @@ class ShaftLoads:
     def angular_momentum(self) -> float:
         """The structure's angular momentum about the shaft axis (kg m^2/s), true motion."""
         s = self.structure
-        r, v = s._relative()
+        r, v = s.relative_motion()
         x, w = s.frame.to_world(s.solver.time, r, v)
         return float((np.cross(x - s.frame.state(s.solver.time)["c"], w)
-                      * s._node_mass[:, None]).sum(axis=0) @ self.axis)
+                      * s.node_mass[:, None]).sum(axis=0) @ self.axis)
 
     def kinetic_energy(self) -> float:
         """The structure's kinetic energy in the world (J), true velocity, lumped mass."""
         s = self.structure
-        r, v = s._relative()
+        r, v = s.relative_motion()
         _, w = s.frame.to_world(s.solver.time, r, v)
-        return 0.5 * float(np.sum(s._node_mass[:, None] * w * w))
+        return 0.5 * float(np.sum(s.node_mass[:, None] * w * w))
 
     def von_mises(self) -> np.ndarray:
         """(Ne,) von Mises stress (Pa) at the element centres, as

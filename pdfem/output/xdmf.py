@@ -28,14 +28,20 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Protocol
 from xml.sax.saxutils import escape, quoteattr
 
 import h5py
 import numpy as np
 
-if TYPE_CHECKING:
-    from pdfem.output.frames import FrameSeries
+class Series(Protocol):
+    """What a grid of frames reads from the frame series it shows
+    (:class:`pdfem.output.frames.FrameSeries`): its HDF5 ``path``, its ``fields`` (name ->
+    (centre, shape per entity)) and the entity count per centre ``sizes``."""
+
+    path: str
+    fields: dict | None
+    sizes: dict
 
 XDMF_TOPOLOGY = {"tetra": ("Tetrahedron", 4), "hexahedron": ("Hexahedron", 8),
                  "triangle": ("Triangle", 3), "quad": ("Quadrilateral", 4),
@@ -115,7 +121,7 @@ def create_view(group: h5py.Group, source: h5py.Dataset, index: int,
 
 
 def frame_grid_xml(name: str, topology_xml: str, geometry_xml: str, constant_xml: str,
-                   h5name: str, series: FrameSeries, index: int, time: float) -> str:
+                   h5name: str, series: Series, index: int, time: float) -> str:
     """The XDMF uniform grid of frame ``index`` (time ``time``, s) of a body."""
     assert series.fields is not None
     parts = [f'<Grid Name={quoteattr(name)} GridType="Uniform">'
@@ -144,7 +150,7 @@ class XdmfGrid:
     """
 
     def __init__(self, name: str, topology_xml: str, geometry_xml: str, constant_xml: str,
-                 series: FrameSeries) -> None:
+                 series: Series) -> None:
         self.name = name
         self.topology_xml = topology_xml
         self.geometry_xml = geometry_xml
@@ -163,7 +169,7 @@ class XdmfGrid:
 
 
 def ice_grid(h5name: str, name: str, body: str, n: int, volume: bool,
-             series: FrameSeries | None) -> XdmfGrid:
+             series: Series | None) -> XdmfGrid:
     """The grid of an ice body at HDF5 path ``body``: ``n`` particles at ``x0``, and its
     ``volume`` shown in every frame if it has one."""
     constant = "" if not volume else attribute(
@@ -173,7 +179,7 @@ def ice_grid(h5name: str, name: str, body: str, n: int, volume: bool,
 
 
 def structure_grid(h5name: str, name: str, body: str, cell_type: str, nn: int, ne: int,
-                   series: FrameSeries) -> XdmfGrid:
+                   series: Series) -> XdmfGrid:
     """The grid of a structure at HDF5 path ``body``: ``ne`` elements over ``nn`` nodes."""
     return XdmfGrid(name, cell_topology(h5name, f"{body}/cells", cell_type, ne),
                     geometry(h5name, f"{body}/points", nn), "", series)

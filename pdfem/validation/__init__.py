@@ -11,6 +11,7 @@
 
 from pdfem.validation.case import Outcome, ValidationCase
 from pdfem.validation.registry import all_cases
-from pdfem.validation.runner import CaseResult, run_validation
+from pdfem.validation.case import CaseResult
+from pdfem.validation.runner import run_validation
 
 __all__ = ["CaseResult", "Outcome", "ValidationCase", "all_cases", "run_validation"]

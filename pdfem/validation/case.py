@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 import importlib.resources
 from contextlib import AbstractContextManager
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, Callable
 
@@ -154,3 +154,35 @@ def replace_structure(case: Case, index: int = 0, **changes) -> Case:
     st[index] = dataclasses.replace(st[index], **changes)
     return dataclasses.replace(case, structures=tuple(st),
                                text=_noted(case, f"structure[{index}]", changes))
+
+
+@dataclass
+class CaseResult:
+    """The figures of one validation case (SI units; ``None`` where the run or measurement failed).
+
+    ``error`` is relative (``|value - reference| / |reference|``) when ``relative``, else
+    absolute (in ``unit``); the case passes when it is at most ``tolerance``. ``seconds`` is the
+    wall time of the run the case measured (shared by the cases of one run); ``plot`` the PNG
+    file name in the report directory, if one was written; ``message`` says what went wrong.
+    """
+
+    name: str
+    quantity: str
+    unit: str
+    value: float | None
+    reference: float | None
+    error: float | None
+    tolerance: float
+    relative: bool
+    passed: bool
+    source: str
+    case_file: str
+    quick: bool
+    quick_note: str
+    seconds: float
+    plot: str | None = None
+    message: str = ""
+
+    def as_dict(self) -> dict:
+        """The result as JSON-serialisable values."""
+        return asdict(self)

@@ -10,8 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the runner imports this module; only types come back
-    from pdfem.validation.case import Outcome, ValidationCase
-    from pdfem.validation.runner import CaseResult
+    from pdfem.validation.case import CaseResult, Outcome, ValidationCase
 
 COLUMNS = ("case", "quantity", "pdfem", "reference", "unit", "error", "tolerance", "pass")
 

@@ -79,7 +79,7 @@ def _check_length(value: float, name: str) -> float:
 # cell sort
 
 
-def _grid(lo: np.ndarray, hi: np.ndarray, cell_size: float) -> list[int]:
+def grid_dims(lo: np.ndarray, hi: np.ndarray, cell_size: float) -> list[int]:
     """Cells per axis of the grid of side ``cell_size`` anchored at ``lo`` that covers ``hi``."""
     inv_h = 1.0 / cell_size
     span = [(hi[k] - lo[k]) * inv_h for k in range(3)]
@@ -97,7 +97,7 @@ def _sort_by_cell(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell_size: floa
     of the cells and the adjacency of occupied ones (cells adjacent before are adjacent after;
     some that were not become so, which only adds candidates that the distance test rejects).
     """
-    dims = _grid(lo, hi, cell_size)
+    dims = grid_dims(lo, hi, cell_size)
     inv_h = 1.0 / cell_size
     # cell coordinates from (x - lo) * (1/h): the same monotone expression for every particle
     if float(dims[0]) * dims[1] * dims[2] <= 2.0 ** 62:
@@ -163,10 +163,12 @@ def search_cell_size(x: np.ndarray, delta: float) -> float:
     if x.shape[0] == 0:
         return delta
     lo, hi, _ = bounding_box(x)
-    return _search_cell_size(lo, hi, delta)
+    return box_cell_size(lo, hi, delta)
 
 
-def _search_cell_size(lo: np.ndarray, hi: np.ndarray, delta: float) -> float:
+def box_cell_size(lo: np.ndarray, hi: np.ndarray, delta: float) -> float:
+    """The search cell side (m) for the box ``lo``..``hi`` and horizon ``delta``: delta made a
+    hair larger, so that rounding of the cell coordinates cannot lose a pair at exactly delta."""
     ncell = float(np.max(hi - lo)) / delta
     return delta * (1.0 + 1e-9 + 8e-16 * ncell)
 
@@ -216,7 +218,7 @@ def cell_pairs(x: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray, np.
     if n == 0:
         return np.zeros(0, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int32)
     lo, hi, _ = bounding_box(x)
-    perm, sorted_ids, (nx, ny, nz) = _sort_by_cell(x, lo, hi, _search_cell_size(lo, hi, delta))
+    perm, sorted_ids, (nx, ny, nz) = _sort_by_cell(x, lo, hi, box_cell_size(lo, hi, delta))
     xs, ys, zs = gather_soa(x, perm)
     first = run_starts(sorted_ids)
     ranges, work = stencil(sorted_ids, first, nx, ny, nz)

@@ -96,19 +96,18 @@ def _update_tensor(C, M, i):
 
 
 @numba.njit(cache=True, parallel=True, fastmath=FASTMATH)
-def corrected_pass(x, bonds, vol, clip, blocks, state, last, out):
+def corrected_pass(x, bonds, vol, clip, blocks, C, M, ov, last, out):
     """One pass of the fixed-point iteration as a race-free pair loop over the blocks
     (:mod:`pdfem.pd.bonds.workspace`): block c sums the moments of its rows, the j side of bonds
     leaving the block into its own overflow rows, which are added in block order; then every
     row's tensor C is updated from its moments. With ``last``, the corrected weights go to
     ``out`` instead (``out`` may be the weights: each is read for the last time there).
-    ``clip`` = (lo, hi) bounds of the factor, ``blocks`` = (ptr, ov_ptr), ``state`` = (C, M,
-    ov) the tensors, moments and overflow rows (taken out of the tuples before the ``prange``:
-    numba loses writes through tuples there)."""
+    ``clip`` = (lo, hi) bounds of the factor, ``blocks`` the :class:`~pdfem.pd.bonds.data.
+    Blocks`; the tensors ``C``, moments ``M`` and overflow rows ``ov`` are written, so they
+    come as arrays of their own (numba loses writes through tuples in a ``prange``)."""
     row_ptr, nbr, xi_len, w0 = bonds.row_ptr, bonds.nbr, bonds.xi_len, bonds.weight
     lo, hi = clip
-    cb, ov_ptr = blocks
-    C, M, ov = state
+    cb, ov_ptr = blocks.ptr, blocks.ov_ptr
     nc = cb.shape[0] - 1
     for c in numba.prange(nc):
         r0 = cb[c]
@@ -208,8 +207,7 @@ def surface_corrected_weights(
     for it in range(iterations + 1):
         last = it == iterations
         corrected_pass(x, Bonds(row_ptr, nbr, xi_len, w0), vol,
-                       (float(bounds[0]), float(bounds[1])), (ws.chunk_ptr, ws.ov_ptr), (C, M, ov),
-                       last, out)
+                       (float(bounds[0]), float(bounds[1])), ws.blocks, C, M, ov, last, out)
         if not last and exchange is not None:
             exchange(C)
     return out

@@ -28,7 +28,7 @@ import numpy as np
 
 from pdfem.geometry.cell_hash import cell_coords
 from pdfem.geometry.lattice import lattice_axes, lattice_plane
-from pdfem.pd.bonds.search import _grid, _search_cell_size
+from pdfem.pd.bonds.search import box_cell_size, grid_dims
 
 
 @dataclass
@@ -95,8 +95,8 @@ def lattice_census(shape, dx: float, delta: float) -> LatticeCensus:
     last = [int(np.flatnonzero(mk)[-1]) for mk in marg]
     lo = np.array([axes[k][first[k]] for k in range(3)])
     hi = np.array([axes[k][last[k]] for k in range(3)])
-    cell = _search_cell_size(lo, hi, float(delta))
-    dims = _grid(lo, hi, cell)
+    cell = box_cell_size(lo, hi, float(delta))
+    dims = grid_dims(lo, hi, cell)
     if float(dims[0]) * dims[1] * dims[2] > 2.0 ** 62:
         raise ValueError("the search grid of this body has more than 2**62 cells")
     inv_h = 1.0 / cell

@@ -215,7 +215,7 @@ def rule_comparison(case: Case, data: dict, polar_class: str = "PC7") -> dict[st
     the spin-up ramp (whose angular acceleration loads the roots far more than the ice), against
     the UR I3 blade stress at the root (hub radius) under the larger design force. Reported,
     not asserted."""
-    from pdfem.models import _propeller_sections as sec
+    from pdfem.models import propeller_sections as sec
 
     s = case.structures[0]
     p = propeller_parameters(case)
