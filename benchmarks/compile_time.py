@@ -5,7 +5,8 @@ runs five case files that together meet the pair loop with a plain critical stre
 the ice failure law (crushed bonds with friction), the full-family loop, short-range contact,
 water, surface contact and an elastic structure, each shortened to two frames of 2 microseconds,
 in a fresh process with an empty cache directory (cold), then again with the cache it filled
-(warm). Compile time = cold - warm CPU seconds of the child process (user + system).
+(warm). The child uses only ``load_case`` and ``run_case``, so the file can be run with an
+older checkout's interpreter to compare (``OLD_VENV/bin/python benchmarks/compile_time.py``). Compile time = cold - warm CPU seconds of the child process (user + system).
 
     python -m pdfem.benchmarks.compile_time [--json]
 """
@@ -24,10 +25,18 @@ CASES = ["demo_ice_sheet_panel", "validation.ice_edge_crushing", "validation.sph
          "validation.floating_heave", "validation.lps_block_tension"]
 
 CHILD = """
-import sys, tempfile
+import dataclasses, sys, tempfile
 from pathlib import Path
-from pdfem.benchmarks.compare_runs import run_all
-run_all(Path(tempfile.mkdtemp()), sys.argv[1:], 2e-6)
+import pdfem.models
+from pdfem.case.schema import load_case
+from pdfem.run.driver import run_case
+root = Path(list(pdfem.models.__path__)[0])
+for key in sys.argv[1:]:
+    path = root / (key.replace("validation.", "validation/") + ".toml")
+    case = load_case(path)
+    case = dataclasses.replace(case, run=dataclasses.replace(case.run, end_time=4e-6,
+                                                             output_interval=2e-6))
+    run_case(case, Path(tempfile.mkdtemp()) / path.stem, quiet=True)
 """
 
 
