@@ -1,7 +1,7 @@
 """Cost of per-rank checkpoints (issue 17, item 3): write time, part sizes, restore time and
 peak memory per rank, on K ranks and restarted on K and on 1 rank.
 
-The case is the cylinder-and-plate case of tests/test_mpi_run.py refined to ``--dx`` (0.005 m:
+The case is the cylinder-and-plate case of tests/run/test_mpi_run.py refined to ``--dx`` (0.005 m:
 160,000 particles, about 10 M bonds), run for 1.5e-4 s with a checkpoint every 20 coupling
 steps. Every ``write_checkpoint`` and the restart's ``restore`` are timed on every rank (s);
 each process's peak resident set (MB, ``ru_maxrss``) is reported. Wall times depend on the

@@ -1,5 +1,5 @@
 """The case-file reference as a markdown table, generated from the schema (the README's
-"Case files" table is this text: ``pdfem schema --markdown``; tests/test_schema.py keeps the two
+"Case files" table is this text: ``pdfem schema --markdown``; tests/case/test_schema.py keeps the two
 the same).
 
 Every description in the schema reads "meaning (unit). Default: ..." or "meaning. Required.";

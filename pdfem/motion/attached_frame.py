@@ -24,7 +24,7 @@ structure gives the ship, at each node, the impulse of the external loads it rec
 the last hand-over (contact impulses, applied loads) minus the change of its elastic momentum
 there: ``j_i = J_ext,i - (p_i(now) - p_i(before))``, ``p_i = m_i R u_e,i'``. That is the load
 its supports pass on to the hull (what the plating does not keep in its own motion), so the
-momentum of ship + structure changes by exactly the external impulses (tests/test_bow_panel.py).
+momentum of ship + structure changes by exactly the external impulses (tests/coupling/test_bow_panel.py).
 Energy: the ship books the work of these impulses (its kinetic-energy change) as its
 ``support_work``, the structure books the work of its frame's inertial loads and of the
 contact impulses on the frame's velocity as its own (as for any moving frame); the two are the

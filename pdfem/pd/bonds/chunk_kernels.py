@@ -20,7 +20,7 @@ run after a cache clear or a source change differed from later runs by round-off
 contact force by ~3e-6 N; found in :func:`pdfem.pd.bonds.pair_step_kernels.forces_pairs`). Without
 ``contract`` the hot loops were ~10 % slower; the explicit FMAs win that back.
 ``reassoc`` is left out as a value-changing rewrite of the same kind that gained nothing.
-tests/test_determinism.py runs a coupled case with a cold and then a warm private cache.
+tests/run/test_determinism.py runs a coupled case with a cold and then a warm private cache.
 """
 
 from __future__ import annotations

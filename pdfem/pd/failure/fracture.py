@@ -10,7 +10,7 @@ dissipated (+ the integrator's error). That error is first order in dt at a brea
 bond pulls in the half kick before the position update but not in the one after it, and its
 energy is taken at the step's end positions (past the critical stretch), so the balance is
 off by about F dr / 2 per breaking bond (F its force, dr its extension in that step). A bar
-torn apart at 0.8 of the stable step (tests/test_fracture_energy.py): 8.8e-4 J of 1.05e-2 J
+torn apart at 0.8 of the stable step (tests/pd/test_fracture_energy.py): 8.8e-4 J of 1.05e-2 J
 put in, 6.2e-3 J dissipated by fracture; half as much at half the step.
 
 :class:`FractureLedger` remembers which bonds were already accounted (one bit per bond), so a

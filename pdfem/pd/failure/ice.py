@@ -33,7 +33,7 @@ Both are bounds on the stretch in theta, the form the kernels take
     s_min = min((-sigma_c + (3 kappa K / 2 - lambda (1 + kappa / 2)) theta) / (2 mu (1 + kappa / 2)),
                 (-sigma_c - lambda theta) / (2 mu))
 
-Checks (tests/test_ice_failure.py): uniaxial tension sigma breaks the axial bond at sigma_t;
+Checks (tests/pd/test_ice_failure.py): uniaxial tension sigma breaks the axial bond at sigma_t;
 uniaxial compression breaks the axial bond at sigma_c and never a lateral one (sigma_n = 0 there,
 so no splitting by Poisson stretch); a confining pressure sigma_3 raises the axial strength to
 sigma_c + kappa sigma_3; hydrostatic pressure breaks nothing. The strengths are the input's at

@@ -1,0 +1,24 @@
+"""Case texts shared by tests of several packages.
+
+``CYLINDER``: the seed's rigid cylinder striking an ice plate that breaks (coarsened: dx 2 cm,
+4.1 GPa ice with a low fracture energy so that it cracks within 1.2 ms), the MPI tests'
+coupled case (tests/run/test_mpi_run.py, tests/forces/test_mpi_short_range.py). SI units.
+"""
+
+CYLINDER = """
+[run]
+end_time = 1.2e-3
+output_interval = 4.0e-4
+energy_tolerance = 0.1  # coarse first contact: 1.3-3.2 % of the input (not what this tests)
+[[ice]]
+name = "plate"
+dx = 0.02
+shape = { box = { min = [0.0, 0.0, 0.0], max = [1.0, 0.5, 0.04] } }
+material = { density = 900.0, youngs_modulus = 4.1e9, poisson_ratio = 0.3, fracture_energy = 3.0 }
+[[structure]]
+name = "cylinder"
+kind = "rigid"
+mesh = "indenters"
+params = { shape = "cylinder", radius = 0.1, length = 0.1, axis = "z", center_x = 0.5, center_y = 0.5905, center_z = 0.02, element_size = 0.02 }
+motion = { velocity = [0.0, -4.0, 0.0] }
+"""
