@@ -1,4 +1,9 @@
-"""Fixtures shared by the whole suite.
+"""Fixtures shared by the whole suite, and the workers' share of the cores.
+
+The suite runs on pytest-xdist workers (``-n 2`` in ``pyproject.toml``); each worker takes its
+share of the machine's cores for numba and BLAS, as an MPI rank does
+(:mod:`pdfem.parallel.threads`), so that the workers do not spin threads on each other's
+cores. Results do not depend on the thread count.
 
 ``gmsh_box`` writes a gmsh mesh of an axis-aligned box with named volume and face groups
 (:func:`support.meshes.write_box`), which the FE, rigid-body and coupling tests mesh.
@@ -7,9 +12,12 @@
 from __future__ import annotations
 
 from pathlib import Path
+import os
 from typing import Callable
 
 import pytest
+
+from pdfem.parallel.threads import limit_threads, node_cores, threads_per_rank
 
 from support.meshes import write_box
 
@@ -18,3 +26,10 @@ from support.meshes import write_box
 def gmsh_box() -> Callable[..., Path]:
     """:func:`write_box`: writes a gmsh mesh of a box with named volume and face groups."""
     return write_box
+
+
+def pytest_configure(config) -> None:
+    """On an xdist worker: numba and BLAS threads = cores // workers."""
+    workers = os.environ.get("PYTEST_XDIST_WORKER_COUNT", "")
+    if workers.isdigit():
+        limit_threads(threads_per_rank(node_cores(), int(workers)))

@@ -105,13 +105,18 @@ def launched_by_mpi() -> bool:
 
 def world():
     """The communicator of this process: :class:`MPIComm` under an MPI launcher with more than
-    one rank, else :class:`SerialComm`."""
+    one rank, else :class:`SerialComm`. With more than one rank, this rank's threads are limited
+    to its share of the node's cores (:func:`pdfem.parallel.threads.share_node_cores`)."""
     if not launched_by_mpi():
         return SerialComm()
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    return MPIComm(comm) if comm.Get_size() > 1 else SerialComm()
+    if comm.Get_size() == 1:
+        return SerialComm()
+    from pdfem.parallel.threads import share_node_cores
+    share_node_cores(comm.Get_size())
+    return MPIComm(comm)
 
 
 def run_guarded(fn, *args, comm=None, **kwargs):
