@@ -13,7 +13,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-
 from support.cli import tool
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -84,3 +83,36 @@ def test_every_subpackage_is_installed():
     listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
     found = {".".join(p.parent.relative_to(ROOT).parts) for p in PACKAGE.rglob("__init__.py")}
     assert found <= listed, f"packages missing from pyproject.toml: {sorted(found - listed)}"
+
+
+def _is_slow(decorator: ast.expr) -> bool:
+    """``@pytest.mark.slow``."""
+    return isinstance(decorator, ast.Attribute) and decorator.attr == "slow"
+
+
+def test_tests_mirror_the_package_and_the_fast_tier_touches_every_package():
+    """Every subpackage of pdfem (and models/) has its folder tests/<name>/, and each folder
+    holds at least one test outside the slow tier, so ``pytest -m "not slow"`` touches every
+    package (README: the fast tier)."""
+    packages = sorted(p.parent.name for p in PACKAGE.glob("*/__init__.py")) + ["models"]
+    tests = ROOT / "tests"
+    missing, slow_only = [], []
+    for name in packages:
+        files = sorted((tests / name).glob("test_*.py"))
+        if not files:
+            missing.append(name)
+            continue
+        fast = 0
+        for path in files:
+            tree = ast.parse(path.read_text())
+            if any(isinstance(n, ast.Assign) and any(getattr(t, "id", "") == "pytestmark"
+                                                     for t in n.targets) for n in tree.body):
+                continue  # a module-wide mark: counted as slow
+            fast += sum(1 for n in tree.body if isinstance(n, ast.FunctionDef)
+                        and n.name.startswith("test_")
+                        and not any(_is_slow(d) for d in n.decorator_list))
+        if not fast:
+            slow_only.append(name)
+    assert not missing, f"packages without tests/<name>/: {missing}"
+    assert not slow_only, f"packages whose tests are all slow: {slow_only}"
+

@@ -45,6 +45,7 @@ def test_panel_sits_on_the_bow_entrance_plane():
             assert x[1] == pytest.approx(ta * (0.75 + x[2] / ts - x[0]), abs=1e-12)
 
 
+@pytest.mark.slow
 def test_towed_panel_loaded_by_the_ice_balances_energy_and_impulse(tmp_path, monkeypatch):
     """The towed tiny case (hull and panel at 0.5 m/s, the sheet notched to the bow) runs
     through the energy guard (residual within 1 % of the work in); the ice loads the panel,
@@ -93,6 +94,7 @@ def _free_ship(tmp_path: Path, name: str, pulse: bool, end_time: float) -> dict:
     return read_results(run_case(case, tmp_path / name, quiet=True).results)
 
 
+@pytest.mark.slow
 def test_free_ship_with_panel_at_rest_does_not_drift(tmp_path):
     """The free hull with the panel attached, in calm water with nothing on it: its centre of
     gravity moves less than 1 mm (here: nothing at all to round-off) and the panel hands it
@@ -104,6 +106,7 @@ def test_free_ship_with_panel_at_rest_does_not_drift(tmp_path):
     assert np.abs(m["attached_impulse"]).max() < 1e-12
 
 
+@pytest.mark.slow
 def test_panel_pulse_reaches_the_ship_through_its_supports(tmp_path):
     """A pressure pulse p = 20 kPa on the panel's plating (area A = 0.08 m x 0.04 m, pulse
     2 ms rise, 5 ms hold, 2 ms fall: t_eff = 7 ms) pushes along -n, the plating's outward

@@ -247,6 +247,7 @@ structure = "ball_b"
     assert abs(h["loads/ball_b"]["force"][:, 2]).max() > abs(h["loads/ball_a"]["force"][:, 2]).max()
 
 
+@pytest.mark.slow
 def test_hull_panel_subcycling_matches_the_small_step(tmp_path):
     """Ice resting on the elastic hull panel (models/hull_panel.py, coarse) and pushed by its
     back layers (ramped to 1 m/s over 0.5 ms): the run with the structure subcycling against

@@ -86,6 +86,7 @@ def lowest_and_highest_eigenvalues(s: ElasticStructure) -> tuple[float, float, n
     return float(lo[0]), float(hi), s.dofmap.to_nodal(mode)
 
 
+@pytest.mark.slow
 def test_static_tip_deflection_converges_to_timoshenko(cantilever):
     """Tip deflection vs Timoshenko beam theory delta = P L^3/(3EI) + P L/(kappa G A) (Cowper's
     kappa): the error decreases with refinement and is within 3 % on the finest mesh; the root
@@ -112,6 +113,7 @@ def test_static_tip_deflection_converges_to_timoshenko(cantilever):
         assert sig[sel, 0, 0] == pytest.approx(navier, rel=0.03)
 
 
+@pytest.mark.slow
 def test_first_bending_frequency_from_free_vibration(cantilever):
     """Released from the static deflected shape, the tip oscillates at the first bending
     frequency: the peak of the amplitude spectrum (FFT, Hann window, zero-padded, parabolic
@@ -151,6 +153,7 @@ def test_first_bending_frequency_from_free_vibration(cantilever):
     assert f_fft == pytest.approx(F1_EULER_BERNOULLI, rel=0.03)
 
 
+@pytest.mark.slow
 def test_undamped_free_vibration_conserves_energy(cantilever):
     """Central difference without damping: kinetic + strain energy stays within 0.5 % of its
     initial value over 20 periods of the first mode, and the discrete invariant

@@ -122,6 +122,7 @@ if comm.rank == 0:
 ''')
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks, speed, fold, aligned",
                          [(1, 1.0, None, False), (2, 1.0, None, False), (3, 15.0, None, False),
                           (2, 1.0, 0.05, False), (2, 15.0, None, True)],
@@ -185,6 +186,7 @@ def _one_and_two_ranks(tmp_path, text: str, body: str, structure: str,
     return ref, two
 
 
+@pytest.mark.slow
 def test_demo_case_on_two_ranks_matches_one(tmp_path):
     """The built-in demo (short_range_contact = true), shortened to 0.3 ms with the sheet at
     20 m/s so that it crushes against the panel within the run: 1 and 2 ranks agree to 1e-10
@@ -207,6 +209,7 @@ CYLINDER = (BASE_CYLINDER.replace("end_time = 1.2e-3", "end_time = 1.6e-3")
 assert "short_range_contact" in CYLINDER and "1.6e-3" in CYLINDER
 
 
+@pytest.mark.slow
 def test_cylinder_breaking_plate_on_two_ranks_matches_one(tmp_path):
     """The rigid cylinder breaking an ice plate at mid-length, where the 2-rank partition
     splits it (test_mpi_run's case, with short-range contact): crushed pieces press on each

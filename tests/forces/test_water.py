@@ -187,6 +187,7 @@ material = { density = 900.0, youngs_modulus = 1.0e7, poisson_ratio = 0.3, fract
 """
 
 
+@pytest.mark.slow
 def test_water_on_two_mpi_ranks_gives_the_serial_run(tmp_path):
     """Buoyancy, drag and the current on a block split over 2 ranks: the serial positions
     bit for bit, the water's energy terms to round-off (summed in another order)."""

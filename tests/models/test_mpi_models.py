@@ -89,6 +89,7 @@ def _assert_close(got: np.ndarray, ref: np.ndarray, where: str, scale: float | N
     np.testing.assert_allclose(got, ref, rtol=0, atol=tol * scale, err_msg=where)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", MODELS, ids=[p.stem for p in MODELS])
 def test_every_model_case_runs_small_and_two_ranks_agree(path, tmp_path, two_ranks):
     case = shorten(load_case(path))

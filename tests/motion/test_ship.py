@@ -244,6 +244,7 @@ ship = { mass = 220.554 }
 """
 
 
+@pytest.mark.slow
 def test_floe_striking_the_side_pushes_the_ship(tmp_path):
     """A floating floe (1.8 kg at 2 m/s) strikes the hull's side amidships and bounces: the
     sway momentum the ship gains equals the floe's loss (nothing else acts along y: buoyancy is

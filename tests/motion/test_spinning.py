@@ -42,6 +42,7 @@ def _bar(path, frame=None, **kwargs):
                          **extra)
 
 
+@pytest.mark.slow
 def test_spinning_bar_radial_stress(tmp_path):
     """The quick validation case: mean sigma_xx at the element centres of 0.2 R..0.8 R within
     3 % of rho omega^2 (R^2 - r^2) / 2."""
@@ -201,6 +202,7 @@ structure = "bar"
 """
 
 
+@pytest.mark.slow
 def test_spinning_bar_strikes_ice_energy_closes_with_the_shaft_work(tmp_path):
     """A bar turning at 20 rad/s about its root sweeps into a free ice cube at r = 0.33..0.41 m:
     the contact sees the moving face (the cube is struck after the bar turns through its 5 mm

@@ -153,6 +153,7 @@ motion = { velocity = [0.0, -4.0, 0.0] }
 """
 
 
+@pytest.mark.slow
 def test_one_and_two_ranks_agree_with_friction(tmp_path):
     """A rigid cylinder crushing an ice plate's edge (the "ice" law, crushed_friction 0.58) on 1 and 2
     ranks: a bond between particles owned by two ranks is evaluated on both, and its shear

@@ -171,6 +171,7 @@ def _run(tmp_path, text: str, ranks: int) -> str:
     return r.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks", [2, 3])
 def test_distributed_setup_equals_global_setup(tmp_path, ranks):
     out = _run(tmp_path, EXACT, ranks)
@@ -188,6 +189,7 @@ def test_distributed_setup_equals_global_setup(tmp_path, ranks):
     assert run["restart_same"] == "True"  # a restart on as many ranks continues bit for bit
 
 
+@pytest.mark.slow
 def test_no_rank_holds_the_global_body(tmp_path):
     """216,000 particles: each of 3 ranks grows its peak resident set during the set-up by less
     than 0.6 times what the global set-up (the whole body, which every rank builds today) grows

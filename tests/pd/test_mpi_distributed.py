@@ -120,6 +120,7 @@ def test_split_bar_matches_serial(tmp_path, ranks):
     assert fields["same_damage"] == "True"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks", [2, 3])
 def test_coupled_contact_split_matches_serial(tmp_path, ranks):
     """A rigid plate driven into an ice plate's edge (contact, bond breaking) on 2 and 3 ranks:

@@ -295,6 +295,7 @@ def _fields(line: str) -> dict:
     return dict(kv.split("=", 1) for kv in line.split()[2:])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks", [2, 3])
 def test_rebalance_mid_run_matches_serial(tmp_path, ranks):
     script = tmp_path / "rebalance.py"

@@ -42,6 +42,7 @@ def _pdfem(*args):
     ("tensile_strength = -1", "tensile_strength", "> 0"),
     ("flexural_strength = 0", "flexural_strength", "> 0"),
 ])
+@pytest.mark.slow
 def test_bad_strength_inputs_exit_2_naming_the_field(material, field, fragment, tmp_path):
     """Reference: the command-line contract (exit 2, one paragraph naming file and field)."""
     case = tmp_path / "bad.toml"
@@ -120,6 +121,7 @@ no_fail = [
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("dx", [0.01, 0.005])
 def test_bar_pulled_slowly_fails_at_the_tensile_strength(dx):
     """Reference: uniaxial tension, sigma = F / A (Hooke's law; s0 = sigma_t / E).
@@ -137,6 +139,7 @@ def test_bar_pulled_slowly_fails_at_the_tensile_strength(dx):
     assert stress == pytest.approx(0.6e6, rel=0.05)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["flexural_strength_three_point", "flexural_strength_four_point",
                                   "flexural_strength_three_point_half_dx",
                                   "flexural_strength_four_point_half_dx"])
@@ -155,6 +158,7 @@ def test_quick_bending_validation_passes(name, tmp_path):
     assert case.error(value, reference) <= case.tolerance, (value, reference)
 
 
+@pytest.mark.slow
 def test_the_validation_load_is_the_written_nose_reaction(tmp_path):
     """Reference: the definition of the load, the reaction of the prescribed region
     (sum over its particles of V (rho a - f)): what the bending validation records

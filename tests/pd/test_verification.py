@@ -91,6 +91,7 @@ def test_wave_speed_in_slender_bar():
     assert T == pytest.approx(T_exact, rel=0.03)
 
 
+@pytest.mark.slow
 def test_recovered_youngs_modulus_and_poisson_ratio():
     """A block under uniaxial stress (traction on its end faces, dynamic relaxation): the interior
     strains give E and nu within 3 % of the input, nu = 0.3 (Hooke's law; shows the state-based
@@ -133,6 +134,7 @@ def test_recovered_youngs_modulus_and_poisson_ratio():
     assert nu_pd == pytest.approx(NU, rel=0.03)
 
 
+@pytest.mark.slow
 def test_notched_bar_fracture_energy():
     """A notched bar pulled apart slowly until it separates in two.
 

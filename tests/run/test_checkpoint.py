@@ -85,6 +85,7 @@ def case_dir(tmp_path_factory, gmsh_box):
     return d
 
 
+@pytest.mark.slow
 def test_killed_run_restarts_bit_identical(case_dir):
     """SIGKILL after a checkpoint, then ``pdfem run --restart``: the final frame (ice u, v,
     damage; structure u), the whole load and energy histories, and the last checkpoint's full
@@ -151,6 +152,7 @@ def _assert_same_run(a: dict, b: dict, exact: bool = True) -> None:
             same(v, b["histories"][g][k], err_msg=f"{g}/{k}")
 
 
+@pytest.mark.slow
 def test_killed_mpi_run_restarts_bit_identical(case_dir):
     """On 2 MPI ranks (short-range contact across the ranks included): SIGKILL of the whole
     job after a checkpoint, then ``mpiexec -n 2 pdfem

@@ -16,6 +16,8 @@ the threaded pair loops run.
 
 from __future__ import annotations
 
+import pytest
+
 import os
 import subprocess
 import sys
@@ -61,6 +63,7 @@ def _run(case: Path, out: Path, env: dict[str, str]) -> Path:
     return out / "results.h5"
 
 
+@pytest.mark.slow
 def test_cold_and_warm_numba_cache_give_identical_results(tmp_path):
     case = tmp_path / "block_on_sphere.toml"
     case.write_text(CASE)

@@ -123,6 +123,7 @@ def test_large_case_fits_four_nodes_not_one(tmp_path):
     assert nodes_needed(estimate_rank_memory(case, 8, False), node) is None
 
 
+@pytest.mark.slow
 def test_estimate_cli_accepts_and_refuses(tmp_path, capsys):
     """``--estimate`` with 8 ranks: exit 0 on 4 nodes, exit 2 on one with a message naming the
     file, the need per node and rank and the nodes needed; nothing is written into --out."""
@@ -177,6 +178,7 @@ def test_more_ranks_than_planes(tmp_path):
 
 
 
+@pytest.mark.slow
 def test_estimate_on_two_mpi_ranks(tmp_path):
     """``mpiexec -n 2 pdfem run CASE --estimate``: one table with both ranks on one node (the
     shared-memory split of this machine), exit 0, nothing written."""

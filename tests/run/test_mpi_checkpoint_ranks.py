@@ -129,6 +129,7 @@ SCRIPT = textwrap.dedent('''
 ''')
 
 
+@pytest.mark.slow
 def test_three_rank_checkpoint_restarts_on_three_two_and_one_rank(tmp_path):
     (tmp_path / "case.toml").write_text(CASE)
     (tmp_path / "script.py").write_text(SCRIPT)

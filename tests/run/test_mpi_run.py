@@ -43,6 +43,7 @@ point = [1.0, 0.6, 0.0]
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text, body, structure", [(CYLINDER, "plate", "cylinder"),
                                                    (PANEL, "floe", "panel")],
                          ids=["cylinder_plate", "hull_panel"])
@@ -83,6 +84,7 @@ def test_one_two_and_three_ranks_agree(tmp_path, text, body, structure):
                                    cp, rtol=0, atol=tol * cp.max())
 
 
+@pytest.mark.slow
 def test_per_rank_ice_files_read_as_one_run(tmp_path):
     """``run.output_per_rank``: on 3 ranks each rank writes its own particles to
     results.rank<R>.h5 (with its XDMF) and rank 0 the rest to results.h5; read_results puts the
@@ -126,6 +128,7 @@ def test_bad_input_on_several_ranks_exits_2_without_traceback(tmp_path):
     assert "run.output_per_rank" in r.stderr and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_bench_mpi_reports_both_runs(tmp_path):
     """`pdfem bench mpi` (strong scaling of the distributed step) runs 1 and 2 ranks on the
     same plate and reports both, the partition of the 2-rank run with a halo (no timing is

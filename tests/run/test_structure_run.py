@@ -54,6 +54,7 @@ def panel_run(tmp_path_factory):
     return json.loads(r.stdout)
 
 
+@pytest.mark.slow
 def test_supports_balance_the_pressure_resultant(panel_run):
     """After the load has risen (1 ms) and the damped response settled, the reaction at the
     clamped boundary equals p x A upward (Newton's static equilibrium), within 1 %; the panel

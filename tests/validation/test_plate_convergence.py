@@ -34,6 +34,7 @@ def quick_rows() -> list[dict]:
     return json.loads(out.stdout)["cases"]
 
 
+@pytest.mark.slow
 def test_quick_covers_every_family(quick_rows):
     families = {r["family"] for r in quick_rows}
     assert families == {"TetP1", "TetP2", "Hex1", "HexS2", "Hex2"}

@@ -52,6 +52,7 @@ def _volume(points: np.ndarray, tets: np.ndarray) -> float:
     return float(np.abs(np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)).sum() / 6.0)
 
 
+@pytest.mark.slow
 def test_groups_exist_and_are_not_empty(mesh):
     """Every group of the contract: blade1..bladeZ, blade{k}_<side>, blade{k}_surface, root and
     contact, non-empty; the sides of each blade lie where their names say."""
@@ -137,6 +138,7 @@ def test_ur_i3_torque_formula():
     assert milling.ur_i3_blade_stress(218e3, 0.3, 1.0, 0.5, 0.1) == pytest.approx(313.92e6, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_tiny_milling_impulse_balance(tmp_path):
     """The tiny milling run: blade 1 meets the ice, and the contact impulse the ice received
     (its momentum change less the feed's impulse) is minus the impulse on the propeller."""
@@ -166,6 +168,7 @@ def test_rake_moves_the_tip_aft(tmp_path):
     assert shift[0] == pytest.approx(-0.7 * math.tan(0.2), abs=2e-3)
 
 
+@pytest.mark.slow
 def test_quick_milling_spectrum_validation_passes(tmp_path):
     """``pdfem validate --quick --case milling_torque_spectrum``: the shaft torque's spectrum
     peaks at the blade passing frequency Z n (here of the quick run's shaft at twice the

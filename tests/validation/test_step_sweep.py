@@ -11,10 +11,13 @@ validation runs, runs beside the others.
 
 from __future__ import annotations
 
+import pytest
+
 from pdfem.validation.cases import coupled_step
 from pdfem.validation.runner import run_validation
 
 
+@pytest.mark.slow
 def test_quick_step_sweep_passes(tmp_path):
     results = run_validation(list(coupled_step.CASES), tmp_path, quick=True)
     assert [r.name for r in results] == ["step_energy_residual", "step_dissipation_sign",

@@ -38,6 +38,7 @@ ELSEWHERE = {"flexural_strength_three_point", "flexural_strength_four_point",
 test_water.py, test_step_sweep.py, test_propeller.py): run once, there, beside the others."""
 
 
+@pytest.mark.slow
 def test_quick_validation_passes(capfd):
     """``pdfem validate --quick --json`` on every case but :data:`LONG` and :data:`ELSEWHERE`:
     exactly one JSON object on stdout (checked at the file descriptor, so nothing from gmsh or

@@ -5,6 +5,8 @@ first five frequencies vs the same panel meshed twice as fine."""
 
 from __future__ import annotations
 
+import pytest
+
 import math
 import tomllib
 from pathlib import Path
@@ -49,6 +51,7 @@ def test_quick_plate_cases_pass(tmp_path):
     assert not failed, failed
 
 
+@pytest.mark.slow
 def test_quick_panel_modes_pass(tmp_path):
     """The demo panel (0.08 m) against the panel meshed at 0.04 m: the first five frequencies
     agree within 5 % (the quick variant is the full check, about a minute)."""

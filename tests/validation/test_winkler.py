@@ -50,6 +50,7 @@ def test_the_winkler_entries_are_registered():
     assert 0.04 / case.ice[0].dx == pytest.approx(6.0)
 
 
+@pytest.mark.slow
 def test_a_two_layer_floating_plate_records_the_bending_deficit(tmp_path):
     """Two particles through h at the default horizon (a 0.8 m plate: edges 2 l from the load)
     against the same finite plate with Morley elements: the lattice sheet is too soft in
