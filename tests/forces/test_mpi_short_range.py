@@ -36,7 +36,7 @@ from pdfem.pd.layout.split import split_body
 from pdfem.pd.materials.lps import IceMaterial
 
 from support.cases import CYLINDER as BASE_CYLINDER
-from support.cli import pdfem_command
+from support.cli import run_ok
 from support.mpi import mpiexec
 
 
@@ -165,10 +165,7 @@ def _one_and_two_ranks(tmp_path, text: str, body: str, structure: str,
     case.write_text(text)
     results = {}
     for ranks in (1, 2):
-        r = subprocess.run(pdfem_command(ranks) + ["run", str(case), "--out", str(tmp_path / f"r{ranks}"),
-                                              "--quiet"], capture_output=True, text=True,
-                           timeout=600)
-        assert r.returncode == 0, r.stderr[-2000:]
+        run_ok("run", case, "--out", tmp_path / f"r{ranks}", "--quiet", ranks=ranks, timeout=600)
         results[ranks] = read_results(tmp_path / f"r{ranks}" / "results.h5")
     ref, two = results[1], results[2]
     assert two["meta"]["ranks"] == 2

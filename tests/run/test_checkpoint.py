@@ -25,7 +25,7 @@ from pdfem.case.schema import load_case
 from pdfem.run.driver import run_case
 from pdfem.output import ResultsWriter, read_results
 
-from support.cli import pdfem_command
+from support.cli import pdfem_command, run_ok, run_pdfem
 
 CASE = """
 [run]
@@ -108,10 +108,7 @@ def test_killed_run_restarts_bit_identical(case_dir):
     before = read_results(killed / "results.h5")  # the killed run's file reads
     assert before["time"].size >= 1
 
-    r = subprocess.run([*pdfem_command(), "run", str(case_dir / "case.toml"), "--restart",
-                        str(killed / CHECKPOINT_NAME), "--json"],
-                       capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stderr
+    run_ok("run", case_dir / "case.toml", "--restart", killed / CHECKPOINT_NAME, "--json", timeout=600)
     a, b = read_results(ref.results), read_results(killed / "results.h5")
     np.testing.assert_array_equal(a["time"], b["time"])
     for k in ("u", "v", "damage"):
@@ -194,10 +191,7 @@ def test_killed_mpi_run_restarts_bit_identical(case_dir):
     for k in sa:
         np.testing.assert_array_equal(sa[k], sb[k], err_msg=k)
 
-    r = subprocess.run([*pdfem_command(), "run", str(case_dir / "case.toml"), "--restart",
-                        str(serial / CHECKPOINT_NAME), "--quiet"],
-                       capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stderr[-3000:]
+    r = run_ok("run", case_dir / "case.toml", "--restart", serial / CHECKPOINT_NAME, "--quiet", timeout=600)
     _assert_same_run(a, read_results(serial / "results.h5"), exact=False)
 
 
@@ -208,12 +202,10 @@ def test_restart_refuses_another_case(case_dir, tmp_path):
         run_case(load_case(case_dir / "case.toml"), out, quiet=True)
     other = case_dir / "other.toml"
     other.write_text(CASE.replace("friction = 0.1", "friction = 0.2"))
-    r = subprocess.run([*pdfem_command(), "run", str(other), "--restart", str(out / CHECKPOINT_NAME)],
-                       capture_output=True, text=True, timeout=600)
+    r = run_pdfem("run", other, "--restart", out / CHECKPOINT_NAME, timeout=600)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert "another case" in r.stderr and "--restart" in r.stderr
-    r = subprocess.run([*pdfem_command(), "run", str(other), "--restart", str(tmp_path / "none.h5")],
-                       capture_output=True, text=True, timeout=600)
+    r = run_pdfem("run", other, "--restart", tmp_path / "none.h5", timeout=600)
     assert r.returncode == 2 and "no such checkpoint" in r.stderr
 
 

@@ -9,7 +9,7 @@ The large case below (48 GiB of ice, more than this 24 GB machine) is sized, nev
 
 from __future__ import annotations
 
-import subprocess
+import os
 
 import numpy as np
 import pytest
@@ -25,7 +25,7 @@ from pdfem.run.estimates import BYTES_PER_PAIR, BYTES_PER_PARTICLE, FIXED_BYTES,
 from pdfem.run.preflight import estimate_rank_memory, node_needs, nodes_needed
 from pdfem.run.sizing import parse_bytes
 
-from support.cli import pdfem_command
+from support.cli import run_ok
 
 LARGE = """
 # a 20 m x 20 m x 1 m ice box at dx = 2.5 cm: 25.6 M particles, 1.51 G bonds, 48 GiB of ice;
@@ -183,11 +183,8 @@ def test_estimate_on_two_mpi_ranks(tmp_path):
     """``mpiexec -n 2 pdfem run CASE --estimate``: one table with both ranks on one node (the
     shared-memory split of this machine), exit 0, nothing written."""
     path = _case(tmp_path, SMALL)
-    r = subprocess.run([*pdfem_command(2), "run", str(path),
-                        "--estimate", "--out", str(tmp_path / "out")], capture_output=True,
-                       text=True, timeout=300, env={**__import__("os").environ,
-                                                    "NUMBA_NUM_THREADS": "1"})
-    assert r.returncode == 0, r.stderr[-2000:]
+    r = run_ok("run", path, "--estimate", "--out", tmp_path / "out", ranks=2, timeout=300,
+               env={**os.environ, "NUMBA_NUM_THREADS": "1"})
     assert "2 ranks on 1 node" in r.stdout and "node 0: 2 ranks" in r.stdout
     rows = [line.split() for line in r.stdout.splitlines() if line[:6].strip().isdigit()]
     assert [row[:2] for row in rows] == [["0", "0"], ["1", "0"]]

@@ -31,6 +31,7 @@ from pdfem.errors import InputError
 from pdfem.output import read_results
 from pdfem.run.checkpoint import CHECKPOINT_NAME, case_hash, read_checkpoint
 
+from support.cases import CYLINDER_BODIES
 from support.mpi import run_script
 
 CASE = """
@@ -45,18 +46,7 @@ level = 0.0351
 linear_drag = 2.0
 drag_coefficient = 1.0
 added_mass = 0.5
-[[ice]]
-name = "plate"
-dx = 0.02
-shape = { box = { min = [0.0, 0.0, 0.0], max = [1.0, 0.5, 0.04] } }
-material = { density = 900.0, youngs_modulus = 4.1e9, poisson_ratio = 0.3, fracture_energy = 3.0 }
-[[structure]]
-name = "cylinder"
-kind = "rigid"
-mesh = "indenters"
-params = { shape = "cylinder", radius = 0.1, length = 0.1, axis = "z", center_x = 0.5, center_y = 0.5905, center_z = 0.02, element_size = 0.02 }
-motion = { velocity = [0.0, -4.0, 0.0] }
-"""
+""" + CYLINDER_BODIES
 
 BAR = """
 [run]

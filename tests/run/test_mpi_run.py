@@ -9,7 +9,6 @@ subprocesses with a timeout from the ordinary suite.
 
 from __future__ import annotations
 
-import subprocess
 
 import numpy as np
 import pytest
@@ -17,7 +16,7 @@ import pytest
 from pdfem.output import read_results
 
 from support.cases import CYLINDER
-from support.cli import pdfem_command
+from support.cli import run_ok, run_pdfem
 
 
 PANEL = """
@@ -52,10 +51,7 @@ def test_one_two_and_three_ranks_agree(tmp_path, text, body, structure):
     case.write_text(text)
     results = {}
     for ranks in (1, 2, 3):
-        r = subprocess.run(pdfem_command(ranks) + ["run", str(case), "--out", str(tmp_path / f"r{ranks}"),
-                                              "--quiet"], capture_output=True, text=True,
-                           timeout=600)
-        assert r.returncode == 0, r.stderr[-2000:]
+        r = run_ok("run", case, "--out", tmp_path / f"r{ranks}", "--quiet", ranks=ranks, timeout=600)
         results[ranks] = read_results(tmp_path / f"r{ranks}" / "results.h5")
     ref = results[1]
     # the whole run, bonds breaking where the floe is crushed against the panel: the contact
@@ -94,10 +90,7 @@ def test_per_rank_ice_files_read_as_one_run(tmp_path):
     case.write_text(CYLINDER.replace("output_interval = 4.0e-4",
                                      "output_interval = 4.0e-4\noutput_per_rank = true"))
     for ranks in (1, 3):
-        r = subprocess.run(pdfem_command(ranks) + ["run", str(case), "--out", str(tmp_path / f"r{ranks}"),
-                                              "--quiet"], capture_output=True, text=True,
-                           timeout=600)
-        assert r.returncode == 0, r.stderr[-2000:]
+        run_ok("run", case, "--out", tmp_path / f"r{ranks}", "--quiet", ranks=ranks, timeout=600)
     assert not (tmp_path / "r1" / "results.rank0.h5").exists()  # one rank: one file
     for k in range(3):
         assert (tmp_path / "r3" / f"results.rank{k}.h5").is_file()
@@ -112,9 +105,7 @@ def test_per_rank_ice_files_read_as_one_run(tmp_path):
     np.testing.assert_allclose(b["u"], a["u"], rtol=0, atol=1e-10 * np.abs(a["u"]).max())
     np.testing.assert_array_equal(b["damage"], a["damage"])
     assert a["damage"][-1].max() > 0
-    out = subprocess.run(pdfem_command(1) + ["post", str(tmp_path / "r3" / "results.h5"), "--json"],
-                         capture_output=True, text=True, timeout=300)
-    assert out.returncode == 0, out.stderr[-2000:]
+    run_ok("post", tmp_path / "r3" / "results.h5", "--json", timeout=300)
 
 
 def test_bad_input_on_several_ranks_exits_2_without_traceback(tmp_path):
@@ -122,8 +113,7 @@ def test_bad_input_on_several_ranks_exits_2_without_traceback(tmp_path):
     case = tmp_path / "bad.toml"
     case.write_text(CYLINDER.replace("output_interval = 4.0e-4",
                                      "output_interval = 4.0e-4\noutput_per_rank = \"yes\""))
-    r = subprocess.run(pdfem_command(2) + ["run", str(case), "--out", str(tmp_path / "o")],
-                       capture_output=True, text=True, timeout=120)
+    r = run_pdfem("run", case, "--out", tmp_path / "o", ranks=2, timeout=120)
     assert r.returncode == 2
     assert "run.output_per_rank" in r.stderr and "Traceback" not in r.stderr
 
@@ -135,9 +125,7 @@ def test_bench_mpi_reports_both_runs(tmp_path):
     asserted: timings belong to BENCHMARKS.md)."""
     import json
 
-    r = subprocess.run([*pdfem_command(), "bench", "mpi", "--n", "4000", "--json"],
-                       capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stderr[-2000:]
+    r = run_ok("bench", "mpi", "--n", "4000", "--json", timeout=600)
     res = json.loads(r.stdout)
     one, two = res["runs"]
     assert (one["ranks"], two["ranks"]) == (1, 2)

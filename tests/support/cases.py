@@ -3,13 +3,18 @@
 ``CYLINDER``: the seed's rigid cylinder striking an ice plate that breaks (coarsened: dx 2 cm,
 4.1 GPa ice with a low fracture energy so that it cracks within 1.2 ms), the MPI tests'
 coupled case (tests/run/test_mpi_run.py, tests/forces/test_mpi_short_range.py). SI units.
+``CYLINDER_BODIES`` is its plate and cylinder without the ``[run]`` section, for tests that
+run them otherwise (tests/run/test_mpi_checkpoint_ranks.py: floating, with checkpoints).
 """
 
-CYLINDER = """
+CYLINDER_RUN = """
 [run]
 end_time = 1.2e-3
 output_interval = 4.0e-4
 energy_tolerance = 0.1  # coarse first contact: 1.3-3.2 % of the input (not what this tests)
+"""
+
+CYLINDER_BODIES = """
 [[ice]]
 name = "plate"
 dx = 0.02
@@ -22,3 +27,5 @@ mesh = "indenters"
 params = { shape = "cylinder", radius = 0.1, length = 0.1, axis = "z", center_x = 0.5, center_y = 0.5905, center_z = 0.02, element_size = 0.02 }
 motion = { velocity = [0.0, -4.0, 0.0] }
 """
+
+CYLINDER = CYLINDER_RUN + CYLINDER_BODIES

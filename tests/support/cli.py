@@ -13,8 +13,6 @@ import sys
 from pathlib import Path
 from typing import Mapping
 
-REPO = Path(__file__).resolve().parents[2]
-"""The repository's root directory (``models/``, ``benchmarks/``, ``pyproject.toml``)."""
 
 
 def tool(name: str) -> str:
