@@ -27,9 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 import skfem
-from skfem.helpers import dot
-from skfem.models.elasticity import linear_elasticity
 
+from pdfem.fem.assembly import assemble, elasticity_matrices
 from pdfem.fem.mesh import FEMesh
 
 STEEL_DEFAULTS: dict[str, float] = {
@@ -149,23 +148,9 @@ def vector_basis(mesh: FEMesh) -> skfem.CellBasis:
 
 
 def stiffness_matrix(basis: skfem.CellBasis, material: ElasticMaterial) -> sp.csr_matrix:
-    """Stiffness matrix K (N/m), symmetric, scipy CSR in the basis' DOF order."""
-    lam, mu = material.lame
-    K = skfem.asm(linear_elasticity(lam, mu), basis).tocsr()
-    K.sum_duplicates()
-    K.sort_indices()
-    return K
-
-
-def consistent_mass(basis: skfem.CellBasis, density: float) -> sp.csr_matrix:
-    """Consistent mass matrix (kg), scipy CSR."""
-    rho = float(density)
-
-    @skfem.BilinearForm
-    def mass(u, v, w):
-        return rho * dot(u, v)
-
-    return skfem.asm(mass, basis).tocsr()
+    """Stiffness matrix K (N/m), symmetric, scipy CSR in the basis' DOF order (assembled
+    element by element, vectorised: :mod:`pdfem.fem.assembly`)."""
+    return assemble(basis, elasticity_matrices(*material.lame))
 
 
 def lumped_mass(basis: skfem.CellBasis, density: float) -> np.ndarray:
@@ -177,7 +162,10 @@ def lumped_mass(basis: skfem.CellBasis, density: float) -> np.ndarray:
         If a lumped mass is not strictly positive (a node without elements, or an element type
         whose row-sum lumping fails, such as P2 tetrahedra).
     """
-    m = np.asarray(consistent_mass(basis, density).sum(axis=1)).ravel()
+    phi = np.array([np.asarray(b[0]) for b in basis.basis])          # (nloc, 3, Ne, nq)
+    # row sum of the consistent mass int rho phi_a . phi_b dV over the element's b
+    rows = float(density) * np.einsum("acen,cen,en->ae", phi, phi.sum(axis=0), basis.dx)
+    m = np.bincount(basis.element_dofs.ravel(), rows.ravel(), minlength=basis.N)
     if not np.all(m > 0.0):
         bad = int(np.sum(~(m > 0.0)))
         raise ValueError(f"row-sum lumped mass has {bad} non-positive entries (min {m.min():.3e} "

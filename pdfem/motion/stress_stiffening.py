@@ -18,19 +18,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
-import skfem
 
+from pdfem.fem.assembly import assemble, initial_stress_matrices
 from pdfem.fem.static import static_displacement
 
 if TYPE_CHECKING:
     from pdfem.motion.moving_frame import MovingFrame
     from pdfem.fem.structure import ElasticStructure
-
-
-@skfem.BilinearForm
-def _initial_stress(u, v, w):
-    """sigma0_jk du_i/dx_j dv_i/dx_k at the quadrature points."""
-    return np.einsum("jk...,ij...,ik...->...", w["sigma"], u.grad, v.grad)
 
 
 def prestress(structure: ElasticStructure, force: np.ndarray) -> np.ndarray:
@@ -65,4 +59,4 @@ def centrifugal_stiffness(structure: ElasticStructure, frame: MovingFrame,
     w = np.asarray(frame.angular_velocity, dtype=np.float64)
     f = -node_mass[:, None] * np.cross(w, np.cross(w, r))
     sigma = prestress(structure, structure.dofmap.to_dofs(f))
-    return sp.csr_matrix(skfem.asm(_initial_stress, structure.basis, sigma=sigma))
+    return assemble(structure.basis, initial_stress_matrices(sigma))
