@@ -61,3 +61,24 @@ def test_matrices_equal_skfem_assembly(name, monkeypatch):
         m = lumped_mass(basis, 7850.0)
         np.testing.assert_allclose(m, m_ref, rtol=1e-13)
         assert m.sum() == pytest.approx(3 * 7850.0 * basis.dx.sum(), rel=1e-13)
+
+
+def test_same_bits_on_any_blocks_and_threads(monkeypatch):
+    """The element matrices are summed element by element in a fixed order: the stiffness is
+    the same bits whatever the block size or the number of threads (1 and N ranks agree)."""
+    import numba
+
+    mesh, element, order = BASES["hex_s2"]
+    basis = skfem.Basis(mesh, skfem.ElementVector(element), intorder=order)
+    form = elasticity_matrices(1.2e9, 0.8e9)
+    K = assemble(basis, form)
+    monkeypatch.setattr(assembly, "BLOCK_BYTES", 1)
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        K1 = assemble(basis, form)
+    finally:
+        numba.set_num_threads(threads)
+    np.testing.assert_array_equal(K1.indptr, K.indptr)
+    np.testing.assert_array_equal(K1.indices, K.indices)
+    np.testing.assert_array_equal(K1.data, K.data)
