@@ -33,3 +33,22 @@ def pytest_configure(config) -> None:
     workers = os.environ.get("PYTEST_XDIST_WORKER_COUNT", "")
     if workers.isdigit():
         limit_threads(threads_per_rank(node_cores(), int(workers)))
+
+
+FIRST = ("validation/test_validate.py", "validation/test_step_sweep.py",
+         "validation/test_propeller.py", "models/test_mpi_models.py", "pd/test_strength.py",
+         "fem/test_fem_cantilever.py", "run/test_mpi_run.py", "run/test_determinism.py")
+"""The suite's longest files (1-3 minutes each on one core; BENCHMARKS.md, "Test suite"). They
+are collected first, so that the workers start them first (``--dist loadfile`` hands the files
+out in collection order) and finish together on the many short files."""
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    """The files of :data:`FIRST` first, in that order; the rest as collected."""
+    rank = {name: k for k, name in enumerate(FIRST)}
+
+    def key(item) -> int:
+        path = item.nodeid.split("::", 1)[0].removeprefix("tests/")
+        return rank.get(path, len(FIRST))
+
+    items.sort(key=key)  # stable: the order within a file and among the rest is kept
