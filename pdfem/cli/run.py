@@ -5,6 +5,8 @@ run without building it (:mod:`pdfem.run.sizing`): memory per rank and per node,
 and projected wall time; exit 0 if every node holds its ranks, 2 (saying how many nodes it
 needs) if not. It writes nothing (``--out`` is not created).
 
+``pdfem run CASE --profile`` also times the run's components (:mod:`pdfem.run.profile`).
+
 ``pdfem run CASE --restart DIR/checkpoint.h5`` continues a run of CASE from its last checkpoint,
 appending to the results file in DIR (``--out`` defaults to the checkpoint's directory).
 Without a case it runs the built-in demo (``demo_ice_sheet_panel.toml`` of the package
@@ -39,6 +41,9 @@ def add_arguments(r: argparse.ArgumentParser) -> None:
                         "run's output directory), appending to its results")
     r.add_argument("--quiet", action="store_true", help="no progress or messages")
     r.add_argument("--json", action="store_true", help="print the run summary as one JSON object")
+    r.add_argument("--profile", action="store_true",
+                   help="time the run's components (bonds, contact, water, structures, output, "
+                        "the rest): a table after the summary, profile.json in --out")
     e = r.add_argument_group("sizing a run (docs/cluster.md)")
     e.add_argument("--estimate", action="store_true",
                    help="build nothing: print memory per rank and per node, time per step and "
@@ -133,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
             summary = run_guarded(run_case, case, out, quiet=True, restart=args.restart,
-                                  comm=comm)
+                                  comm=comm, profile=args.profile)
         if comm.rank != 0:
             return EXIT_OK
         report = {"results": str(summary.results), "steps": summary.steps,
@@ -142,6 +147,8 @@ def run(args: argparse.Namespace) -> int:
                   "bonds": summary.bonds, "broken_bonds": summary.broken_bonds,
                   "frames": summary.frames,
                   "energy_budget": _budget(summary.energy)}
+        if summary.profile is not None:
+            report["profile"] = summary.profile
         if demo:
             from pdfem.post import load_results, summarize
             report["case"] = str(case.file)
@@ -150,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(report))
     else:
         summary = run_guarded(run_case, case, out, quiet=args.quiet, restart=args.restart,
-                              comm=comm)
+                              comm=comm, profile=args.profile)
         if not args.quiet and comm.rank == 0:
             print(summary.text())
             if demo:

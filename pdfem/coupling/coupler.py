@@ -57,6 +57,7 @@ from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.facet_loads import FacetLoads, collect_facet_loads
 from pdfem.coupling.impulse_work import ImpulseWork
 from pdfem.parallel.comm import SerialComm
+from pdfem.geometry.vectors import cross
 
 
 @dataclass
@@ -277,7 +278,7 @@ class Coupler:
         for p, impulse in zip(self.pairs, pair_impulse):
             p.contacts = int(self.comm.allreduce_sum(p.contacts))
             p.force = impulse.sum(axis=0) / D
-            p.moment = np.cross(p.structure.surface_points(), impulse).sum(axis=0) / D
+            p.moment = cross(p.structure.surface_points(), impulse).sum(axis=0) / D
         collect_facet_loads(self.records, D)
         self.time += D
         return broken

@@ -18,6 +18,8 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 import scipy.sparse as sp
 
+from pdfem.geometry.vectors import cross
+
 
 @runtime_checkable
 class ContactSurface(Protocol):
@@ -82,7 +84,7 @@ def split_quads(faces: np.ndarray) -> np.ndarray:
 def triangle_normals(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """(T, 3) unit normals by the right-hand rule of each triangle's node order."""
     x = points[triangles]
-    n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    n = cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
     return n / np.linalg.norm(n, axis=1)[:, None]
 
 
@@ -164,7 +166,7 @@ def orient_outward(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     closed = np.ones(ncomp, dtype=bool)
     closed[np.unique(edge_comp[open_edge])] = False
     x = points[tri]
-    vol6 = np.einsum("ij,ij->i", x[:, 0], np.cross(x[:, 1], x[:, 2]))
+    vol6 = np.einsum("ij,ij->i", x[:, 0], cross(x[:, 1], x[:, 2]))
     vol = np.bincount(comp, weights=vol6, minlength=ncomp)
     inward = closed & (vol < 0.0)
     sel = inward[comp]
@@ -233,4 +235,4 @@ class SurfaceBody:
         """(3,) moment (N m) of the accumulated surface forces about ``about`` (m), taken at the
         current node positions."""
         r = self.surface_points() - np.asarray(about, dtype=np.float64).reshape(1, 3)
-        return np.cross(r, self._surface_forces).sum(axis=0)
+        return cross(r, self._surface_forces).sum(axis=0)

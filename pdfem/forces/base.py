@@ -24,6 +24,9 @@ from abc import ABC, abstractmethod
 class ParticleForce(ABC):
     """A force on ice particles, added to their force density every ice step (SI units)."""
 
+    label: str = "particle force"
+    """What the force is, for messages and the run's profile (:mod:`pdfem.run.profile`)."""
+
     energy_key: str = ""
     """Name of this force's potential energy in the energy history (J)."""
 

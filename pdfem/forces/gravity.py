@@ -25,6 +25,7 @@ class Gravity(ParticleForce):
         (3,) gravitational acceleration, m/s^2.
     """
 
+    label = "gravity"
     energy_key = "gravity_potential"
 
     def __init__(self, bodies: list, g) -> None:

@@ -199,6 +199,7 @@ class ShortRangeContact(ParticleForce):
         self._counts = np.zeros(1, dtype=np.int64)
         self._reserve(0)
 
+    label = "short-range contact"
     energy_key = "short_range_potential"
     """Key of :meth:`potential_energy` in the energy history (:class:`ParticleForce`)."""
 

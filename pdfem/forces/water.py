@@ -68,6 +68,7 @@ class Water(ParticleForce):
         ``rho_ice + Ca rho_w phi`` (kg/m^3); 0 = off.
     """
 
+    label = "water"
     energy_key = "water_potential"
     dissipation_key = "water_drag_dissipated"
 

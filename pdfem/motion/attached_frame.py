@@ -39,6 +39,7 @@ import numpy as np
 from pdfem.motion.frame_structure import FrameStructure
 from pdfem.motion.rotation import rotation_vector
 from pdfem.motion.ship import Ship
+from pdfem.geometry.vectors import cross
 
 
 class ShipFrame:
@@ -86,8 +87,8 @@ class ShipFrame:
         f = self.state(t)
         R = f["R"]
         w, w_dot = R.T @ f["w"], R.T @ f["w_dot"]
-        acc = (R.T @ f["c_ddot"])[None, :] + np.cross(w_dot, r) \
-            + np.cross(w, np.cross(w, r)) + 2.0 * np.cross(w, v)
+        acc = (R.T @ f["c_ddot"])[None, :] + cross(w_dot, r) \
+            + cross(w, cross(w, r)) + 2.0 * cross(w, v)
         return -mass[:, None] * acc
 
     def to_world(self, t: float, r: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -95,12 +96,12 @@ class ShipFrame:
         ``v`` (body axes)."""
         f = self.state(t)
         rr = r @ f["R"].T
-        return f["c"] + rr, f["c_dot"] + np.cross(f["w"], rr) + v @ f["R"].T
+        return f["c"] + rr, f["c_dot"] + cross(f["w"], rr) + v @ f["R"].T
 
     def frame_velocity(self, t: float, r: np.ndarray) -> np.ndarray:
         """(N, 3) world velocity (m/s) of the hull's points at the nodes ``r``."""
         f = self.state(t)
-        return f["c_dot"] + np.cross(f["w"], r @ f["R"].T)
+        return f["c_dot"] + cross(f["w"], r @ f["R"].T)
 
 
 class AttachedStructure(FrameStructure):

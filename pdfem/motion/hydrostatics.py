@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pdfem.geometry.vectors import cross
+
 
 @dataclass
 class Hydrostatics:
@@ -91,13 +93,13 @@ def hydrostatics(x: np.ndarray, triangles: np.ndarray, level: float, density: fl
     p, d = _wet_triangles(np.asarray(x, dtype=np.float64), np.asarray(triangles), float(level))
     if len(p) == 0:
         return Hydrostatics(np.zeros(3), np.zeros(3), 0.0, 0.0, c.copy())
-    area_n = 0.5 * np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])  # A n, (K, 3)
+    area_n = 0.5 * cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])  # A n, (K, 3)
     sd = d.sum(axis=1)
     # int d dA = A sd / 3; with area_n = A n: int d n dA = area_n sd / 3
     f = -density * g * (area_n * (sd / 3.0)[:, None]).sum(axis=0)
     r = p - c
     dx = (d[:, :, None] * r).sum(axis=1) + sd[:, None] * r.sum(axis=1)  # 12 int d r dA / A
-    m = -density * g * (np.cross(dx, area_n) / 12.0).sum(axis=0)
+    m = -density * g * (cross(dx, area_n) / 12.0).sum(axis=0)
     d2 = (d * d).sum(axis=1) + sd * sd                            # 12 int d^2 dA / A
     u = -0.5 * density * g * float((area_n[:, 2] * d2 / 12.0).sum())
     volume = -float((area_n[:, 2] * sd / 3.0).sum())              # int d n_z dA = -V

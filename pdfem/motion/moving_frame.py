@@ -25,12 +25,13 @@ velocity jumps (:meth:`MovingFrame.velocity_jump`), which the structure takes as
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from pdfem.geometry.path import DisplacementPath
 from pdfem.motion.rotation import axis_rotation
+from pdfem.geometry.vectors import cross
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,8 @@ class MovingFrame:
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     ramp_time: float = 0.0
     path: tuple | None = None
+    _last: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    """The last :meth:`state` asked for (a substep asks for it several times at one time)."""
 
     @property
     def is_still(self) -> bool:
@@ -88,7 +91,10 @@ class MovingFrame:
     def state(self, t: float) -> dict[str, np.ndarray]:
         """The frame at time ``t`` (s): ``R`` (3, 3) rotation, ``c`` (3,) centre (m), ``c_dot``
         (m/s), ``c_ddot`` (m/s^2), ``w`` and ``w_dot`` (3,) angular velocity (rad/s) and
-        acceleration (rad/s^2), in world axes (``w``, ``w_dot`` are the same in frame axes)."""
+        acceleration (rad/s^2), in world axes (``w``, ``w_dot`` are the same in frame axes).
+        The arrays are shared with later calls at the same ``t``: read them, do not change them."""
+        if self._last.get("t") == t:
+            return self._last["state"]
         s, ds, S = self.speed_factor(t)
         w = np.asarray(self.angular_velocity, dtype=np.float64)
         V = np.asarray(self.velocity, dtype=np.float64)
@@ -98,8 +104,10 @@ class MovingFrame:
         if self.path is not None:
             p = DisplacementPath(self.path)
             c, c_dot = c + p.displacement(t), c_dot + p.velocity(t)
-        return {"R": R, "c": np.asarray(self.center, dtype=np.float64) + c,
-                "c_dot": c_dot, "c_ddot": ds * V, "w": s * w, "w_dot": ds * w}
+        state = {"R": R, "c": np.asarray(self.center, dtype=np.float64) + c,
+                 "c_dot": c_dot, "c_ddot": ds * V, "w": s * w, "w_dot": ds * w}
+        self._last.update(t=t, state=state)
+        return state
 
     def inertial_force(self, t: float, r: np.ndarray, v: np.ndarray,
                        mass: np.ndarray) -> np.ndarray:
@@ -107,8 +115,8 @@ class MovingFrame:
         with relative velocities ``v`` = u_e' (m/s) and lumped masses ``mass`` (kg, (N,))."""
         f = self.state(t)
         w, w_dot = f["w"], f["w_dot"]
-        acc = (f["R"].T @ f["c_ddot"])[None, :] + np.cross(w_dot, r) \
-            + np.cross(w, np.cross(w, r)) + 2.0 * np.cross(w, v)
+        acc = (f["R"].T @ f["c_ddot"])[None, :] + cross(w_dot, r) \
+            + cross(w, cross(w, r)) + 2.0 * cross(w, v)
         return -mass[:, None] * acc
 
     def to_world(self, t: float, r: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -116,10 +124,10 @@ class MovingFrame:
         with relative velocities ``v`` = u_e' (frame axes)."""
         f = self.state(t)
         rr = r @ f["R"].T
-        return f["c"] + rr, f["c_dot"] + np.cross(f["w"], rr) + v @ f["R"].T
+        return f["c"] + rr, f["c_dot"] + cross(f["w"], rr) + v @ f["R"].T
 
     def frame_velocity(self, t: float, r: np.ndarray) -> np.ndarray:
         """(N, 3) world velocity (m/s) of the frame's points that coincide with the nodes at
         ``r`` = X - c0 + u_e (the drive's velocity there, without the elastic motion)."""
         f = self.state(t)
-        return f["c_dot"] + np.cross(f["w"], r @ f["R"].T)
+        return f["c_dot"] + cross(f["w"], r @ f["R"].T)

@@ -32,6 +32,7 @@ from pdfem.fem.base import Structure
 from pdfem.fem.surface import orient_outward, split_quads
 from pdfem.fem.surface_patches import surface_patches
 from pdfem.motion.rotation import rotation_matrix
+from pdfem.geometry.vectors import cross
 
 
 def read_surface(path: str | os.PathLike, group: str = "contact") -> tuple[np.ndarray, np.ndarray]:
@@ -154,7 +155,7 @@ class RigidBody(Structure):
     def _update_pose(self) -> None:
         c = self.centre()
         self._x = c + (self.x0 - self.centre0) @ self.rotation().T
-        self._v = self.translation_velocity() + np.cross(self.angular_velocity, self._x - c)
+        self._v = self.translation_velocity() + cross(self.angular_velocity, self._x - c)
 
     def step(self, dt: float) -> None:
         """Advance the pose by ``dt`` (s).

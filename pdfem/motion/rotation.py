@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from pdfem.geometry.vectors import cross
+
 
 def cross_matrix(k: np.ndarray) -> np.ndarray:
     """(3, 3) matrix K with K v = k x v."""
@@ -57,7 +59,7 @@ def rotation_quaternion(rotation_vector) -> np.ndarray:
 def quaternion_product(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Hamilton product ``p q`` (the rotation q, then p)."""
     w1, v1, w2, v2 = p[0], p[1:], q[0], q[1:]
-    return np.concatenate([[w1 * w2 - v1 @ v2], w1 * v2 + w2 * v1 + np.cross(v1, v2)])
+    return np.concatenate([[w1 * w2 - v1 @ v2], w1 * v2 + w2 * v1 + cross(v1, v2)])
 
 
 def rotation_vector(q: np.ndarray) -> np.ndarray:

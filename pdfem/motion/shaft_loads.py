@@ -66,6 +66,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from pdfem.fem.stress import von_mises
+from pdfem.geometry.vectors import cross
 
 BLADE_SURFACE = re.compile(r"blade(\d+)_surface\Z")
 """Name of blade k's surface group (its faces but the root)."""
@@ -106,7 +107,7 @@ def spindle(axis: np.ndarray, psi: float, point: np.ndarray) -> np.ndarray:
     if np.linalg.norm(z) < 1e-6:
         return radial
     z = _unit(z)
-    best = max((np.cos(a) * z + np.sin(a) * np.cross(axis, z) for a in (psi, -psi)),
+    best = max((np.cos(a) * z + np.sin(a) * cross(axis, z) for a in (psi, -psi)),
                key=lambda e: float(e @ radial))
     return best if best @ radial > np.cos(np.radians(30.0)) else radial
 
@@ -153,7 +154,7 @@ class ShaftLoads:
             e_r = spindle(self.axis, 2.0 * np.pi * k / len(groups),
                           r0[structure.surface_nodes[mask]].mean(axis=0) if len(root) == 0
                           or np.linalg.norm(p - (p @ self.axis) * self.axis) < 1e-9 else p)
-            axes = np.array([e_r, np.cross(self.axis, e_r), self.axis])  # rows: e_r, e_t, e_a
+            axes = np.array([e_r, cross(self.axis, e_r), self.axis])  # rows: e_r, e_t, e_a
             self.blades.append((label, mask, p, axes))
         self._held = structure.solver.fixed                       # held DOFs
         self._k_held = structure.K.tocsr()[self._held]
@@ -190,7 +191,7 @@ class ShaftLoads:
         ``r`` (m, (Ns, 3), frame axes from the shaft centre), with the frame's ``rotation`` and
         their ``work`` (J, world)."""
         jf = impulse @ rotation
-        m = np.cross(r, jf)
+        m = cross(r, jf)
         self.impulse_world += impulse
         self.impulse_frame += jf
         self.moment_frame += m
@@ -225,8 +226,8 @@ class ShaftLoads:
             np.add.at(force, (self._held_row, self._held_comp), reaction)
         r = self._r0[nodes] + sol.u[s.dofmap.nodal_dofs[:, nodes].T]
         f = s.frame.state(sol.time)
-        v = f["R"].T @ f["c_dot"] + np.cross(f["w"], r)       # frame velocity, frame axes
-        return float(np.cross(r, force).sum(axis=0) @ self.axis), float(np.sum(force * v))
+        v = f["R"].T @ f["c_dot"] + cross(f["w"], r)       # frame velocity, frame axes
+        return float(cross(r, force).sum(axis=0) @ self.axis), float(np.sum(force * v))
 
     def after_step(self, dt: float) -> None:
         """After a structure step of ``dt`` (s): integrate the shaft's torque and power."""
@@ -241,7 +242,7 @@ class ShaftLoads:
         s = self.structure
         r, v = s.relative_motion()
         x, w = s.frame.to_world(s.solver.time, r, v)
-        return float((np.cross(x - s.frame.state(s.solver.time)["c"], w)
+        return float((cross(x - s.frame.state(s.solver.time)["c"], w)
                       * s.node_mass[:, None]).sum(axis=0) @ self.axis)
 
     def kinetic_energy(self) -> float:
@@ -304,9 +305,9 @@ class ShaftLoads:
         held = self.held_reactions()
         r_held = self._r0[self._held_nodes] + s.dofmap.to_nodal(s.solver.u)[self._held_nodes]
         for (label, mask, p, axes), rows in zip(self.blades, self._root_rows):
-            root_moment = -np.cross(r_held[rows] - p, held[rows]).sum(axis=0)
+            root_moment = -cross(r_held[rows] - p, held[rows]).sum(axis=0)
             jf = self.impulse_frame[mask].sum(axis=0) * scale
-            m = (self.moment_frame[mask].sum(axis=0) - np.cross(p, self.impulse_frame[mask].sum(
+            m = (self.moment_frame[mask].sum(axis=0) - cross(p, self.impulse_frame[mask].sum(
                 axis=0))) * scale
             bpeak, bwhere = self._stress_peak(vm, s.mesh.element_sets.get(label))
             out[label] = {"force": self.impulse_world[mask].sum(axis=0) * scale,

@@ -44,6 +44,7 @@ from pdfem.fem.surface_patches import surface_patches
 from pdfem.fem.surface import orient_outward
 from pdfem.motion.rotation import (quaternion_matrix, quaternion_product, rotation_quaternion,
                                    rotation_vector)
+from pdfem.geometry.vectors import cross
 
 
 class Ship(Structure):
@@ -173,7 +174,7 @@ class Ship(Structure):
         self.R = quaternion_matrix(self.q)
         self._x = self.c + self.body_points @ self.R.T
         self.omega = self.R @ ((self.R.T @ self.L) / self.inertia)
-        self._v = self.v + np.cross(self.omega, self._x - self.c)
+        self._v = self.v + cross(self.omega, self._x - self.c)
         self.hydro = hydrostatics(self._x, self.surface_triangles, self.level, self.density,
                                   self.g, self.c)
         self.thrust_force = self.thrust * self.R[:, 0]
@@ -222,7 +223,7 @@ class Ship(Structure):
         j = np.asarray(impulse, dtype=np.float64)
         before = self.kinetic_energy()
         self.v += j.sum(axis=0) / self.mass
-        self.L += np.cross(self._x - self.c, j).sum(axis=0)
+        self.L += cross(self._x - self.c, j).sum(axis=0)
         self._update_velocity()
         work = self.kinetic_energy() - before
         self._hold_surge()
@@ -235,7 +236,7 @@ class Ship(Structure):
         j = np.asarray(impulse, dtype=np.float64).reshape(-1, 3)
         before = self.kinetic_energy()
         self.v += j.sum(axis=0) / self.mass
-        self.L += np.cross(np.asarray(points, dtype=np.float64) - self.c, j).sum(axis=0)
+        self.L += cross(np.asarray(points, dtype=np.float64) - self.c, j).sum(axis=0)
         self._update_velocity()
         self.attached_impulse += j.sum(axis=0)
         self.attached_work += self.kinetic_energy() - before
@@ -244,7 +245,7 @@ class Ship(Structure):
     def _update_velocity(self) -> None:
         """Angular velocity and surface velocities after a change of ``v`` or ``L``."""
         self.omega = self.R @ ((self.R.T @ self.L) / self.inertia)
-        self._v = self.v + np.cross(self.omega, self._x - self.c)
+        self._v = self.v + cross(self.omega, self._x - self.c)
 
     # ------------------------------------------------------------------ energies
     def kinetic_energy(self) -> float:

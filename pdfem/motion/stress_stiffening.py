@@ -21,6 +21,7 @@ import scipy.sparse as sp
 
 from pdfem.fem.assembly import assemble, initial_stress_matrices
 from pdfem.fem.static import static_displacement
+from pdfem.geometry.vectors import cross
 
 if TYPE_CHECKING:
     from pdfem.motion.moving_frame import MovingFrame
@@ -57,6 +58,6 @@ def centrifugal_stiffness(structure: ElasticStructure, frame: MovingFrame,
         (Nn,) lumped nodal masses (kg).
     """
     w = np.asarray(frame.angular_velocity, dtype=np.float64)
-    f = -node_mass[:, None] * np.cross(w, np.cross(w, r))
+    f = -node_mass[:, None] * cross(w, cross(w, r))
     sigma = prestress(structure, structure.dofmap.to_dofs(f))
     return assemble(structure.basis, initial_stress_matrices(sigma))

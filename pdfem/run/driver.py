@@ -22,6 +22,7 @@ numba or MPI.
 
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +39,7 @@ from pdfem.run.loop import LoopState, run_loop
 from pdfem.run.outdir import OutDirLock, check_out_dir
 from pdfem.run.outputs import Outputs, open_outputs, sources
 from pdfem.run.preflight import preflight
+from pdfem.run.profile import PROFILE_NAME, Profile, table
 from pdfem.run.progress import Progress
 
 
@@ -55,6 +57,7 @@ class RunSummary:
     broken_bonds: int
     frames: int
     energy: dict | None = None   # the energy row of the last frame (J), for the budget
+    profile: list[dict] | None = None  # with profile=True: the time by component (s)
 
     def budget(self) -> str:
         """The energy budget at the end of the run (:func:`pdfem.run.energy.budget_text`)."""
@@ -69,7 +72,9 @@ class RunSummary:
                 f"in {self.wall_seconds:.1f} s wall\n"
                 f"  particles {self.particles:,}, bonds {self.bonds:,}, broken {self.broken_bonds:,}\n"
                 f"  results: {self.results} ({self.frames} frames; open {self.results.with_suffix('.xdmf')} "
-                "in ParaView)" + ("\n" + self.budget() if self.energy else ""))
+                "in ParaView)" + ("\n" + self.budget() if self.energy else "")
+                + ("\n" + "\n".join(table(self.profile, self.particles, self.steps))
+                   if self.profile else ""))
 
 
 def _start(case: Case, setup: Setup, outputs: Outputs, ckpt, say, comm) -> LoopState:
@@ -90,7 +95,8 @@ def _start(case: Case, setup: Setup, outputs: Outputs, ckpt, say, comm) -> LoopS
 
 
 def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: bool | None = None,
-             log=None, restart: str | Path | None = None, comm=None) -> RunSummary:
+             log=None, restart: str | Path | None = None, comm=None,
+             profile: bool = False) -> RunSummary:
     """Run a validated case and write ``results.h5`` (+ ``results.xdmf``) into ``out_dir``.
 
     Before building anything the particles, bonds and memory of the ice are estimated
@@ -117,6 +123,9 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
         (frames and history rows written after the checkpoint are dropped).
     comm
         The communicator (default :func:`pdfem.parallel.comm.world`).
+    profile
+        Time the run's components (:mod:`pdfem.run.profile`): the summary's ``profile`` and
+        ``profile.json`` in ``out_dir``.
 
     Returns
     -------
@@ -135,11 +144,11 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     comm = comm or world()
     out = check_out_dir(out_dir)
     with OutDirLock(out, enabled=comm.rank == 0):  # one run per output directory
-        return _run(case, out, quiet, progress, log, restart, comm)
+        return _run(case, out, quiet, progress, log, restart, comm, profile)
 
 
-def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart, comm
-         ) -> RunSummary:
+def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart, comm,
+         profile: bool = False) -> RunSummary:
     """:func:`run_case` in its checked and locked output directory ``out``."""
     quiet = quiet or comm.rank != 0  # one rank speaks for all
     say = (lambda s: None) if quiet else (log or (lambda s: print(s, flush=True)))
@@ -153,6 +162,9 @@ def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart
     steps = None if ckpt is None else (ckpt.driver.time_step, ckpt.driver.ice_substeps,
                                        ckpt.driver.structure_substeps)
     setup = build(case, out, comm, say, steps)
+    timing = Profile() if profile else None
+    if timing is not None:
+        timing.instrument(setup)
     meta = {"title": case.run.title, "ranks": comm.size, "time_step": setup.dt,
             "ice_substeps": setup.n_ice, "structure_substeps": setup.n_st,
             "pd_loop": case.run.pd_loop}
@@ -180,10 +192,17 @@ def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart
     bar = Progress(case.run.end_time, enabled=False if quiet else progress,
                    start_time=(state.first - 1) * setup.dt, start_step=state.first - 1)
     try:
-        done = run_loop(case, setup, outputs, monitor, state, comm, bar, ckpt_path, say)
+        done = run_loop(case, setup, outputs, monitor, state, comm, bar, ckpt_path, say,
+                        timing)
     finally:  # -- 3. finish
         wall = bar.finish()
         outputs.close()
+    rows = None
+    if timing is not None:
+        steps = done.step - state.first + 1
+        rows = timing.rows(comm, setup.particles, steps, steps * setup.n_ice)
+        if comm.rank == 0:
+            (out / PROFILE_NAME).write_text(json.dumps(rows, indent=1))
     return RunSummary(writer.path, done.step, setup.dt, setup.nsteps * setup.dt, wall,
                       setup.particles, setup.bonds, setup.cut + done.broken, done.frames,
-                      done.energy)
+                      done.energy, rows)

@@ -65,6 +65,8 @@ class Step:
 class Histories:
     """The history rows of every coupling step."""
 
+    label = "histories"
+
     def __init__(self, outputs) -> None:
         self.outputs = outputs
 
@@ -74,6 +76,8 @@ class Histories:
 
 class Balance:
     """The load balance of split ice bodies after every step (:mod:`pdfem.run.balance`)."""
+
+    label = "load balance"
 
     def __init__(self, balance: LoadBalance, outputs) -> None:
         self.balance, self.outputs = balance, outputs
@@ -85,6 +89,8 @@ class Balance:
 class MotionCheck:
     """Runaway motion and NaN, every check interval (the monitor's own schedule)."""
 
+    label = "checks and progress"
+
     def __init__(self, monitor) -> None:
         self.monitor = monitor
 
@@ -94,6 +100,8 @@ class MotionCheck:
 
 class EnergyCheck:
     """Energy created, every check interval between frames (a frame checks its own)."""
+
+    label = "checks and progress"
 
     def __init__(self, monitor, outputs) -> None:
         self.monitor, self.outputs = monitor, outputs
@@ -106,6 +114,8 @@ class EnergyCheck:
 class Frames:
     """A results frame every ``output_interval`` (s) and at the last step, each with the
     motion and energy checks."""
+
+    label = "frames and checkpoints"
 
     def __init__(self, outputs, monitor, interval: float, state: LoopState, t0: float) -> None:
         self.outputs, self.monitor, self.interval = outputs, monitor, interval
@@ -134,6 +144,8 @@ class Checkpoints:
     """A checkpoint every ``every`` steps and every ``minutes`` of wall time (rank 0's clock
     decides for all ranks), never at the last step."""
 
+    label = "frames and checkpoints"
+
     def __init__(self, case, setup, outputs, frames: Frames, path: Path, comm,
                  broken) -> None:
         run = case.run
@@ -161,6 +173,8 @@ class Checkpoints:
 class ProgressTask:
     """The progress line after every step."""
 
+    label = "checks and progress"
+
     def __init__(self, bar) -> None:
         self.bar = bar
 
@@ -169,9 +183,10 @@ class ProgressTask:
 
 
 def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
-             ckpt_path: Path, say=lambda s: None) -> LoopResult:
+             ckpt_path: Path, say=lambda s: None, profile=None) -> LoopResult:
     """Take the steps ``state.first`` .. ``setup.nsteps`` (see the module docstring); ``say``
-    reports re-partitions.
+    reports re-partitions; ``profile`` (a :class:`pdfem.run.profile.Profile`, with the
+    coupling step's parts wrapped) also times the tasks and the loop.
 
     Raises
     ------
@@ -189,6 +204,9 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
              MotionCheck(monitor), EnergyCheck(monitor, outputs), frames,
              Checkpoints(case, setup, outputs, frames, ckpt_path, comm, lambda: broken),
              ProgressTask(bar)]
+    if profile is not None:
+        profile.instrument_tasks(tasks)
+    start = time.perf_counter()
     try:
         for step in range(state.first, setup.nsteps + 1):
             t = step * dt
@@ -212,6 +230,8 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
         outputs.close()
         raise InstabilityError(f"{exc}. The results so far are kept: {outputs.writer.path} "
                                f"({outputs.writer.n_frames} frames{note})") from None
+    if profile is not None:
+        profile.loop += time.perf_counter() - start
     return LoopResult(step, frames.frames, broken, frames.energy)
 
 

@@ -1,0 +1,118 @@
+"""Where a run's time goes: ``pdfem run CASE --profile``.
+
+A :class:`Profile` wraps the methods of the built objects that do each part of a coupling step
+and adds up the wall time spent in them, by component:
+
+- ``bonds and failure``: the ice bodies' bond forces, dilatation and breaking
+  (``compute_forces``, ``refresh_forces``);
+- one row per particle force, named by its ``label`` (``short-range contact``, ``water``,
+  ``gravity``);
+- ``surface contact``: detection and resolution of the particles against the structures'
+  contact surfaces (``SurfaceContact.resolve``); ``contact surfaces``: their update to the
+  structures' new positions (pseudo-normals, facet grid);
+- ``structures``: the structures' own steps and their surface motion (the surface motion's
+  ``over``, ``after``, ``begin``, ``sample``, ``respond``, ``drive_work``);
+- ``coupling (rest)``: what the coupling step does besides (the ice's integration, the hand-over
+  of impulses, the step's Python);
+- one row per after-step task of the loop (its ``label``: histories, frames and checkpoints,
+  checks and progress);
+- ``loop (rest)``: the loop's own remainder.
+
+The time of a call is booked to its own component only: a wrapped call inside another wrapped
+call is taken out of the outer one's time, so the rows add up to the loop's wall time. The
+table gives each row in seconds (the largest over the ranks), as a share of the loop, per
+coupling step and per particle-step (the ice's particles times its steps, from all ranks). SI
+units (s).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+PROFILE_NAME = "profile.json"
+"""The profile's file in the output directory: the rows of :meth:`Profile.rows` as JSON."""
+
+MOTION_METHODS = ("over", "after", "begin", "sample", "respond", "drive_work")
+"""The surface motion's methods (:class:`pdfem.fem.surface_motion.SurfaceMotion`): the
+structures' share of a coupling step."""
+
+
+class Profile:
+    """Wall time by component (s), exclusive of the wrapped calls made inside."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = {}
+        self._stack: list[list[float]] = []   # per open call: [start, time in wrapped calls]
+        self.loop = 0.0                        # s, the loop's wall time
+
+    def wrap(self, obj: Any, method: str, label: str) -> None:
+        """Replace ``obj.method`` (on this instance) by a call that books its time to ``label``."""
+        inner = getattr(obj, method)
+        self.seconds.setdefault(label, 0.0)
+        seconds, stack = self.seconds, self._stack
+
+        def timed(*args, **kwargs):
+            stack.append([time.perf_counter(), 0.0])
+            try:
+                return inner(*args, **kwargs)
+            finally:
+                start, nested = stack.pop()
+                spent = time.perf_counter() - start
+                seconds[label] += spent - nested
+                if stack:
+                    stack[-1][1] += spent
+
+        setattr(obj, method, timed)
+
+    def instrument(self, setup) -> None:
+        """Wrap the coupling step's parts of a built run (:class:`pdfem.run.build.Setup`)."""
+        for body in setup.bodies:
+            self.wrap(body, "compute_forces", "bonds and failure")
+            self.wrap(body, "refresh_forces", "bonds and failure")
+        for force in setup.forces:
+            self.wrap(force, "add_forces", force.label)
+        for pair in setup.coupler.pairs:
+            self.wrap(pair.contact, "resolve", "surface contact")
+            self.wrap(pair.contact, "set_surface", "contact surfaces")
+        for record in setup.coupler.records:
+            for method in MOTION_METHODS:
+                self.wrap(record.motion, method, "structures")
+        self.wrap(setup.coupler, "step", "coupling (rest)")
+
+    def instrument_tasks(self, tasks: list) -> None:
+        """Wrap the loop's after-step tasks, each booked to its ``label``, and start the count
+        afresh (the set-up's first forces and frame are not the loop's)."""
+        for task in tasks:
+            self.wrap(task, "after_step", task.label)
+        for label in self.seconds:
+            self.seconds[label] = 0.0
+
+    def rows(self, comm, particles: int, steps: int, ice_steps: int) -> list[dict]:
+        """The table's rows (every rank calls; the seconds are the largest over the ranks):
+        component, seconds, share of the loop, s per coupling step, s per particle-step."""
+        parts = comm.allgather(dict(self.seconds, **{"loop (rest)": self.loop
+                                                     - sum(self.seconds.values())}))
+        loop = max(p_loop for p_loop in comm.allgather(self.loop))
+        out = []
+        for label in parts[0]:
+            s = max(p[label] for p in parts)
+            out.append({"component": label, "seconds": s,
+                        "share": s / loop if loop > 0 else 0.0,
+                        "per_step": s / max(steps, 1),
+                        "per_particle_step": s / max(particles * ice_steps, 1)})
+        out.append({"component": "total", "seconds": loop, "share": 1.0,
+                    "per_step": loop / max(steps, 1),
+                    "per_particle_step": loop / max(particles * ice_steps, 1)})
+        return out
+
+
+def table(rows: list[dict], particles: int, steps: int) -> list[str]:
+    """The profile as text lines: one row per component, the largest first."""
+    lines = [f"  profile: {steps:,} coupling steps, {particles:,} ice particles",
+             f"    {'component':<26}{'s':>10}{'%':>7}{'ms/step':>10}{'ns/particle-step':>18}"]
+    body = sorted(rows[:-1], key=lambda r: -r["seconds"]) + rows[-1:]
+    for r in body:
+        lines.append(f"    {r['component']:<26}{r['seconds']:>10.3f}{100 * r['share']:>7.1f}"
+                     f"{1e3 * r['per_step']:>10.3f}{1e9 * r['per_particle_step']:>18.1f}")
+    return lines
