@@ -90,20 +90,26 @@ class Profile:
 
     def rows(self, comm, particles: int, steps: int, ice_steps: int) -> list[dict]:
         """The table's rows (every rank calls; the seconds are the largest over the ranks):
-        component, seconds, share of the loop, s per coupling step, s per particle-step."""
+        component, seconds, share of the loop, s per coupling step, s per particle-step
+        (``None`` without ice)."""
         parts = comm.allgather(dict(self.seconds, **{"loop (rest)": self.loop
                                                      - sum(self.seconds.values())}))
         loop = max(p_loop for p_loop in comm.allgather(self.loop))
+        particle_steps = particles * ice_steps
+
+        def per_particle_step(s: float) -> float | None:
+            return s / particle_steps if particle_steps > 0 else None
+
         out = []
         for label in parts[0]:
             s = max(p[label] for p in parts)
             out.append({"component": label, "seconds": s,
                         "share": s / loop if loop > 0 else 0.0,
                         "per_step": s / max(steps, 1),
-                        "per_particle_step": s / max(particles * ice_steps, 1)})
+                        "per_particle_step": per_particle_step(s)})
         out.append({"component": "total", "seconds": loop, "share": 1.0,
                     "per_step": loop / max(steps, 1),
-                    "per_particle_step": loop / max(particles * ice_steps, 1)})
+                    "per_particle_step": per_particle_step(loop)})
         return out
 
 
@@ -113,6 +119,8 @@ def table(rows: list[dict], particles: int, steps: int) -> list[str]:
              f"    {'component':<26}{'s':>10}{'%':>7}{'ms/step':>10}{'ns/particle-step':>18}"]
     body = sorted(rows[:-1], key=lambda r: -r["seconds"]) + rows[-1:]
     for r in body:
+        pps = r["per_particle_step"]
         lines.append(f"    {r['component']:<26}{r['seconds']:>10.3f}{100 * r['share']:>7.1f}"
-                     f"{1e3 * r['per_step']:>10.3f}{1e9 * r['per_particle_step']:>18.1f}")
+                     f"{1e3 * r['per_step']:>10.3f}"
+                     + (f"{1e9 * pps:>18.1f}" if pps is not None else f"{'-':>18}"))
     return lines

@@ -105,3 +105,16 @@ def test_cli_profile_in_the_json_summary(tmp_path):
     report = json.loads(r.stdout)
     names = [row["component"] for row in report["profile"]]
     assert names[-1] == "total" and "bonds and failure" in names
+
+
+def test_no_ice_no_particle_step_figure():
+    """A run without ice (a structure alone) has no particle-steps: the column says so."""
+    from pdfem.run.profile import table
+
+    p = Profile()
+    p.seconds["structures"] = 1.0
+    p.loop = 1.5
+    rows = p.rows(SerialComm(), particles=0, steps=10, ice_steps=10)
+    assert all(r["per_particle_step"] is None for r in rows)
+    assert rows[-1]["seconds"] == 1.5 and rows[-1]["per_step"] == pytest.approx(0.15)
+    assert table(rows, 0, 10)[-1].rstrip().endswith("-")
