@@ -10,6 +10,7 @@ at 0.9.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -19,7 +20,8 @@ from pdfem.case import Case
 from pdfem.output import read_results
 from pdfem.post.windowed import peak_windowed_force, windowed_force
 from pdfem.run.driver import run_case
-from pdfem.validation.case import Outcome, ValidationCase, replace_run, replace_structure
+from pdfem.validation.case import (Outcome, ValidationCase, replace_ice, replace_run,
+                                   replace_structure)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -106,17 +108,30 @@ most of the demo's step, costs about a tenth; the step's coupling (what this swe
 the same."""
 
 
+QUICK_ADVANCE = 0.4e-3
+"""How much closer (m) the quick sweep starts the sheet to the panel: the demo's sheet flies
+1.0 ms (0.5 mm at 0.5 m/s, unloaded and at rest inside) before it touches; starting it 0.4 mm
+closer skips 0.8 ms of that flight, the same motion shifted in time (the pushed and unbreakable
+regions, boxes with 1 cm of slack, hold the same particles)."""
+
+
 def quick(case: Case) -> Case:
-    """To 2.5 ms: the impact (first contact at 1.0 ms) and the peak load (near 1.9 ms), the
-    panel meshed at :data:`QUICK_ELEMENT_SIZE`."""
+    """The sheet :data:`QUICK_ADVANCE` closer (first contact at 0.2 ms instead of 1.0 ms), to
+    1.7 ms: the impact and the peak load (near 1.1 ms); the panel meshed at
+    :data:`QUICK_ELEMENT_SIZE`."""
     st = case.structures[0]
     case = replace_structure(case, params={**st.params, "element_size": QUICK_ELEMENT_SIZE})
-    return replace_run(case, end_time=2.5e-3)
+    box = case.ice[0].shape
+    lower = tuple(box.min[:2]) + (box.min[2] - QUICK_ADVANCE,)
+    upper = tuple(box.max[:2]) + (box.max[2] - QUICK_ADVANCE,)
+    case = replace_ice(case, shape=dataclasses.replace(box, min=lower, max=upper))
+    return replace_run(case, end_time=1.7e-3)
 
 
 _COMMON = dict(case_file="demo_step_sweep.toml", execute=sweep, quick=quick, relative=False,
                reference=lambda case: 0.0,
-               quick_note="to 2.5 ms (impact and peak load) instead of 4 ms, panel elements "
+               quick_note="the sheet 0.4 mm closer (first contact at 0.2 ms), to 1.7 ms (impact "
+                          "and peak load) instead of 4 ms, panel elements "
                           f"{QUICK_ELEMENT_SIZE} m instead of 0.08 m")
 CASES = (
     ValidationCase(
