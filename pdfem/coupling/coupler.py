@@ -56,8 +56,8 @@ import numpy as np
 from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.facet_loads import FacetLoads, collect_facet_loads
 from pdfem.coupling.impulse_work import ImpulseWork
-from pdfem.parallel.comm import SerialComm
 from pdfem.geometry.vectors import cross
+from pdfem.parallel.comm import SerialComm
 
 
 @dataclass

@@ -35,6 +35,18 @@ def local_gradients(basis: skfem.CellBasis, elements: slice) -> np.ndarray:
     return np.ascontiguousarray(g.transpose(3, 4, 0, 1, 2))
 
 
+def local_values(basis: skfem.CellBasis) -> np.ndarray:
+    """Values ``phi[a, i, e, q]`` of every local vector function ``a`` of the basis at the
+    quadrature points of every element, (nloc, 3, Ne, nq)."""
+    return np.array([np.asarray(b[0]) for b in basis.basis])
+
+
+def assemble_vector(basis: skfem.CellBasis, per_element: np.ndarray) -> np.ndarray:
+    """The global DOF vector (N,) that sums the element entries ``per_element`` (nloc, Ne) of
+    every element's local DOFs."""
+    return np.bincount(basis.element_dofs.ravel(), per_element.ravel(), minlength=basis.N)
+
+
 def assemble(basis: skfem.CellBasis,
              element_matrices: Callable[[np.ndarray, np.ndarray, slice], np.ndarray]
              ) -> sp.csr_matrix:

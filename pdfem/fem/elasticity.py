@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 import skfem
 
-from pdfem.fem.assembly import assemble, elasticity_matrices
+from pdfem.fem.assembly import assemble, assemble_vector, elasticity_matrices, local_values
 from pdfem.fem.mesh import FEMesh
 
 STEEL_DEFAULTS: dict[str, float] = {
@@ -162,10 +162,10 @@ def lumped_mass(basis: skfem.CellBasis, density: float) -> np.ndarray:
         If a lumped mass is not strictly positive (a node without elements, or an element type
         whose row-sum lumping fails, such as P2 tetrahedra).
     """
-    phi = np.array([np.asarray(b[0]) for b in basis.basis])          # (nloc, 3, Ne, nq)
+    phi = local_values(basis)                                        # (nloc, 3, Ne, nq)
     # row sum of the consistent mass int rho phi_a . phi_b dV over the element's b
     rows = float(density) * np.einsum("acen,cen,en->ae", phi, phi.sum(axis=0), basis.dx)
-    m = np.bincount(basis.element_dofs.ravel(), rows.ravel(), minlength=basis.N)
+    m = assemble_vector(basis, rows)
     if not np.all(m > 0.0):
         bad = int(np.sum(~(m > 0.0)))
         raise ValueError(f"row-sum lumped mass has {bad} non-positive entries (min {m.min():.3e} "

@@ -31,6 +31,7 @@ import numpy as np
 import skfem
 from skfem.io.meshio import HEX_MAPPING
 
+from pdfem.fem.assembly import assemble_vector, local_values
 from pdfem.fem.mesh import FEMesh
 from pdfem.fem.mesh_second_order import edge_lookup
 
@@ -200,7 +201,7 @@ def hrz_mass(basis: skfem.CellBasis, density: float) -> np.ndarray:
     """
     rho = float(density)
     dx = basis.dx                                                    # (Ne, nq)
-    phi = np.array([np.asarray(b[0]) for b in basis.basis])            # (nloc, 3, Ne, nq)
+    phi = local_values(basis)                                        # (nloc, 3, Ne, nq)
     diag = rho * np.einsum("icen,icen,en->ie", phi, phi, dx)        # (nloc, Ne)
     comp = np.argmax(np.abs(phi).sum(axis=(2, 3)), axis=1)          # direction of local DOF
     m_e = rho * dx.sum(axis=1)
@@ -208,7 +209,7 @@ def hrz_mass(basis: skfem.CellBasis, density: float) -> np.ndarray:
     for c in range(3):
         sel = comp == c
         out[sel] = diag[sel] * (m_e / diag[sel].sum(axis=0))
-    m = np.bincount(basis.element_dofs.ravel(), out.ravel(), minlength=basis.N)
+    m = assemble_vector(basis, out)
     if not np.all(m > 0.0):
         raise ValueError(f"HRZ lumped mass has {int(np.sum(~(m > 0.0)))} non-positive entries "
                          f"(min {m.min():.3e} kg); the mesh has nodes without elements")

@@ -36,10 +36,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from pdfem.geometry.vectors import cross
 from pdfem.motion.frame_structure import FrameStructure
 from pdfem.motion.rotation import rotation_vector
 from pdfem.motion.ship import Ship
-from pdfem.geometry.vectors import cross
 
 
 class ShipFrame:

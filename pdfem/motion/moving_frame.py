@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pdfem.geometry.path import DisplacementPath
-from pdfem.motion.rotation import axis_rotation
 from pdfem.geometry.vectors import cross
+from pdfem.motion.rotation import axis_rotation
 
 
 @dataclass(frozen=True)

@@ -31,8 +31,8 @@ from pdfem.fem.mesh import load_mesh, read_msh_groups
 from pdfem.fem.base import Structure
 from pdfem.fem.surface import orient_outward, split_quads
 from pdfem.fem.surface_patches import surface_patches
-from pdfem.motion.rotation import rotation_matrix
 from pdfem.geometry.vectors import cross
+from pdfem.motion.rotation import rotation_matrix
 
 
 def read_surface(path: str | os.PathLike, group: str = "contact") -> tuple[np.ndarray, np.ndarray]:

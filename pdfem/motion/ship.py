@@ -38,13 +38,13 @@ import numpy as np
 
 from pdfem.errors import InputError
 from pdfem.fem.base import Structure
+from pdfem.geometry.vectors import cross
 from pdfem.motion.hydrostatics import hydrostatics
 from pdfem.motion.rigid import read_surface
 from pdfem.fem.surface_patches import surface_patches
 from pdfem.fem.surface import orient_outward
 from pdfem.motion.rotation import (quaternion_matrix, quaternion_product, rotation_quaternion,
                                    rotation_vector)
-from pdfem.geometry.vectors import cross
 
 
 class Ship(Structure):

@@ -73,7 +73,7 @@ class RunSummary:
                 f"  particles {self.particles:,}, bonds {self.bonds:,}, broken {self.broken_bonds:,}\n"
                 f"  results: {self.results} ({self.frames} frames; open {self.results.with_suffix('.xdmf')} "
                 "in ParaView)" + ("\n" + self.budget() if self.energy else "")
-                + ("\n" + "\n".join(table(self.profile, self.particles, self.steps))
+                + ("\n" + "\n".join(table(self.profile, self.particles))
                    if self.profile else ""))
 
 

@@ -205,8 +205,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
              Checkpoints(case, setup, outputs, frames, ckpt_path, comm, lambda: broken),
              ProgressTask(bar)]
     if profile is not None:
-        profile.instrument_tasks(tasks)
-    start = time.perf_counter()
+        profile.start_loop(tasks)
     try:
         for step in range(state.first, setup.nsteps + 1):
             t = step * dt
@@ -231,7 +230,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
         raise InstabilityError(f"{exc}. The results so far are kept: {outputs.writer.path} "
                                f"({outputs.writer.n_frames} frames{note})") from None
     if profile is not None:
-        profile.loop += time.perf_counter() - start
+        profile.stop_loop()
     return LoopResult(step, frames.frames, broken, frames.energy)
 
 

@@ -45,6 +45,7 @@ class Profile:
         self.seconds: dict[str, float] = {}
         self._stack: list[list[float]] = []   # per open call: [start, time in wrapped calls]
         self.loop = 0.0                        # s, the loop's wall time
+        self._loop_start = 0.0
 
     def wrap(self, obj: Any, method: str, label: str) -> None:
         """Replace ``obj.method`` (on this instance) by a call that books its time to ``label``."""
@@ -80,42 +81,42 @@ class Profile:
                 self.wrap(record.motion, method, "structures")
         self.wrap(setup.coupler, "step", "coupling (rest)")
 
-    def instrument_tasks(self, tasks: list) -> None:
-        """Wrap the loop's after-step tasks, each booked to its ``label``, and start the count
-        afresh (the set-up's first forces and frame are not the loop's)."""
+    def start_loop(self, tasks: list) -> None:
+        """Wrap the loop's after-step tasks, each booked to its ``label``, and start counting
+        (the set-up's first forces and frame are not the loop's)."""
         for task in tasks:
             self.wrap(task, "after_step", task.label)
         for label in self.seconds:
             self.seconds[label] = 0.0
+        self._loop_start = time.perf_counter()
+
+    def stop_loop(self) -> None:
+        """The loop ended: its wall time so far is :attr:`loop`."""
+        self.loop += time.perf_counter() - self._loop_start
 
     def rows(self, comm, particles: int, steps: int, ice_steps: int) -> list[dict]:
         """The table's rows (every rank calls; the seconds are the largest over the ranks):
         component, seconds, share of the loop, s per coupling step, s per particle-step
-        (``None`` without ice)."""
-        parts = comm.allgather(dict(self.seconds, **{"loop (rest)": self.loop
-                                                     - sum(self.seconds.values())}))
-        loop = max(p_loop for p_loop in comm.allgather(self.loop))
+        (``None`` without ice); the last row, ``total``, also gives the coupling ``steps``."""
+        mine = dict(self.seconds, **{"loop (rest)": self.loop - sum(self.seconds.values()),
+                                     "total": self.loop})
+        parts = comm.allgather(mine)
+        loop = max(p["total"] for p in parts)
         particle_steps = particles * ice_steps
-
-        def per_particle_step(s: float) -> float | None:
-            return s / particle_steps if particle_steps > 0 else None
-
         out = []
-        for label in parts[0]:
+        for label in mine:
             s = max(p[label] for p in parts)
             out.append({"component": label, "seconds": s,
                         "share": s / loop if loop > 0 else 0.0,
                         "per_step": s / max(steps, 1),
-                        "per_particle_step": per_particle_step(s)})
-        out.append({"component": "total", "seconds": loop, "share": 1.0,
-                    "per_step": loop / max(steps, 1),
-                    "per_particle_step": per_particle_step(loop)})
+                        "per_particle_step": s / particle_steps if particle_steps > 0 else None})
+        out[-1]["steps"] = steps
         return out
 
 
-def table(rows: list[dict], particles: int, steps: int) -> list[str]:
-    """The profile as text lines: one row per component, the largest first."""
-    lines = [f"  profile: {steps:,} coupling steps, {particles:,} ice particles",
+def table(rows: list[dict], particles: int) -> list[str]:
+    """The profile as text lines: one row per component, the largest first, the total last."""
+    lines = [f"  profile: {rows[-1]['steps']:,} coupling steps, {particles:,} ice particles",
              f"    {'component':<26}{'s':>10}{'%':>7}{'ms/step':>10}{'ns/particle-step':>18}"]
     body = sorted(rows[:-1], key=lambda r: -r["seconds"]) + rows[-1:]
     for r in body:
