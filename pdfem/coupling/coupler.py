@@ -314,12 +314,13 @@ class Coupler:
         step's start)."""
         D, n = self.dt, self.structure_substeps
         h = D / n
-        works = [ImpulseWork(b) for b in self.bodies]
-        olds = [b.begin_step(D, keep_old=True) for b in self.bodies]
-        kicks = []
-        for b, y_old, work in zip(self.bodies, olds, works):
-            b.y[:] = y_old                       # the drift is taken below, in n parts
-            kicks.append(b.v - work.v0)          # the first half kick, D/2 a_t
+        # the impulse ledgers of the bodies in contact pairs (a body without pairs takes none)
+        works = [ImpulseWork(r.body) if r.pairs else None for r in self.body_records]
+        v0 = [r.body.v.copy() if n > 1 else None for r in self.body_records]
+        for b in self.bodies:
+            b.begin_step(D, drift=False)         # the drift is taken below, in n parts
+        # the first half kick, D/2 a_t (with n substeps)
+        kicks = [None if v is None else b.v - v for b, v in zip(self.bodies, v0)]
         for j in range(n):
             starts = {}
             for r in self.records:
@@ -329,19 +330,21 @@ class Coupler:
             for rec, work, kick in zip(self.body_records, works, kicks):
                 body = rec.body
                 y = body.y                       # in place: the body keeps its array
-                before = y.copy()
+                before = None if work is None else y.copy()
                 # the velocity of substep j: v_t + a_t (j + 1/2) h, so that a contact stops
                 # the particle's velocity of that instant (not the mid-step velocity of the
                 # whole step, off by O(D a)); the positions at the step's end are Verlet's
-                u = body.v if n == 1 else body.v + kick * ((2 * j + 1) / n - 1.0)
+                u = body.v if kick is None else body.v + kick * ((2 * j + 1) / n - 1.0)
                 y += h * u
-                self._contact(rec, before, u, h, work, j * h)
+                if work is not None:
+                    self._contact(rec, before, u, h, work, j * h)
             self._hand_over(pair_impulse)
             self._apply_impulses()
             for r in self.records:
                 r.motion.after(h)
         broken = self._finish_ice_step(D)
-        self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies))
+        self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies)
+                                        if w is not None)
         self._after_breaking(broken)
         return broken
 
@@ -362,14 +365,16 @@ class Coupler:
                 start, end, velocity = r.motion.sample(h, frac)
                 starts[id(r)], r.end = start, (end, velocity)
             self._set_surfaces(starts)
-            works = [ImpulseWork(b) for b in self.bodies]
-            olds = [b.begin_step(h, keep_old=True) for b in self.bodies]
+            works = [ImpulseWork(r.body) if r.pairs else None for r in self.body_records]
+            olds = [r.body.begin_step(h, keep_old=bool(r.pairs)) for r in self.body_records]
             for rec, y_old, work in zip(self.body_records, olds, works):
-                self._contact(rec, y_old, rec.body.v, h, work, 0.0)
+                if work is not None:
+                    self._contact(rec, y_old, rec.body.v, h, work, 0.0)
             self._hand_over(pair_impulse)
             self._apply_impulses()
             now = self._finish_ice_step(h)
-            self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies))
+            self.contact_work_on_ice += sum(w.work(b) for w, b in zip(works, self.bodies)
+                                        if w is not None)
             self._after_breaking(now)
             broken += now
         for r in self.records:

@@ -395,11 +395,14 @@ class IceBody:
         self.refresh_forces()
         self.local_fracture_dissipated = before
 
-    def begin_step(self, dt: float, keep_old: bool = False) -> np.ndarray | None:
+    def begin_step(self, dt: float, keep_old: bool = False,
+                   drift: bool = True) -> np.ndarray | None:
         """First half of a velocity-Verlet step: half kick, constraints, position update.
         Returns the positions before the update if ``keep_old`` (contact needs them), else
-        ``None``. Follow with :meth:`compute_forces` (plus any extra force density added to
-        ``f``) and :meth:`end_step`."""
+        ``None``. With ``drift=False`` the positions are left as they are, for the caller to
+        move (the coupler drifts them in the structures' substeps). Follow with
+        :meth:`compute_forces` (plus any extra force density added to ``f``) and
+        :meth:`end_step`."""
         half = 0.5 * dt
         t0 = self.time
         if self.rates is not None:
@@ -410,7 +413,8 @@ class IceBody:
         y_old = self.y.copy() if keep_old else None
         if self.shear is not None:  # the springs advance by this step's change of the bonds
             self.shear.begin_step(self.y)
-        self.y += dt * self.v
+        if drift:
+            self.y += dt * self.v
         self.time = t0 + dt
         return y_old
 

@@ -2,8 +2,11 @@
 field and what is valid, and no traceback.
 
 Reference: the contract of the command line (DESIGN.md, "Command line": exit 2 for bad input,
-the message names file and field). Every case runs the installed console script as a user
-would; each is a small valid case with one thing wrong.
+the message names file and field). Each case is a small valid case with one thing wrong. The
+inputs of :data:`CONSOLE` (one per stage: the case file, the structure's mesh, the time step of
+the built body) run the installed console script as a user would; the others run its code in
+this process (:func:`support.cli.run_main`: the same ``main``, without an interpreter start of
+about a second each).
 """
 
 from __future__ import annotations
@@ -11,7 +14,7 @@ from __future__ import annotations
 
 import pytest
 
-from support.cli import run_pdfem
+from support.cli import run_main, run_pdfem
 
 RUN = "[run]\nend_time = 1e-4\noutput_interval = 5e-5\n"
 ICE = ("[[ice]]\nname = 'cube'\ndx = 0.01\n"
@@ -122,6 +125,10 @@ CORPUS = [
 ]
 
 
+CONSOLE = {"not_toml", "structure_group_missing", "time_step_above_stable"}
+"""Inputs run through the installed console script (a new process each)."""
+
+
 @pytest.fixture(scope="module")
 def block_msh(tmp_path_factory, gmsh_box) -> str:
     """A hexahedral block [0, 0.1] x [0, 0.1] x [0, 0.02] m, groups "fixed" (z = 0) and
@@ -142,7 +149,8 @@ def test_bad_input_exits_2_with_a_clear_message(name, text, files, fragments, tm
     case.write_text(text)
     for fname, content in files.items():
         (tmp_path / fname).write_text(block_msh if content is None else content)
-    r = run_pdfem("run", str(case), "--out", str(tmp_path / "out"), "--quiet")
+    run = run_pdfem if name in CONSOLE else run_main
+    r = run("run", str(case), "--out", str(tmp_path / "out"), "--quiet")
     assert r.returncode == 2, r.stderr
     assert "Traceback" not in r.stderr
     message = r.stderr.strip().splitlines()[-1]
@@ -156,3 +164,4 @@ def test_corpus_is_large_and_distinct():
     """The issue asks for at least 25 distinct bad inputs."""
     assert len(CORPUS) >= 25 and len({c[0] for c in CORPUS}) == len(CORPUS)
     assert len({c[1] + str(c[2]) for c in CORPUS}) == len(CORPUS)
+    assert CONSOLE <= {c[0] for c in CORPUS}

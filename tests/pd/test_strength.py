@@ -9,8 +9,6 @@ fracture energy of 3-D OSB-PD; the beam formula of the flexural test (ASTM C78, 
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,15 +20,11 @@ from pdfem.pd.materials.lps import (IceMaterial, critical_stretch, implied_fract
 from pdfem.run.build_ice import build_ice_body, ice_material
 from pdfem.validation.cases.bending import pull
 
+from support.cli import run_main
+
 RUN = "[run]\nend_time = 1e-4\noutput_interval = 5e-5\n"
 ICE = ("[[ice]]\nname = 'cube'\ndx = 0.01\n"
        "shape = { box = { min = [0, 0, 0], max = [0.04, 0.04, 0.04] } }\n")
-
-
-def _pdfem(*args):
-    script = Path(sys.executable).parent / "pdfem"
-    command = [str(script)] if script.exists() else [sys.executable, "-m", "pdfem"]
-    return subprocess.run([*command, *args], capture_output=True, text=True, timeout=600)
 
 
 @pytest.mark.parametrize("material, field, fragment", [
@@ -42,12 +36,12 @@ def _pdfem(*args):
     ("tensile_strength = -1", "tensile_strength", "> 0"),
     ("flexural_strength = 0", "flexural_strength", "> 0"),
 ])
-@pytest.mark.slow
 def test_bad_strength_inputs_exit_2_naming_the_field(material, field, fragment, tmp_path):
-    """Reference: the command-line contract (exit 2, one paragraph naming file and field)."""
+    """Reference: the command-line contract (exit 2, one paragraph naming file and field;
+    ``pdfem run``'s code in this process, as tests/cli/test_bad_inputs.py runs its corpus)."""
     case = tmp_path / "bad.toml"
     case.write_text(RUN + ICE + f"material = {{ {material} }}\n")
-    r = _pdfem("run", str(case), "--out", str(tmp_path / "out"), "--quiet")
+    r = run_main("run", str(case), "--out", str(tmp_path / "out"), "--quiet")
     assert r.returncode == 2, r.stderr
     assert "Traceback" not in r.stderr and "bad.toml" in r.stderr
     assert f"ice[0].material.{field}" in r.stderr and fragment in r.stderr, r.stderr
@@ -95,7 +89,7 @@ def test_flexural_strength_on_too_thin_a_body_exits_2(tmp_path):
     case = tmp_path / "thin.toml"
     case.write_text(RUN + ICE.replace("0.04, 0.04, 0.04", "0.10, 0.10, 0.03")
                     + "material = { flexural_strength = 0.7e6 }\n")
-    r = _pdfem("run", str(case), "--out", str(tmp_path / "out"), "--quiet")
+    r = run_main("run", str(case), "--out", str(tmp_path / "out"), "--quiet")
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert "ice[0].material.flexural_strength" in r.stderr and "4 particle layers" in r.stderr
 

@@ -7,12 +7,13 @@ runs in, where ``pip install`` put ``pdfem`` and the mpich wheel put ``mpiexec``
 
 from __future__ import annotations
 
+import contextlib
+import io
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 from typing import Mapping
-
 
 
 def tool(name: str) -> str:
@@ -57,3 +58,17 @@ def run_ok(*args: str | Path, ranks: int = 1, **kwargs) -> subprocess.CompletedP
                               f"{r.stderr[-3000:]}"
     return r
 
+
+
+def run_main(*args: str | Path) -> subprocess.CompletedProcess:
+    """``pdfem ARGS`` in this process: :func:`pdfem.cli.main.main`, the console script's code
+    without an interpreter start (about 1 s each), with its standard output and error captured
+    as :func:`run_pdfem` gives them. For the serial commands whose many variants a test runs
+    (the bad-input corpus); a test that checks the console script itself uses :func:`run_pdfem`.
+    """
+    from pdfem.cli.main import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in args])
+    return subprocess.CompletedProcess(list(args), code, out.getvalue(), err.getvalue())

@@ -33,9 +33,10 @@ ELSEWHERE = {"flexural_strength_three_point", "flexural_strength_four_point",
              "panel_modes", "plate_clamped_frequency", "plate_clamped_deflection",
              "plate_simply_supported_frequency", "plate_simply_supported_deflection",
              "floating_draught", "floating_heave_period", "step_energy_residual",
-             "step_dissipation_sign", "step_load_convergence", "milling_torque_spectrum"}
+             "step_dissipation_sign", "step_load_convergence", "milling_torque_spectrum",
+             "cantilever_frequency"}
 """Cases whose ``--quick`` run has its own test (tests/pd/test_strength.py, test_validation_plate.py,
-test_water.py, test_step_sweep.py, test_propeller.py): run once, there, beside the others."""
+test_water.py, test_step_sweep.py, test_propeller.py, test_cantilever.py): run once, there, beside the others."""
 
 
 @pytest.mark.slow
@@ -54,7 +55,7 @@ def test_quick_validation_passes(capfd):
     assert status == 0 and report["passed"] and report["quick"]
     assert report["cases"] == len(report["results"]) >= 8
     names = {r["name"] for r in report["results"]}
-    assert {"wave_speed", "youngs_modulus", "poisson_ratio", "cantilever_frequency",
+    assert {"wave_speed", "youngs_modulus", "poisson_ratio",
             "impact_momentum", "impact_energy", "pair_vs_full_family", "wall_contact_duration",
             "wall_contact_force", "panel_reaction"} <= names
     for r in report["results"]:
