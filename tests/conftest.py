@@ -37,7 +37,7 @@ def pytest_configure(config) -> None:
 
 FIRST = ("validation/test_validate.py", "validation/test_step_sweep.py",
          "validation/test_propeller.py", "models/test_mpi_models.py", "pd/test_strength.py",
-         "fem/test_fem_cantilever.py", "run/test_mpi_run.py", "run/test_determinism.py")
+         "validation/test_cantilever.py", "run/test_mpi_run.py", "run/test_determinism.py")
 """The suite's longest files (1-3 minutes each on one core; BENCHMARKS.md, "Test suite"). They
 are collected first, so that the workers start them first (``--dist loadfile`` hands the files
 out in collection order) and finish together on the many short files."""
