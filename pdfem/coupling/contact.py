@@ -275,7 +275,8 @@ class ContactStep:
 
     contacts: int
     impulse: np.ndarray        # (3,) impulse given to the structure, N s
-    particle_impulse: np.ndarray  # (N, 3) impulse given to each particle, N s
+    rows: np.ndarray           # (K,) the particles given an impulse, ascending
+    row_impulse: np.ndarray    # (K, 3) their impulses, N s
 
 
 class SurfaceContact:
@@ -401,13 +402,14 @@ class SurfaceContact:
         _respond(self._facet, self._weight, Drift(y, y_old, v, mass), float(dt),
                  SurfaceState(self._points, self._start, self._velocities, self.inverse_mass,
                               share, t.triangles), self.friction, per_particle, totals)
-        hit = np.flatnonzero(per_particle.any(axis=1))
+        near = np.flatnonzero(self._facet >= 0)     # only these can have an impulse
+        hit = near[per_particle[near].any(axis=1)]
         facets = self._facet[hit]
         normal = np.einsum("ij,ij->i", per_particle[hit], self._normals[0][facets])  # pressing
         self.records.add(ids[hit], facets, self._weight[hit], per_particle[hit], normal)
         impulse = totals[:3].copy()
         self.total_impulse += impulse
-        return ContactStep(int(totals[3]), impulse, per_particle)
+        return ContactStep(int(totals[3]), impulse, hit, per_particle[hit])
 
     @property
     def node_impulse(self) -> np.ndarray:

@@ -54,6 +54,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pdfem.coupling.contact import SurfaceContact
+from pdfem.coupling.drift import drift
 from pdfem.coupling.facet_loads import FacetLoads, collect_facet_loads
 from pdfem.coupling.impulse_work import ImpulseWork
 from pdfem.geometry.vectors import cross
@@ -302,9 +303,9 @@ class Coupler:
             c = p.contact.resolve(body.y, y_old, u, rec.mass, h, active=body.owned,
                                   ids=rec.ids)
             p.contacts += c.contacts
-            work.add(c.particle_impulse, t_sub)
+            work.add(c.rows, c.row_impulse, t_sub)
             if u is not body.v:
-                np.add(body.v, c.particle_impulse / rec.mass[:, None], out=body.v)
+                body.v[c.rows] += c.row_impulse / rec.mass[c.rows, None]
 
     def _step_with_structure_substeps(self, pair_impulse: list) -> int:
         """One ice step of D whose drift is taken in the structures' substeps: before each
@@ -316,26 +317,30 @@ class Coupler:
         h = D / n
         # the impulse ledgers of the bodies in contact pairs (a body without pairs takes none)
         works = [ImpulseWork(r.body) if r.pairs else None for r in self.body_records]
-        v0 = [r.body.v.copy() if n > 1 else None for r in self.body_records]
+        v0 = [None if n == 1 else w.v0 if w is not None else b.v.copy()
+              for w, b in zip(works, self.bodies)]
         for b in self.bodies:
             b.begin_step(D, drift=False)         # the drift is taken below, in n parts
-        # the first half kick, D/2 a_t (with n substeps)
+        # the first half kick, D/2 a_t (with n substeps), and the drift's buffers: the
+        # positions before each substep's move (for the contact) and its velocity
         kicks = [None if v is None else b.v - v for b, v in zip(self.bodies, v0)]
+        befores = [None if w is None else np.empty_like(b.y) for w, b in zip(works, self.bodies)]
+        us = [b.v if k is None else np.empty_like(b.v) for k, b in zip(kicks, self.bodies)]
         for j in range(n):
             starts = {}
             for r in self.records:
                 p0, end, velocity = r.motion.over(h)
                 starts[id(r)], r.end = p0, (end, velocity)
             self._set_surfaces(starts, normals=j == 0)
-            for rec, work, kick in zip(self.body_records, works, kicks):
+            for rec, work, kick, before, u in zip(self.body_records, works, kicks, befores, us):
                 body = rec.body
-                y = body.y                       # in place: the body keeps its array
-                before = None if work is None else y.copy()
                 # the velocity of substep j: v_t + a_t (j + 1/2) h, so that a contact stops
                 # the particle's velocity of that instant (not the mid-step velocity of the
-                # whole step, off by O(D a)); the positions at the step's end are Verlet's
-                u = body.v if kick is None else body.v + kick * ((2 * j + 1) / n - 1.0)
-                y += h * u
+                # whole step, off by O(D a)); the positions at the step's end are Verlet's.
+                # The body keeps its arrays (in place).
+                drift(body.y, body.v, body.v if kick is None else kick, (2 * j + 1) / n - 1.0,
+                      h, body.y if before is None else before, u, kick is not None,
+                      before is not None)
                 if work is not None:
                     self._contact(rec, before, u, h, work, j * h)
             self._hand_over(pair_impulse)

@@ -66,11 +66,12 @@ class ImpulseWork:
         self.impulse = np.zeros_like(self.v0)   # P, N s
         self.moment = np.zeros_like(self.v0)    # sum_j P_j (tau_j - t), N s^2
 
-    def add(self, impulse: np.ndarray, since: float) -> None:
-        """Impulses (N, 3) (N s) given ``since`` seconds after the step's start."""
-        self.impulse += impulse
+    def add(self, rows: np.ndarray, impulse: np.ndarray, since: float) -> None:
+        """Impulses (K, 3) (N s) given to the particles ``rows`` (K,) (distinct) ``since``
+        seconds after the step's start."""
+        self.impulse[rows] += impulse
         if since:
-            self.moment += since * impulse
+            self.moment[rows] += since * impulse
 
     def work(self, body) -> float:
         """The impulses' work (J) on the owned particles, with the body at the step's end."""

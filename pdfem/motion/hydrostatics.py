@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from pdfem.geometry.vectors import cross
@@ -33,41 +34,70 @@ class Hydrostatics:
     centre_of_buoyancy: np.ndarray  # (3,) m (the centre given if nothing is submerged)
 
 
+@numba.njit(cache=True)
+def _wet_parts(x, tri, level, p, d):
+    """Fill ``p`` (K, 3, 3) and ``d`` (K, 3) with the submerged parts of the triangles and
+    return K. Order: the wholly wet triangles, the one-corner triangles, then the first and
+    then the second halves of the two-corner quadrilaterals (each group in triangle order).
+    Each partly wet triangle is turned cyclically so that its odd corner (the wet one of one,
+    the dry one of two) comes first, which keeps its orientation; the waterline crossings are
+    ``a + (d_a / (d_a - d_b)) (b - a)``, as the numpy expression this kernel replaced."""
+    nt = tri.shape[0]
+    depth = np.empty((nt, 3))
+    count = np.zeros(nt, dtype=np.int64)
+    for t in range(nt):
+        for k in range(3):
+            depth[t, k] = level - x[tri[t, k], 2]
+            if depth[t, k] > 0.0:
+                count[t] += 1
+    m = 0
+    for t in range(nt):
+        if count[t] == 3:
+            for k in range(3):
+                for c in range(3):
+                    p[m, k, c] = x[tri[t, k], c]
+                d[m, k] = depth[t, k]
+            m += 1
+    for group in range(3):           # one wet corner; two (first halves); two (second halves)
+        wet_corners = 1 if group == 0 else 2
+        for t in range(nt):
+            if count[t] != wet_corners:
+                continue
+            first = 0
+            for k in range(3):
+                if (depth[t, k] > 0.0) == (wet_corners == 1):
+                    first = k
+                    break
+            ia, ib, ic = tri[t, first], tri[t, (first + 1) % 3], tri[t, (first + 2) % 3]
+            da, db, dc = depth[t, first], depth[t, (first + 1) % 3], depth[t, (first + 2) % 3]
+            fb, fc = da / (da - db), da / (da - dc)
+            for c in range(3):
+                a, b, cc = x[ia, c], x[ib, c], x[ic, c]
+                ab, ac = a + fb * (b - a), a + fc * (cc - a)
+                if group == 0:
+                    p[m, 0, c], p[m, 1, c], p[m, 2, c] = a, ab, ac
+                elif group == 1:
+                    p[m, 0, c], p[m, 1, c], p[m, 2, c] = ab, b, cc
+                else:
+                    p[m, 0, c], p[m, 1, c], p[m, 2, c] = ab, cc, ac
+            if group == 0:
+                d[m, 0], d[m, 1], d[m, 2] = da, 0.0, 0.0
+            elif group == 1:
+                d[m, 0], d[m, 1], d[m, 2] = 0.0, db, dc
+            else:
+                d[m, 0], d[m, 1], d[m, 2] = 0.0, dc, 0.0
+            m += 1
+    return m
+
+
 def _wet_triangles(x: np.ndarray, tri: np.ndarray, level: float) -> tuple[np.ndarray, np.ndarray]:
     """Corners (K, 3, 3) (m) and depths (K, 3) (m, >= 0) of the submerged parts of the
-    triangles, with the triangles' orientation kept."""
-    p = x[tri]                                     # (T, 3, 3)
-    d = level - p[:, :, 2]                         # depth of each corner
-    wet = d > 0.0
-    n_wet = wet.sum(axis=1)
-    parts = [p[n_wet == 3]]
-    depths = [d[n_wet == 3]]
-    for count in (1, 2):
-        sel = n_wet == count
-        if not sel.any():
-            continue
-        pp, dd, ww = p[sel], d[sel], wet[sel]
-        # rotate each triangle cyclically so that the odd corner (the wet one if count == 1, the
-        # dry one if count == 2) comes first; a cyclic shift keeps the orientation
-        odd = ww if count == 1 else ~ww
-        first = np.argmax(odd, axis=1)
-        order = (first[:, None] + np.arange(3)[None, :]) % 3
-        pp = np.take_along_axis(pp, order[:, :, None], axis=1)
-        dd = np.take_along_axis(dd, order, axis=1)
-        a, b, c = pp[:, 0], pp[:, 1], pp[:, 2]
-        da, db, dc = dd[:, 0:1], dd[:, 1:2], dd[:, 2:3]
-        ab = a + (da / (da - db)) * (b - a)        # the waterline crossings (depth 0)
-        ac = a + (da / (da - dc)) * (c - a)
-        zero = np.zeros_like(da)
-        if count == 1:
-            parts.append(np.stack([a, ab, ac], axis=1))
-            depths.append(np.hstack([da, zero, zero]))
-        else:
-            parts.append(np.stack([ab, b, c], axis=1))
-            depths.append(np.hstack([zero, db, dc]))
-            parts.append(np.stack([ab, c, ac], axis=1))
-            depths.append(np.hstack([zero, dc, zero]))
-    return np.concatenate(parts), np.concatenate(depths)
+    triangles, with the triangles' orientation kept (:func:`_wet_parts`)."""
+    tri = np.ascontiguousarray(tri, dtype=np.int64)
+    p = np.empty((2 * len(tri), 3, 3))
+    d = np.empty((2 * len(tri), 3))
+    k = _wet_parts(np.ascontiguousarray(x, dtype=np.float64), tri, level, p, d)
+    return p[:k], d[:k]
 
 
 def hydrostatics(x: np.ndarray, triangles: np.ndarray, level: float, density: float, g: float,

@@ -57,7 +57,7 @@ def test_towed_panel_loaded_by_the_ice_balances_energy_and_impulse(tmp_path, mon
 
     def resolve_spy(self, *args, **kwargs):
         step = resolve(self, *args, **kwargs)
-        on_ice[self.name] = on_ice.get(self.name, 0.0) + step.particle_impulse.sum(axis=0)
+        on_ice[self.name] = on_ice.get(self.name, 0.0) + step.row_impulse.sum(axis=0)
         return step
 
     def take_spy(self, *args, **kwargs):

@@ -37,7 +37,7 @@ def test_one_particle_kinetic_energy_change_is_the_work():
     work = ImpulseWork(body)
     dt, s = 1e-4, 3e-5
     P = np.array([2e-4, -1e-4, 5e-4])
-    work.add(P[None, :], s)
+    work.add(np.array([0]), P[None, :], s)
     # exact motion: v(t') = v_t + a t' + P/m H(t' - s); the force's work is m a . (y_T - y_t)
     v_T = v_t + a * dt + P / m
     dy = v_t * dt + 0.5 * a * dt**2 + (dt - s) * P / m
@@ -54,8 +54,9 @@ def test_work_over_owned_particles_is_the_vector_formula():
     work = ImpulseWork(body)
     hit = rng.random(n) < 0.2
     P = rng.normal(size=(n, 3)) * 1e-4 * hit[:, None]
-    work.add(P, 0.0)
-    work.add(0.5 * P, 2e-5)
+    rows = np.flatnonzero(hit)
+    work.add(rows, P[rows], 0.0)
+    work.add(rows, 0.5 * P[rows], 2e-5)
     body.f = rng.normal(size=(n, 3)) * 1e6        # the forces at the step's end
     rho = body.material.density
     a_bar = 0.5 * (work.f0 / rho + body.f / rho) + body.gravity

@@ -66,6 +66,27 @@ def test_cube_centred_on_the_surface_floats_half(axis):
     assert h.potential == pytest.approx(1000 * 9.81 * 0.5 * -h.centre_of_buoyancy[2], rel=1e-12)
 
 
+@pytest.mark.parametrize("apex_down", [True, False])
+def test_tetrahedron_clipped_by_the_water_plane(apex_down):
+    """A tetrahedron of base height H: with its apex down, immersed to depth d above the apex,
+    the wet part is the similar tetrahedron, V (d / H)^3 (every side face one wet corner);
+    apex up, the dry part is, V (1 - ((H - d) / H)^3) (side faces two wet corners, the base
+    wholly wet). Reference: volumes of similar solids scale with the cube of the length."""
+    H = 1.2
+    base = np.array([[1.0, 0.0, 0.0], [-0.5, 0.8, 0.0], [-0.4, -0.9, 0.0]])
+    apex = np.array([[0.1, 0.05, -H if apex_down else H]])
+    v = np.vstack([base, apex])
+    tri = orient_outward(v, np.array([(0, 1, 2), (0, 1, 3), (1, 2, 3), (2, 0, 3)]))
+    volume = abs(np.linalg.det(base - apex)) / 6.0
+    for d in (0.1, 0.55, 1.0):
+        level = (-H + d) if apex_down else d
+        h = hydrostatics(v, tri, level, 1000.0, 9.81, (0.0, 0.0, 0.0))
+        expected = volume * ((d / H) ** 3 if apex_down else 1.0 - ((H - d) / H) ** 3)
+        assert h.volume == pytest.approx(expected, rel=1e-12)
+        np.testing.assert_allclose(h.force, [0.0, 0.0, 1000.0 * 9.81 * expected],
+                                   atol=1e-9 * 1000.0 * 9.81)
+
+
 def test_upright_cube_buoyancy_centre_and_moment():
     """Upright cube a = 1 immersed to 0.3 m: V = 0.3, B at z = -0.15 below the surface
     (bottom at -0.3); about a point 0.2 m off in x the moment of the buoyancy is r x F."""
