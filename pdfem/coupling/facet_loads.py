@@ -52,6 +52,9 @@ class FacetLoads:
         self.triangles = np.asarray(structure.surface_triangles, dtype=np.int32)
         self.area = triangle_areas(self.reference, self.triangles)       # m^2
         self.patches = structure.surface_groups() if len(self.triangles) else {}
+        # each patch's facets (ascending, as its mask selects them) and area, for the rows
+        self._patch_facets = {g: np.flatnonzero(on) for g, on in self.patches.items()}
+        self._patch_area = {g: float(self.area[on].sum()) for g, on in self.patches.items()}
         n = len(self.triangles)
         self.force = np.zeros((n, 3))        # N, last coupling step
         self.normal_impulse = np.zeros(n)    # N s, since the last frame
@@ -71,8 +74,8 @@ class FacetLoads:
 
     def patch_forces(self) -> dict[str, tuple[np.ndarray, float]]:
         """``{patch: ((3,) force (N) of the last coupling step, the patch's area (m^2))}``."""
-        return {g: (self.force[on].sum(axis=0), float(self.area[on].sum()))
-                for g, on in self.patches.items()}
+        return {g: (self.force[rows].sum(axis=0), self._patch_area[g])
+                for g, rows in self._patch_facets.items()}
 
     def take_frame(self, time: float) -> tuple[np.ndarray, np.ndarray]:
         """``(pressure, max_pressure)`` (F,) (Pa) of the frame at ``time`` (s): the mean normal
