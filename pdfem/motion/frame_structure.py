@@ -26,10 +26,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from pdfem.fem.node_blocks import NodeBlockOperator
+from pdfem.fem.structure import ElasticStructure
 from pdfem.motion.moving_frame import MovingFrame
 from pdfem.motion.shaft_loads import ShaftLoads
 from pdfem.motion.stress_stiffening import centrifugal_stiffness
-from pdfem.fem.structure import ElasticStructure
 
 
 class FrameStructure(ElasticStructure):
@@ -53,6 +54,7 @@ class FrameStructure(ElasticStructure):
         self.node_mass = self.dofmap.to_nodal(self.solver.m)[:, 0].copy()
         self.K_sigma = (centrifugal_stiffness(self, frame, self._r0, self.node_mass)
                         if stress_stiffening and np.any(frame.angular_velocity) else None)
+        self._k_sigma = None if self.K_sigma is None else NodeBlockOperator(self.K_sigma)
         self.inertial_work = 0.0     # J, work of the inertial loads on u_e
         self.drive_impulse_work = 0.0  # J, work of contact impulses on the frame's velocity
         self._f_inertial = self._inertial_dofs(0.0)
@@ -69,8 +71,8 @@ class FrameStructure(ElasticStructure):
         """Inertial loads (N, DOF vector, frame axes) at time ``t`` (s) on the current state."""
         r, v = self.relative_motion()
         f = self.dofmap.to_dofs(self.frame.inertial_force(t, r, v, self.node_mass))
-        if self.K_sigma is not None:
-            f -= self.frame.speed_factor(t)[0] ** 2 * (self.K_sigma @ self.solver.u)
+        if self._k_sigma is not None:
+            f -= self.frame.speed_factor(t)[0] ** 2 * (self._k_sigma @ self.solver.u)
         return f
 
     def rotating_stiffness(self, t: float | None = None) -> sp.csr_matrix:
