@@ -123,6 +123,9 @@ class CentralDifference:
 
     Attributes
     ----------
+    k_op
+        ``K`` as a :class:`~pdfem.fem.node_blocks.NodeBlockOperator`: ``k_op @ x`` is
+        ``K @ x``, bit for bit, faster.
     u, v, a
         Displacement (m), velocity (m/s), acceleration (m/s^2) DOF vectors at ``time``.
     v_half
@@ -137,7 +140,7 @@ class CentralDifference:
                  rayleigh_alpha: float = 0.0, rayleigh_beta: float = 0.0,
                  safety_factor: float = 0.9, max_eigenvalue: float | None = None):
         self.K = sp.csr_matrix(stiffness)
-        self._k = NodeBlockOperator(self.K)   # K x by node blocks: the bits of self.K @ x
+        self.k_op = NodeBlockOperator(self.K)   # K x by node blocks: the bits of self.K @ x
         self.m = np.asarray(mass, dtype=np.float64).copy()
         n = self.m.shape[0]
         if self.K.shape != (n, n):
@@ -228,11 +231,11 @@ class CentralDifference:
     # ----------------------------------------------------------------- stepping
     def _damping_force(self, v: np.ndarray) -> np.ndarray:
         if self.alpha and self.beta:
-            return self.alpha * self.m * v + self.beta * (self._k @ v)
+            return self.alpha * self.m * v + self.beta * (self.k_op @ v)
         if self.alpha:
             return self.alpha * self.m * v
         if self.beta:
-            return self.beta * (self._k @ v)
+            return self.beta * (self.k_op @ v)
         return self._zero
 
     def initialize(self, u: np.ndarray | None = None, v: np.ndarray | None = None,
@@ -257,7 +260,7 @@ class CentralDifference:
         self.v_half = self.v.copy()
         self.f_ext = np.zeros(self.n) if f_ext is None else np.array(f_ext, dtype=np.float64)
         self.f_damp = self._damping_force(self.v)
-        self.a = (self.f_ext - self._k @ self.u - self.f_damp) / self.m
+        self.a = (self.f_ext - self.k_op @ self.u - self.f_damp) / self.m
         self.a[self.fixed] = 0.0
         self._reaction = self.residual_force()[self.fixed]
 
@@ -282,7 +285,7 @@ class CentralDifference:
         f = self._zero if f_ext is None else np.array(f_ext, dtype=np.float64)
         f_damp_old = self.f_damp
         self.f_damp = self._damping_force(v_half)
-        ku = self._k @ u_new
+        ku = self.k_op @ u_new
         a_new = f - ku
         if self.f_damp is not self._zero:
             a_new -= self.f_damp
@@ -353,4 +356,4 @@ class CentralDifference:
     def residual_force(self) -> np.ndarray:
         """``K u + C v_half + M a - f_ext`` (N) per DOF: zero on free DOFs, the support reaction
         (the force the support exerts on the body) on Dirichlet DOFs."""
-        return self._k @ self.u + self.f_damp + self.m * self.a - self.f_ext
+        return self.k_op @ self.u + self.f_damp + self.m * self.a - self.f_ext

@@ -12,7 +12,6 @@
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 import skfem
 
 from pdfem.fem.elasticity import DofMap, ElasticMaterial, element_for
@@ -97,8 +96,9 @@ def nodal_average(mesh: FEMesh, values: np.ndarray, volumes: np.ndarray,
     return (num / den[:, None]).reshape((n_nodes,) + values.shape[1:])
 
 
-def strain_energy(stiffness: sp.spmatrix, u: np.ndarray) -> float:
-    """Strain energy ``1/2 u . K u`` (J)."""
+def strain_energy(stiffness, u: np.ndarray) -> float:
+    """Strain energy ``1/2 u . K u`` (J); ``stiffness`` a scipy sparse matrix or anything
+    with its ``@`` (e.g. :class:`pdfem.fem.node_blocks.NodeBlockOperator`)."""
     return 0.5 * float(u @ (stiffness @ u))
 
 

@@ -283,7 +283,7 @@ class ElasticStructure(AppliedLoads, Structure):
 
     def strain_energy(self) -> float:
         """Strain energy 1/2 u.K u (J)."""
-        return strain_energy(self.K, self.solver.u)
+        return strain_energy(self.solver.k_op, self.solver.u)
 
     def stresses(self) -> np.ndarray:
         """(Ne, 3, 3) element stress tensors (Pa), at the element centres."""
