@@ -140,7 +140,8 @@ def test_bar_pulled_slowly_fails_at_the_tensile_strength(dx):
 def test_quick_bending_validation_passes(name, tmp_path):
     """Reference: the beam formula sigma_f = 3 F (L - L_i) / (2 b h^2) at the failure load
     (ASTM C78) against the input flexural_strength = 0.7 MPa (Timco & O'Brien 1994), within
-    the 10 % of issue 14, in the --quick variant (a 0.04 m wide beam)."""
+    the 10 % of issue 14, in the --quick variant (a beam four lattice spacings wide: 0.04 m at
+    dx, 0.02 m at dx/2)."""
     from pdfem.validation import all_cases
     from pdfem.validation.case import Outcome, load_validation_case
 
