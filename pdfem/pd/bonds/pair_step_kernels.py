@@ -22,6 +22,7 @@ compiled function (measured: 0.24 s against 0.50 s per pass on 59 M bonds).
 from __future__ import annotations
 
 import numba
+import numpy as np
 from numba import prange
 
 from pdfem.pd.bonds.chunk_kernels import FASTMATH, U64, add_overflow1, add_overflow3, fma, twin
@@ -359,6 +360,9 @@ def forces_pairs_law(bonds, P, B, law, rbuf, use_r, granular):
     ov = ov2.reshape(ov2.size)
     signed = broken.shape[0] == 0
     C = cb.shape[0] - 1
+    # each block's crushed-bond dissipation goes to a local array first: written through the
+    # law tuple's array inside the parallel loop it was lost (0 on every multi-block body)
+    dissipated = np.zeros(C)
     for c in prange(C):
         r0 = cb[c]
         r1 = U64(cb[c + 1])
@@ -371,7 +375,9 @@ def forces_pairs_law(bonds, P, B, law, rbuf, use_r, granular):
                               aux, wt, nofail, f, r1, ov, base, rbuf, use_r, rest, granular, sy,
                               owned, lim, slip, y0, shear)
         counts[c] = nb
-        crush[c] = dc
+        dissipated[c] = dc
+    for c in range(C):
+        crush[c] = dissipated[c]
     for t in prange(C):
         add_overflow3(t, cb, ov_ptr, ov2, fout)
     total = 0
