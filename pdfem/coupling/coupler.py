@@ -316,7 +316,8 @@ class Coupler:
         D, n = self.dt, self.structure_substeps
         h = D / n
         # the impulse ledgers of the bodies in contact pairs (a body without pairs takes none)
-        works = [ImpulseWork(r.body) if r.pairs else None for r in self.body_records]
+        works = [ImpulseWork(r.body, r.mass) if r.pairs else None
+                 for r in self.body_records]
         v0 = [None if n == 1 else w.v0 if w is not None else b.v.copy()
               for w, b in zip(works, self.bodies)]
         for b in self.bodies:
@@ -370,7 +371,8 @@ class Coupler:
                 start, end, velocity = r.motion.sample(h, frac)
                 starts[id(r)], r.end = start, (end, velocity)
             self._set_surfaces(starts)
-            works = [ImpulseWork(r.body) if r.pairs else None for r in self.body_records]
+            works = [ImpulseWork(r.body, r.mass) if r.pairs else None
+                 for r in self.body_records]
             olds = [r.body.begin_step(h, keep_old=bool(r.pairs)) for r in self.body_records]
             for rec, y_old, work in zip(self.body_records, olds, works):
                 if work is not None:

@@ -38,11 +38,11 @@ def impulse_work_terms(owned, impulse, moment, v0, f0, f, rho, gravity, mass):
         p0, p1, p2 = impulse[i, 0], impulse[i, 1], impulse[i, 2]
         m0, m1, m2 = moment[i, 0], moment[i, 1], moment[i, 2]
         if p0 != 0.0 or p1 != 0.0 or p2 != 0.0 or m0 != 0.0 or m1 != 0.0 or m2 != 0.0:
-            a = np.empty(3)
-            for c in range(3):
-                a[c] = 0.5 * ((f0[i, c] / rho + gravity[c]) + f[i, c] / rho + gravity[c])
+            a0 = 0.5 * ((f0[i, 0] / rho + gravity[0]) + f[i, 0] / rho + gravity[0])
+            a1 = 0.5 * ((f0[i, 1] / rho + gravity[1]) + f[i, 1] / rho + gravity[1])
+            a2 = 0.5 * ((f0[i, 2] / rho + gravity[2]) + f[i, 2] / rho + gravity[2])
             pv = (p0 * v0[i, 0] + p2 * v0[i, 2]) + p1 * v0[i, 1]
-            am = (a[0] * m0 + a[2] * m2) + a[1] * m1
+            am = (a0 * m0 + a2 * m2) + a1 * m1
             pp = (p0 * p0 + p2 * p2) + p1 * p1
             out[k] = (pv + am) + 0.5 * pp / mass[i]
         k += 1
@@ -55,12 +55,14 @@ class ImpulseWork:
     Parameters
     ----------
     body
-        An ice body (:class:`pdfem.pd.ice_interface.IceParticles`: ``v``, ``f``, ``vol``,
+        An ice body (:class:`pdfem.pd.ice_interface.IceParticles`: ``v``, ``f``,
         ``material.density``, ``gravity``, ``owned``), at the start of the step.
+    mass
+        Its particles' masses rho V (kg, (N,)), as the caller keeps them.
     """
 
-    def __init__(self, body) -> None:
-        self.mass = body.material.density * body.vol
+    def __init__(self, body, mass: np.ndarray) -> None:
+        self.mass = mass
         self.v0 = body.v.copy()
         self.f0 = body.f.copy()
         self.impulse = np.zeros_like(self.v0)   # P, N s

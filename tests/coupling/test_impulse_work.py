@@ -34,7 +34,7 @@ def test_one_particle_kinetic_energy_change_is_the_work():
     m = body.material.density * body.vol[0]
     a = body.f[0] / body.material.density + body.gravity
     v_t = body.v[0].copy()
-    work = ImpulseWork(body)
+    work = ImpulseWork(body, body.material.density * body.vol)
     dt, s = 1e-4, 3e-5
     P = np.array([2e-4, -1e-4, 5e-4])
     work.add(np.array([0]), P[None, :], s)
@@ -51,7 +51,7 @@ def test_work_over_owned_particles_is_the_vector_formula():
     rng = np.random.default_rng(4)
     n = 2000
     body = _body(n, rng, owned=rng.random(n) < 0.7)
-    work = ImpulseWork(body)
+    work = ImpulseWork(body, body.material.density * body.vol)
     hit = rng.random(n) < 0.2
     P = rng.normal(size=(n, 3)) * 1e-4 * hit[:, None]
     rows = np.flatnonzero(hit)
