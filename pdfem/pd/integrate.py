@@ -2,7 +2,7 @@
 
 A step of the explicit time loop is ``kick(dt/2); drift(dt); forces; kick(dt/2)``. Both loops
 write only their own particle's entries, so they thread without races; below
-``SERIAL_BELOW_PARTICLES`` particles they run their serial build.
+``SERIAL_BELOW_PARTICLES`` particles they run on one thread.
 """
 
 from __future__ import annotations

@@ -365,7 +365,7 @@ def test_bond_breaking_and_damage():
 def test_same_thread_count_gives_bit_identical_results():
     """Reference: determinism by construction (fixed chunks, fixed reduction order): with the
     threaded build, two calls and a fresh workspace give bit-identical theta and forces; other
-    chunk counts (and the serial build) agree to round-off."""
+    chunk counts (and one block, on one thread) agree to round-off."""
     b = Body((9, 9, 9), n_chunks=2)
     assert b.ws.parallel and b.ws.ov_ptr[-1] > 0  # overflow buffers are exercised
     y = random_state(b, 1e-3, 7)

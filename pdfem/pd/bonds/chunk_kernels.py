@@ -1,10 +1,10 @@
-"""Machinery of the chunked pair loops: serial/parallel kernel twins and overflow adds.
+"""Machinery of the chunked pair loops: kernels on one or all threads, and overflow adds.
 
 The pair loops (:mod:`pdfem.pd.bonds.pair_step_kernels`, :mod:`pdfem.pd.bonds.pair_sum_kernels`) cut the
 particles into chunks of equal pair count (:class:`pdfem.pd.bonds.workspace.PairWorkspace` holds the
 layout); each chunk writes the j side of a bond that leaves the chunk into its overflow buffer,
 and :func:`add_overflow1` / :func:`add_overflow3` add those buffers in fixed chunk order. Every
-kernel is compiled twice (:func:`twin`): thread-parallel and serial. :func:`pairs_forward` and
+kernel is thread-parallel and also runs on one thread (:func:`twin`). :func:`pairs_forward` and
 :func:`chunk_split` check and analyse a pair list for the layout.
 
 Same input, same output, whatever the state of numba's on-disk cache: :data:`FASTMATH` (the
@@ -25,8 +25,6 @@ tests/run/test_determinism.py runs a coupled case with a cold and then a warm pr
 
 from __future__ import annotations
 
-import types
-
 import numba
 import numpy as np
 from numba.core.types import float64 as _f8
@@ -45,25 +43,32 @@ def fma(typingctx, a, b, c):
 
 
 class Twin:
-    """A kernel compiled twice: thread-parallel (``prange``) and serial (``prange`` = range).
+    """A thread-parallel kernel (``prange``) that also runs on one thread.
 
-    Called as ``kernel(parallel, *args)``. The serial build is a clone of the function under
-    another qualified name, so both builds have their own on-disk cache entries.
+    Called as ``kernel(parallel, *args)``: with ``parallel`` false it runs on the calling
+    thread alone (numba's thread count set to 1 for the call). There is no separately compiled
+    serial build: numba runs the body of a ``prange`` loop, compiled as its parallel-loop
+    function, about twice as fast as the same loop in an ordinary compiled function (the ice
+    law's force pass on a 4,000-particle sheet: 1.0 against 2.05 ms), and a kernel compiled once
+    loads from the cache once. The one-thread call costs about 3 microseconds more than a
+    serial function's.
     """
 
-    __slots__ = ("par", "ser")
+    __slots__ = ("par",)
 
     def __init__(self, pyfunc, fastmath):
         fm = FASTMATH if fastmath else False
         self.par = numba.njit(parallel=True, cache=True, fastmath=fm, error_model="numpy")(pyfunc)
-        clone = types.FunctionType(pyfunc.__code__, pyfunc.__globals__, pyfunc.__name__ + "_serial",
-                                   pyfunc.__defaults__, pyfunc.__closure__)
-        clone.__qualname__ = pyfunc.__qualname__ + "_serial"
-        clone.__doc__ = pyfunc.__doc__
-        self.ser = numba.njit(cache=True, fastmath=fm, error_model="numpy")(clone)
 
     def __call__(self, parallel, *args):
-        return (self.par if parallel else self.ser)(*args)
+        if parallel:
+            return self.par(*args)
+        threads = numba.get_num_threads()
+        numba.set_num_threads(1)
+        try:
+            return self.par(*args)
+        finally:
+            numba.set_num_threads(threads)
 
 
 def twin(fastmath: bool = True):

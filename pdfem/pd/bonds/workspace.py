@@ -17,7 +17,7 @@ its block in row order, then each earlier block's overflow in block order. A ran
 body holds every bond of its owned particles, in the global order, so it takes each owned
 particle's sums in the same order as the whole body does: the same bits on any number of
 threads and ranks. A body with fewer than ``SERIAL_BELOW_PAIRS`` bonds is one block and runs a
-serial build of the same kernels (:func:`twin`).
+same kernels on one thread (:func:`twin`).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ import numpy as np
 from pdfem.pd.bonds.chunk_kernels import chunk_split, max_reach, pairs_forward
 from pdfem.pd.bonds.data import Blocks
 
-# Below these sizes the kernels run their serial build: a parallel region costs more than the
+# Below these sizes the kernels run on one thread: a parallel region costs more than the
 # work, and a lot more when the machine is oversubscribed (the threads wait at a barrier for a
 # descheduled peer).
 SERIAL_BELOW_PAIRS = 50_000
@@ -66,7 +66,7 @@ class PairWorkspace:
         The CSR pair list (int64 (N+1,), int32 (P,)); every pair must have i < nbr[k] < N.
     n_chunks
         Number of blocks C of equal particle count, for tests (default: :func:`block_bounds`
-        of this pair list). With C = 1 the kernels run their serial build.
+        of this pair list). With C = 1 the kernels run on one thread.
     bounds, gid
         The global blocks (:func:`block_bounds` of the whole body) and the global numbers of
         the local particles (ascending), for a rank's part of a body (or a body whose blocks are
