@@ -162,6 +162,7 @@ class StructureConfig:
     ship: ShipConfig | None = None  # kind = "ship" only
     ramp_time: float = 0.0          # s, the elastic structure's moving frame
     attached_to: str | None = None  # the ship an elastic structure rides on
+    integrator: str = "explicit"    # elastic structures: "explicit" or "implicit"
 
 
 @dataclass(frozen=True)
@@ -240,7 +241,7 @@ def _structure(s: StructureSection, at: str, water=None,
         damping_alpha=s.damping.alpha, damping_beta=s.damping.beta, loads=tuple(loads),
         velocity=m.velocity, angular_velocity=m.angular_velocity, center=m.center, path=m.path,
         field=at, ship=ship_config(s, water, gravity), ramp_time=m.ramp_time,
-        attached_to=s.attached_to)
+        attached_to=s.attached_to, integrator=s.integrator)
 
 
 def resolve(data: CaseFile, file: str, text: str, directory: Path) -> Case:

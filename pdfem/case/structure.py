@@ -24,6 +24,7 @@ STEEL = {"density": 7850.0, "youngs_modulus": 210e9, "poisson_ratio": 0.3}
 
 #: What a structure is.
 Kind = Choice("elastic", "rigid", "ship")
+Integrator = Choice("explicit", "implicit")
 
 
 class SteelSection(Section):
@@ -216,6 +217,15 @@ class StructureSection(Section):
                        "hexahedra) raised from the mesh; 1 = linear elements, which lock in "
                        "bending (a 12 mm plate 1.5 to 3.6 times too stiff, see "
                        "docs/structures_convergence.md). Default: 2.")
+    integrator: Integrator = Field(
+        "explicit", description='Elastic structures: "explicit" (central differences: the step '
+                                "is limited by the smallest element; the structure subcycles "
+                                'inside the ice\'s step) or "implicit" (average-acceleration '
+                                "Newmark, unconditionally stable: one factorisation, then one "
+                                "solve per step; period error (omega dt)^2 / 12; "
+                                "docs/structures_time_integration.md). Implicit: structures at "
+                                "rest (no motion, not on a ship) that the ice does not touch; a "
+                                'case without ice then needs run.time_step. Default: "explicit".')
     contact_group: Name = Field("contact", description='Mesh group facing the ice. '
                                                       'Default: "contact".')
     damping: DampingSection = Field(default_factory=DampingSection,
@@ -291,6 +301,11 @@ class StructureSection(Section):
                                              or "motion" in self.model_fields_set):
             raise fail("only an elastic structure without a motion rides on a ship (its frame is "
                        "the ship's)", self.attached_to, key="attached_to")
+        if self.integrator == "implicit" and (self.kind != "elastic" or self.attached_to
+                                              is not None or "motion" in self.model_fields_set):
+            raise fail("the implicit integrator is for elastic structures at rest (no motion, "
+                       "not attached to a ship); use integrator = \"explicit\" for this one",
+                       self.integrator, key="integrator")
         if self.kind != "ship" and self.ship is not None:
             raise fail("only a ship (kind = \"ship\") takes a ship table", key="ship")
         if self.kind == "ship" and (self.fixed_groups or self.loads or self.supports):

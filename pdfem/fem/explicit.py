@@ -296,15 +296,7 @@ class CentralDifference:
             a_new[self.fixed] = (v_half[self.fixed] - self.v_half[self.fixed]) / dt
         # work of each force over the step by the trapezoidal rule on the displacement
         # increment: with it the scheme's energy balance holds exactly (module docstring)
-        du = dt * v_half
-        self.work_external += 0.5 * float((self.f_ext + f) @ du)
-        if self.f_damp is not self._zero:
-            self.damping_dissipated += 0.5 * float((f_damp_old + self.f_damp) @ du)
-        if moving:
-            fx = self.fixed
-            reaction = ku[fx] + self.f_damp[fx] + self.m[fx] * a_new[fx] - f[fx]
-            self.work_supports += 0.5 * float((self._reaction + reaction) @ du[fx])
-            self._reaction = reaction
+        self._book_work(dt * v_half, f, f_damp_old, ku if moving else None, a_new)
         self.u = u_new
         self.v_half = v_half
         self.a = a_new
@@ -314,6 +306,21 @@ class CentralDifference:
         self.f_ext = f
         self.time = t_new
         self.last_dt = float(dt)
+
+    def _book_work(self, du: np.ndarray, f: np.ndarray, f_damp_old: np.ndarray,
+                   ku: np.ndarray | None, a_new: np.ndarray) -> None:
+        """Add the step's works by the trapezoidal rule on the displacement increment ``du``
+        (with it the energy balance holds exactly): of the external force (old ``f_ext``, new
+        ``f``), of the damping (old and new ``f_damp``) and, given the new ``K u`` as ``ku``
+        (moving supports), of the support reactions."""
+        self.work_external += 0.5 * float((self.f_ext + f) @ du)
+        if self.f_damp is not self._zero:
+            self.damping_dissipated += 0.5 * float((f_damp_old + self.f_damp) @ du)
+        if ku is not None:
+            fx = self.fixed
+            reaction = ku[fx] + self.f_damp[fx] + self.m[fx] * a_new[fx] - f[fx]
+            self.work_supports += 0.5 * float((self._reaction + reaction) @ du[fx])
+            self._reaction = reaction
 
     def apply_impulse(self, dofs: np.ndarray, impulse: np.ndarray) -> None:
         """Give the DOFs ``dofs`` the impulses ``impulse`` (N s) now: their velocity jumps by

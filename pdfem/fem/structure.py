@@ -30,6 +30,7 @@ from pdfem.fem.elasticity import (DofMap, ElasticMaterial, element_volumes, lump
                                   stiffness_matrix)
 from pdfem.fem.explicit import CentralDifference
 from pdfem.fem.fe_space import fe_space, hrz_mass
+from pdfem.fem.implicit import Newmark
 from pdfem.fem.loads import AppliedLoads
 from pdfem.fem.mesh import FEMesh, load_mesh
 from pdfem.fem.probe import Probe, make_probe, probe_values
@@ -40,9 +41,13 @@ from pdfem.fem.supports import (constrained_dofs, prescribed_values, support_rea
 from pdfem.meshing.quality import check_cells
 
 
+INTEGRATORS = {"explicit": CentralDifference, "implicit": Newmark}
+"""Time integrators of an elastic structure by the case's ``integrator`` name."""
+
+
 class ElasticStructure(AppliedLoads, Structure):
-    """A linear-elastic FE structure advanced by explicit central differences (a
-    :class:`pdfem.fem.base.Structure`).
+    """A linear-elastic FE structure advanced by explicit central differences or implicit
+    Newmark steps (a :class:`pdfem.fem.base.Structure`).
 
     Parameters
     ----------
@@ -72,6 +77,10 @@ class ElasticStructure(AppliedLoads, Structure):
     element_order
         2 (default): 10-node tetrahedra / 20-node serendipity hexahedra on the (first-order)
         mesh; 1: 4-node tetrahedra / 8-node hexahedra (they lock in bending).
+    integrator
+        ``"explicit"`` (default: central differences, :mod:`pdfem.fem.explicit`) or
+        ``"implicit"`` (average-acceleration Newmark, unconditionally stable,
+        :mod:`pdfem.fem.implicit`); a key of :data:`INTEGRATORS`.
 
     Raises
     ------
@@ -84,7 +93,8 @@ class ElasticStructure(AppliedLoads, Structure):
                  name: str = "structure",
                  rayleigh_alpha: float = 0.0, rayleigh_beta: float = 0.0,
                  safety_factor: float = 0.9, max_eigenvalue: float | None = None,
-                 supports: Mapping[str, Sequence[str]] | None = None, element_order: int = 2):
+                 supports: Mapping[str, Sequence[str]] | None = None, element_order: int = 2,
+                 integrator: str = "explicit"):
         if isinstance(fixed_groups, str):
             fixed_groups = [fixed_groups]
         prescribed = dict(prescribed or {})
@@ -106,9 +116,9 @@ class ElasticStructure(AppliedLoads, Structure):
         self.mass = (lumped_mass(self.basis, material.density) if element_order == 1
                      else hrz_mass(self.basis, material.density))
         fixed = constrained_dofs(self.dofmap, self.group_nodes, self.supports)
-        self.solver = CentralDifference(self.K, self.mass, fixed,
-                                        rayleigh_alpha=rayleigh_alpha, rayleigh_beta=rayleigh_beta,
-                                        safety_factor=safety_factor, max_eigenvalue=max_eigenvalue)
+        self.solver = INTEGRATORS[integrator](
+            self.K, self.mass, fixed, rayleigh_alpha=rayleigh_alpha, rayleigh_beta=rayleigh_beta,
+            safety_factor=safety_factor, max_eigenvalue=max_eigenvalue)
         if prescribed:
             self.solver.prescribe(prescribed_values(self.solver.fixed, self.dofmap,
                                                     self.group_nodes, prescribed))
@@ -332,14 +342,16 @@ class ElasticStructure(AppliedLoads, Structure):
         return hist
 
     def describe(self) -> str:
-        """Nodes, DOFs, elements (which element) and critical step."""
+        """Nodes, DOFs, elements (which element) and critical step (or the implicit integrator)."""
         note = ("; the file's second-order elements were read by their corners and raised "
                 "straight-sided" if self.mesh.file_order == 2 and not self.mesh.isoparametric
                 else "; isoparametric (the file's midside nodes)" if self.mesh.isoparametric
                 else "")
+        dt_c = self.critical_time_step()
+        step = (f"critical step {dt_c:.3e} s" if np.isfinite(dt_c)
+                else "implicit Newmark steps (no stability limit)")
         return (f"structure '{self.name}': {self.n_nodes:,} nodes, {self.dofmap.n_dofs:,} DOFs, "
-                f"{self.mesh.n_elements:,} {self.space.element_name}, critical step "
-                f"{self.critical_time_step():.3e} s{note}")
+                f"{self.mesh.n_elements:,} {self.space.element_name}, {step}{note}")
 
     def check_mesh(self) -> None:
         """Refuse inverted or degenerate tetrahedra by their corners

@@ -46,6 +46,11 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
         ice *= run.safety_factor
     st = run.safety_factor * min((s.critical_time_step() for s in structures), default=math.inf)
     if not math.isfinite(ice) and not math.isfinite(st):
+        if any(c.integrator == "implicit" for c in case.structures):
+            raise InputError(case.file, "run.time_step", "an implicit structure has no "
+                             "stability limit and the case has no ice to set the step: give "
+                             "run.time_step (s), e.g. a twentieth of the period of the highest "
+                             "mode the loads excite (period error (omega dt)^2 / 12)")
         ice = run.output_interval / 10  # rigid bodies only
     dt, n_ice, n_st = substep_counts(ice, st, run.substeps)
     nsteps = max(1, math.ceil(run.end_time / dt - 1e-9))

@@ -14,7 +14,7 @@ from pdfem.validation.case import ValidationCase
 MODULES: tuple[str, ...] = (
     "wave_speed",          # bar_wave_speed.toml: wave speed in a fixed-free bar
     "elastic_constants",   # lps_block_tension.toml: E and nu of the LPS
-    "cantilever",          # cantilever_frequency.toml: first bending frequency
+    "cantilever",          # cantilever_frequency*.toml: first bending frequency (explicit, implicit)
     "coupled_impact",      # coupled_impact.toml: momentum and energy in an impact
     "loop_agreement",      # sphere_ice_loops.toml: pair loop vs full-family loop
     "rigid_wall",          # bar_rigid_wall.toml: contact duration and force

@@ -1,10 +1,11 @@
-"""The cantilever validation entry (``models/validation/cantilever_frequency.toml``, quick
-variant: three periods of the first mode) checked against its reference and, more tightly,
-against the FE model's own first eigenfrequency.
+"""The cantilever validation entries (``models/validation/cantilever_frequency.toml``, explicit,
+and ``cantilever_frequency_implicit.toml``, implicit Newmark; quick variant: three periods of the
+first mode) checked against their reference and, more tightly, against the FE model's own first
+eigenfrequency.
 
 References: Euler-Bernoulli beam theory, f1 = 1.875104^2 / (2 pi L^2) sqrt(E I / (rho A)) (the
 entry's reference and tolerance, 3 %); the lowest eigenvalue of the model's constrained
-``M^-1 K`` (scipy eigsh), which the explicit run must reproduce: the spectral peak within 1 %,
+``M^-1 K`` (scipy eigsh), which the runs must reproduce: the spectral peak within 1 %,
 the period from the zero crossings about the static deflection within 0.5 %.
 """
 
@@ -21,11 +22,14 @@ from pdfem.validation import all_cases
 from pdfem.validation.case import Outcome, case_path, load_validation_case
 
 
-@pytest.mark.slow
-def test_quick_cantilever_frequency_is_the_beam_s_and_the_fe_model_s(tmp_path):
+@pytest.mark.parametrize("name", [
+    pytest.param("cantilever_frequency", marks=pytest.mark.slow),
+    "cantilever_frequency_implicit"])
+def test_quick_cantilever_frequency_is_the_beam_s_and_the_fe_model_s(tmp_path, name):
     """The quick entry passes (Euler-Bernoulli, 3 %); its spectral peak is within 1 % and its
-    zero-crossing period within 0.5 % of the FE model's first eigenfrequency."""
-    entry = next(c for c in all_cases() if c.name == "cantilever_frequency")
+    zero-crossing period within 0.5 % of the FE model's first eigenfrequency: explicit at the
+    elements' stable step, and implicit (Newmark) at 100 steps per period."""
+    entry = next(c for c in all_cases() if c.name == name)
     run = entry.quick(load_validation_case(entry.case_file))
     outcome = Outcome(run, entry.execute(run, tmp_path / "run"), tmp_path / "run", 0.0)
     value, reference = entry.measure(outcome), entry.reference(run)
