@@ -59,6 +59,7 @@ from pdfem.coupling.facet_loads import FacetLoads, collect_facet_loads
 from pdfem.coupling.impulse_work import ImpulseWork
 from pdfem.geometry.vectors import cross
 from pdfem.parallel.comm import SerialComm
+from pdfem.pd.bonds.workspace import SERIAL_BELOW_PARTICLES
 
 
 @dataclass
@@ -339,8 +340,9 @@ class Coupler:
                 # the particle's velocity of that instant (not the mid-step velocity of the
                 # whole step, off by O(D a)); the positions at the step's end are Verlet's.
                 # The body keeps its arrays (in place).
-                drift(body.y, body.v, body.v if kick is None else kick, (2 * j + 1) / n - 1.0,
-                      h, body.y if before is None else before, u, kick is not None,
+                drift(len(body.y) >= SERIAL_BELOW_PARTICLES, body.y, body.v,
+                      body.v if kick is None else kick, (2 * j + 1) / n - 1.0, h,
+                      body.y if before is None else before, u, kick is not None,
                       before is not None)
                 if work is not None:
                     self._contact(rec, before, u, h, work, j * h)

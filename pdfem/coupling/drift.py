@@ -5,16 +5,18 @@ the particles by ``h u`` with the velocity of that substep, ``u = v + kick c`` (
 first half kick D/2 a_t, ``c = (2 j + 1) / n - 1`` for substep j; ``u = v`` when n = 1), and
 the contact then needs the positions before the move. :func:`drift` does the three in one pass
 (the copy, the velocity and the move), with numpy's operations and order: the same bits as
-``before = y.copy(); u = v + kick * c; y += h * u``. Units: m, m/s, s.
+``before = y.copy(); u = v + kick * c; y += h * u``. Called as ``drift(parallel, ...)``
+(:func:`pdfem.pd.bonds.chunk_kernels.twin`): threaded for large bodies, else on one thread. Units: m, m/s, s.
 """
 
 from __future__ import annotations
 
-import numba
 from numba import prange
 
+from pdfem.pd.bonds.chunk_kernels import twin
 
-@numba.njit(parallel=True, cache=True)
+
+@twin(fastmath=False)
 def drift(y, v, kick, c, h, before, u, with_kick, keep_before):
     """Move ``y`` (n, 3) by ``h u`` in place, ``u = v + kick * c`` if ``with_kick`` (written to
     ``u``) else ``v`` (``u`` untouched); the positions before the move go to ``before`` if

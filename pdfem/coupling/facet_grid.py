@@ -13,6 +13,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from pdfem.coupling.broad_phase import moved_beyond
 from pdfem.geometry.cell_hash import bin_boxes, cell_floor
 
 
@@ -62,8 +63,8 @@ class FacetGrid:
         """True if a node has moved more than ``margin`` since the last build."""
         if self.built_points is None:
             return True
-        moved = np.einsum("ij,ij->i", points - self.built_points, points - self.built_points)
-        return bool(moved.max() > self.margin * self.margin)
+        return bool(moved_beyond(np.ascontiguousarray(points, dtype=np.float64),
+                                 self.built_points, self.margin))
 
     def build(self, points: np.ndarray) -> None:
         """(Re)build the hash for node positions ``points`` ((Ns, 3), m)."""

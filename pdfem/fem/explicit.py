@@ -43,6 +43,7 @@ from collections.abc import Callable
 import numpy as np
 import scipy.sparse as sp
 
+from pdfem.fem.central_difference_kernels import correct, predict
 from pdfem.fem.node_blocks import NodeBlockOperator
 
 Prescribed = Callable[[float], np.ndarray]
@@ -177,6 +178,7 @@ class CentralDifference:
         self.work_supports = 0.0
         self.damping_dissipated = 0.0
         self._reaction = np.zeros(self.fixed.size)
+        self._held = np.zeros(self.fixed.size)   # the displacement of supports held still
 
     # ----------------------------------------------------------------- constraints
     def prescribe(self, values: np.ndarray | Prescribed | None) -> None:
@@ -275,34 +277,26 @@ class CentralDifference:
             (n,) external force DOF vector at ``time + dt``; default zero.
         """
         t_new = self.time + dt
-        v_half = self.v + 0.5 * dt * self.a
-        u_new = self.u + dt * v_half
+        n = self.n
+        v_half, u_new, a_new, v_new = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         moving = self.fixed.size and self._prescribed is not None
-        if self.fixed.size:
-            g = self._dirichlet(t_new)
-            v_half[self.fixed] = (g - self.u[self.fixed]) / dt
-            u_new[self.fixed] = g
+        g = self._dirichlet(t_new) if moving else self._held
+        predict(self.u, self.v, self.a, dt, self.fixed, g, v_half, u_new)
         f = self._zero if f_ext is None else np.array(f_ext, dtype=np.float64)
         f_damp_old = self.f_damp
         self.f_damp = self._damping_force(v_half)
         ku = self.k_op @ u_new
-        a_new = f - ku
-        if self.f_damp is not self._zero:
-            a_new -= self.f_damp
-        a_new /= self.m
-        if self.fixed.size:
-            # Dirichlet DOFs: acceleration from the change of their mid-step velocity (zero when
-            # held still)
-            a_new[self.fixed] = (v_half[self.fixed] - self.v_half[self.fixed]) / dt
+        # Dirichlet DOFs: acceleration from the change of their mid-step velocity (zero when
+        # held still)
+        correct(f, ku, self.f_damp, self.f_damp is not self._zero, self.m, dt, v_half,
+                self.v_half, self.fixed, a_new, v_new)
         # work of each force over the step by the trapezoidal rule on the displacement
         # increment: with it the scheme's energy balance holds exactly (module docstring)
         self._book_work(dt * v_half, f, f_damp_old, ku if moving else None, a_new)
         self.u = u_new
         self.v_half = v_half
         self.a = a_new
-        self.v = v_half + 0.5 * dt * a_new
-        if self.fixed.size:
-            self.v[self.fixed] = v_half[self.fixed]
+        self.v = v_new
         self.f_ext = f
         self.time = t_new
         self.last_dt = float(dt)
@@ -313,7 +307,8 @@ class CentralDifference:
         (with it the energy balance holds exactly): of the external force (old ``f_ext``, new
         ``f``), of the damping (old and new ``f_damp``) and, given the new ``K u`` as ``ku``
         (moving supports), of the support reactions."""
-        self.work_external += 0.5 * float((self.f_ext + f) @ du)
+        if f.any() or self.f_ext.any():  # else the work is +-0 (the same sum, no passes)
+            self.work_external += 0.5 * float((self.f_ext + f) @ du)
         if self.f_damp is not self._zero:
             self.damping_dissipated += 0.5 * float((f_damp_old + self.f_damp) @ du)
         if ku is not None:

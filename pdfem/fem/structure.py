@@ -133,6 +133,7 @@ class ElasticStructure(AppliedLoads, Structure):
         self._surface_forces = np.zeros((len(self.surface_nodes), 3))
         # DOF index of (surface node, component), node-major like _surface_forces.ravel()
         self._surface_dofs = self.dofmap.nodal_dofs[:, self.surface_nodes].T.ravel()
+        self._surface_points0 = self.node_points[self.surface_nodes]
         self._nodal_forces = np.zeros((self.n_nodes, 3))
         self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
         self._load_dofs = np.zeros(self.dofmap.n_dofs)   # nodal forces + surface loads, as DOFs
@@ -247,12 +248,11 @@ class ElasticStructure(AppliedLoads, Structure):
     # ------------------------------------------------------------------ surface interface
     def surface_points(self) -> np.ndarray:
         """(Ns, 3) current positions of the contact-surface nodes (m)."""
-        u = self.dofmap.to_nodal(self.solver.u)
-        return self.node_points[self.surface_nodes] + u[self.surface_nodes]
+        return self._surface_points0 + self.solver.u[self._surface_dofs].reshape(-1, 3)
 
     def surface_velocities(self) -> np.ndarray:
         """(Ns, 3) current velocities of the contact-surface nodes (m/s)."""
-        return self.dofmap.to_nodal(self.solver.v)[self.surface_nodes]
+        return self.solver.v[self._surface_dofs].reshape(-1, 3)
 
     # ------------------------------------------------------------------ time stepping
     def max_eigenvalue(self) -> float:

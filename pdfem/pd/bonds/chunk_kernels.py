@@ -4,7 +4,8 @@ The pair loops (:mod:`pdfem.pd.bonds.pair_step_kernels`, :mod:`pdfem.pd.bonds.pa
 particles into chunks of equal pair count (:class:`pdfem.pd.bonds.workspace.PairWorkspace` holds the
 layout); each chunk writes the j side of a bond that leaves the chunk into its overflow buffer,
 and :func:`add_overflow1` / :func:`add_overflow3` add those buffers in fixed chunk order. Every
-kernel is thread-parallel and also runs on one thread (:func:`twin`). :func:`pairs_forward` and
+kernel is thread-parallel and also runs on one thread, by a serial build or by its parallel
+build on one thread (:func:`twin`). :func:`pairs_forward` and
 :func:`chunk_split` check and analyse a pair list for the layout.
 
 Same input, same output, whatever the state of numba's on-disk cache: :data:`FASTMATH` (the
@@ -25,6 +26,8 @@ tests/run/test_determinism.py runs a coupled case with a cold and then a warm pr
 
 from __future__ import annotations
 
+import types
+
 import numba
 import numpy as np
 from numba.core.types import float64 as _f8
@@ -43,26 +46,44 @@ def fma(typingctx, a, b, c):
 
 
 class Twin:
-    """A thread-parallel kernel (``prange``) that also runs on one thread.
+    """A kernel compiled thread-parallel (``prange``) that also runs on one thread.
 
-    Called as ``kernel(parallel, *args)``: with ``parallel`` false it runs on the calling
-    thread alone (numba's thread count set to 1 for the call). There is no separately compiled
-    serial build: numba runs the body of a ``prange`` loop, compiled as its parallel-loop
-    function, about twice as fast as the same loop in an ordinary compiled function (the ice
-    law's force pass on a 4,000-particle sheet: 1.0 against 2.05 ms), and a kernel compiled once
-    loads from the cache once. The one-thread call costs about 3 microseconds more than a
-    serial function's.
+    Called as ``kernel(parallel, *args)``. With ``parallel`` false it runs on the calling
+    thread, by one of two builds, fixed per kernel (``one_thread``):
+
+    - ``"serial"``: a serial clone of the function (``prange`` = ``range``) under another
+      qualified name, so both builds have their own on-disk cache entries. A call costs what a
+      plain compiled function's does: the cheap per-particle loops (a half kick of 4,000
+      particles: 6 us serial, 9 us as the parallel build on one thread) and the contact's
+      narrow phase (the demo's 250 candidates: 112 against 176 us) run this way;
+    - ``"parallel"``: the parallel build with numba's thread count set to 1 for the call. numba
+      runs the body of a ``prange`` loop, compiled as its parallel-loop function, about twice as
+      fast as the same loop in an ordinary compiled function for the ice law's row loop (its
+      force pass on a 4,000-particle sheet: 1.0 against 2.05 ms), at about 3 us more per call:
+      the pair loops of a time step run this way.
     """
 
-    __slots__ = ("par",)
+    __slots__ = ("par", "ser")
 
-    def __init__(self, pyfunc, fastmath):
+    def __init__(self, pyfunc, fastmath, one_thread="serial"):
+        if one_thread not in ("serial", "parallel"):
+            raise ValueError(f"one_thread must be 'serial' or 'parallel', got {one_thread!r}")
         fm = FASTMATH if fastmath else False
         self.par = numba.njit(parallel=True, cache=True, fastmath=fm, error_model="numpy")(pyfunc)
+        self.ser = None
+        if one_thread == "serial":
+            clone = types.FunctionType(pyfunc.__code__, pyfunc.__globals__,
+                                       pyfunc.__name__ + "_serial", pyfunc.__defaults__,
+                                       pyfunc.__closure__)
+            clone.__qualname__ = pyfunc.__qualname__ + "_serial"
+            clone.__doc__ = pyfunc.__doc__
+            self.ser = numba.njit(cache=True, fastmath=fm, error_model="numpy")(clone)
 
     def __call__(self, parallel, *args):
         if parallel:
             return self.par(*args)
+        if self.ser is not None:
+            return self.ser(*args)
         threads = numba.get_num_threads()
         numba.set_num_threads(1)
         try:
@@ -71,9 +92,10 @@ class Twin:
             numba.set_num_threads(threads)
 
 
-def twin(fastmath: bool = True):
-    """Decorator: compile a kernel as a :class:`Twin` (``fastmath`` uses ``FASTMATH``)."""
-    return lambda pyfunc: Twin(pyfunc, fastmath)
+def twin(fastmath: bool = True, one_thread: str = "serial"):
+    """Decorator: compile a kernel as a :class:`Twin` (``fastmath`` uses ``FASTMATH``;
+    ``one_thread``: which build runs a call on one thread)."""
+    return lambda pyfunc: Twin(pyfunc, fastmath, one_thread)
 
 
 @numba.njit(cache=True)

@@ -84,7 +84,7 @@ def _dilatation_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, wt
                         r1, ov, base, rbuf, store_r)
 
 
-@twin()
+@twin(one_thread="parallel")
 def dilatation_pairs(bonds, P, B, rbuf, store_r):
     """Pair-loop dilatation into ``P.theta``; with ``store_r`` also rbuf[k] = |y_j - y_i| of
     unbroken bonds."""
@@ -292,7 +292,7 @@ def _plain_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, coef, w
     return nb
 
 
-@twin()
+@twin(one_thread="parallel")
 def forces_pairs(bonds, P, B, coef2, s0, rbuf, use_r):
     """Pair-loop force density into ``P.f`` and breaking under a plain critical stretch ``s0``
     (a bond breaks when its stretch exceeds s0); with ``use_r`` the bond lengths come from
@@ -339,7 +339,7 @@ def forces_pairs(bonds, P, B, coef2, s0, rbuf, use_r):
     return total
 
 
-@twin()
+@twin(one_thread="parallel")
 def forces_pairs_law(bonds, P, B, law, rbuf, use_r, granular):
     """:func:`forces_pairs` for a failure law with dilatation-dependent bounds, strength
     factors or crushed bonds (:mod:`pdfem.pd.failure.ice`): one copy of the row loop, with
