@@ -352,6 +352,12 @@ class SurfaceContact:
         self.total_impulse = np.zeros(3)
         self._points = self._velocities = self._start = None
         self._normals = None
+        # a surface that moves rigidly: its normals are the reference normals rotated
+        self._rotation0 = surface.surface_rotation()
+        self._normals_rotation = None
+        self._ref_normals = (None if self._rotation0 is None
+                             else pseudo_normals(np.ascontiguousarray(points, dtype=np.float64),
+                                                 self.topology))
         self._facet = self._weight = self._normal = None
         self.set_surface(points, surface.surface_velocities())
 
@@ -367,8 +373,21 @@ class SurfaceContact:
         self._start = (self._points if start is None
                        else np.ascontiguousarray(start, dtype=np.float64))
         if normals or self._normals is None:
-            self._normals = pseudo_normals(self._points, self.topology)
+            self._update_normals()
         self.grid.update(self._points)
+
+    def _update_normals(self) -> None:
+        """The pseudo-normals of the surface now: recomputed from the node positions, or, for
+        a surface that moves rigidly, the reference normals turned by the rotation since the
+        start (once per change of rotation: a surface that only translates keeps them)."""
+        if self._rotation0 is None:
+            self._normals = pseudo_normals(self._points, self.topology)
+            return
+        rotation = self.surface.surface_rotation()
+        if self._normals_rotation is None or not np.array_equal(rotation, self._normals_rotation):
+            turn = rotation @ self._rotation0.T
+            self._normals = tuple(np.ascontiguousarray(n @ turn.T) for n in self._ref_normals)
+            self._normals_rotation = rotation.copy()
 
     def _grid_arrays(self) -> GridArrays:
         g = self.grid

@@ -70,6 +70,12 @@ class Structure(SurfaceBody, ABC):
         return math.inf
 
     # -- contact impulses ----------------------------------------------------------------------
+    def surface_rotation(self) -> np.ndarray | None:
+        """(3, 3) rotation of the contact surface from its reference configuration, when the
+        surface moves as a rigid body (its normals are then the reference ones rotated, not
+        recomputed); ``None`` when it deforms. Default: ``None``."""
+        return None
+
     def surface_inverse_mass(self) -> np.ndarray:
         """(Ns, 3) inverse lumped mass (1/kg) of each contact-surface node and component; zero
         where the motion is prescribed (supports, a prescribed-motion body), which the contact

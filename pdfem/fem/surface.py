@@ -39,6 +39,11 @@ class ContactSurface(Protocol):
         """(T, 3) unit normals pointing out of the body, current configuration."""
         ...
 
+    def surface_rotation(self) -> np.ndarray | None:
+        """(3, 3) rotation from the reference configuration if the surface moves rigidly, else
+        ``None``."""
+        ...
+
     def add_surface_forces(self, forces: np.ndarray) -> None:
         """Accumulate (Ns, 3) nodal forces (N) for the next step."""
         ...

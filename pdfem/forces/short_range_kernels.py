@@ -184,7 +184,7 @@ def interact(i, j, px, py, pz, d2, x0, vol, stiff, rad, body, dist_factor, rad_f
     return True
 
 
-@twin(fastmath=False)
+@twin(fastmath=False, one_thread="parallel")
 def find_dense(table, consts, grid, found):
     """Pairs on a dense grid padded by one empty cell on every side, per chunk of sorted
     positions, into the chunk's slots ``[c*cap, (c+1)*cap)``.
@@ -240,7 +240,7 @@ def find_dense(table, consts, grid, found):
         counts[c] = cnt
 
 
-@twin(fastmath=False)
+@twin(fastmath=False, one_thread="parallel")
 def find_folded(table, consts, grid, found):
     """:func:`find_dense` for a folded grid: buckets hold several cells, told apart by key.
 

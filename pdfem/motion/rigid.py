@@ -152,6 +152,10 @@ class RigidBody(Structure):
         """(3, 3) current rotation R(w t)."""
         return rotation_matrix(self.angular_velocity * self.time)
 
+    def surface_rotation(self) -> np.ndarray:
+        """(3, 3) the body's rotation (:meth:`rotation`): the surface moves rigidly."""
+        return self.rotation()
+
     def _update_pose(self) -> None:
         c = self.centre()
         self._x = c + (self.x0 - self.centre0) @ self.rotation().T

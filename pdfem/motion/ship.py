@@ -317,6 +317,10 @@ class Ship(Structure):
         """(Ns, 3) hull node velocities ``v + w x (x - c)`` (m/s)."""
         return self._v.copy()
 
+    def surface_rotation(self) -> np.ndarray:
+        """(3, 3) the hull's attitude ``R`` (body to world): the hull is rigid."""
+        return self.R.copy()
+
     # ------------------------------------------------------------------ checkpoints
     def checkpoint_state(self) -> dict[str, np.ndarray | float]:
         """c, q, v, L, time and the work counters."""

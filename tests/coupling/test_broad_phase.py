@@ -37,6 +37,9 @@ class _Plate:
     def surface_inverse_mass(self):
         return np.zeros((4, 3))
 
+    def surface_rotation(self):
+        return None
+
 
 def test_candidates_find_every_particle_a_full_scan_finds_while_they_move():
     """Particles falling through a plate from up to 1 m above: at every step the contacts of the

@@ -84,7 +84,7 @@ def _dilatation_rows(r0, split, y, row_ptr, nbr, xi_len, broken, signed, vol, wt
                         r1, ov, base, rbuf, store_r)
 
 
-@twin(one_thread="parallel")
+@twin()
 def dilatation_pairs(bonds, P, B, rbuf, store_r):
     """Pair-loop dilatation into ``P.theta``; with ``store_r`` also rbuf[k] = |y_j - y_i| of
     unbroken bonds."""
