@@ -121,6 +121,7 @@ class RigidBody(Structure):
         self.angular_velocity = np.asarray(angular_velocity, dtype=np.float64).reshape(3).copy()
         self.centre0 = np.asarray(centre, dtype=np.float64).reshape(3).copy()
         self.translation = translation
+        self._arm0 = self.x0 - self.centre0   # the nodes about the centre, at t = 0
         self.time = 0.0
         self._time_carry = 0.0
         self._surface_forces = np.zeros((len(self.x0), 3))
@@ -158,8 +159,12 @@ class RigidBody(Structure):
 
     def _update_pose(self) -> None:
         c = self.centre()
-        self._x = c + (self.x0 - self.centre0) @ self.rotation().T
-        self._v = self.translation_velocity() + cross(self.angular_velocity, self._x - c)
+        if np.any(self.angular_velocity):
+            self._x = c + self._arm0 @ self.rotation().T
+            self._v = self.translation_velocity() + cross(self.angular_velocity, self._x - c)
+        else:  # a body that only translates: R = I, w x r = 0 (the same values, no products)
+            self._x = c + self._arm0
+            self._v = np.broadcast_to(self.translation_velocity(), self._x.shape).copy()
 
     def step(self, dt: float) -> None:
         """Advance the pose by ``dt`` (s).
