@@ -27,13 +27,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from pdfem.geometry.vectors import cross
-
-
-def triangle_areas(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """(T,) areas (m^2) of the triangles ``triangles`` (T, 3) over ``points`` (N, 3) (m)."""
-    x = points[triangles]
-    return 0.5 * np.linalg.norm(cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1)
+from pdfem.meshing.quality import triangle_areas
 
 
 @numba.njit(cache=True)

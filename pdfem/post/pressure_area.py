@@ -33,6 +33,8 @@ import heapq
 
 import numpy as np
 
+from pdfem.meshing.quality import triangle_areas
+
 AREAS = 40
 """Number of areas at which the curves and their envelope are sampled."""
 
@@ -127,8 +129,7 @@ def pressure_area(time: np.ndarray, surface: dict, n_areas: int = AREAS) -> dict
         and total normal contact force (N).
     """
     tri = np.asarray(surface["cells"], dtype=np.int64)
-    x = np.asarray(surface["points"])[tri]
-    area = 0.5 * np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1)
+    area = triangle_areas(np.asarray(surface["points"], dtype=np.float64), tri)
     p = np.asarray(surface["contact_pressure"])
     contact_area = (area * (p > 0)).sum(axis=1)
     hi = max(float(contact_area.max()) if len(p) else 0.0, float(area.min()))
