@@ -17,6 +17,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from pdfem.geometry.cell_hash import in_box
+
 
 @numba.njit(cache=True)
 def moved_beyond(y, ref, limit):
@@ -29,19 +31,6 @@ def moved_beyond(y, ref, limit):
         if d0 * d0 + d1 * d1 + d2 * d2 > lim2:
             return True
     return False
-
-
-@numba.njit(cache=True)
-def in_box(y, lo, hi):
-    """The rows of ``y`` (N, 3) inside the box ``[lo, hi]`` (m), ascending (int64)."""
-    keep = np.empty(y.shape[0], dtype=np.int64)
-    k = 0
-    for i in range(y.shape[0]):
-        if (lo[0] <= y[i, 0] <= hi[0] and lo[1] <= y[i, 1] <= hi[1]
-                and lo[2] <= y[i, 2] <= hi[2]):
-            keep[k] = i
-            k += 1
-    return keep[:k].copy()
 
 
 class Candidates:

@@ -50,10 +50,10 @@ import numpy as np
 from numba import prange
 
 from pdfem.coupling.broad_phase import Candidates
-from pdfem.pd.bonds.chunk_kernels import twin
 from pdfem.coupling.facet_grid import FacetGrid
 from pdfem.coupling.facets import FACE, FacetTopology, closest_point_on_triangle, pseudo_normals
 from pdfem.coupling.nodal_impulse import ContactRecords
+from pdfem.pd.bonds.chunk_kernels import twin
 
 
 class GridArrays(NamedTuple):
@@ -483,8 +483,9 @@ class SurfaceContact:
         n = len(y)
         self._buffers(n)
         _detect(n >= PARALLEL_CANDIDATES, np.ascontiguousarray(y, dtype=np.float64),
-                np.arange(n), np.ones(n, dtype=np.bool_), self._grid_arrays(), self._surface_arrays(), self.search_radius, self._facet,
-                self._weight, self._normal)
+                np.arange(n), np.ones(n, dtype=np.bool_), self._grid_arrays(),
+                self._surface_arrays(), self.search_radius, self._facet, self._weight,
+                self._normal)
         return self._facet >= 0
 
 

@@ -36,12 +36,12 @@ def _patch_sums(force, ptr, rows, out):
     in row order from the first, as numpy's ``force[rows].sum(axis=0)`` adds them (the same
     bits, without the gathered copy)."""
     for g in range(ptr.shape[0] - 1):
+        lo, hi = ptr[g], ptr[g + 1]
         for d in range(3):
-            out[g, d] = 0.0
-        for k in range(ptr[g], ptr[g + 1]):
-            r = rows[k]
+            out[g, d] = force[rows[lo], d] if hi > lo else 0.0
+        for k in range(lo + 1, hi):
             for d in range(3):
-                out[g, d] = force[r, d] if k == ptr[g] else out[g, d] + force[r, d]
+                out[g, d] += force[rows[k], d]
 
 
 class FacetLoads:

@@ -279,7 +279,7 @@ class CentralDifference:
         t_new = self.time + dt
         n = self.n
         v_half, u_new, a_new, v_new = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-        moving = self.fixed.size and self._prescribed is not None
+        moving = self._supports_move
         g = self._dirichlet(t_new) if moving else self._held
         predict(self.u, self.v, self.a, dt, self.fixed, g, v_half, u_new)
         f = self._zero if f_ext is None else np.array(f_ext, dtype=np.float64)
@@ -293,12 +293,18 @@ class CentralDifference:
         # work of each force over the step by the trapezoidal rule on the displacement
         # increment: with it the scheme's energy balance holds exactly (module docstring)
         self._book_work(dt * v_half, f, f_damp_old, ku if moving else None, a_new)
-        self.u = u_new
-        self.v_half = v_half
-        self.a = a_new
-        self.v = v_new
-        self.f_ext = f
-        self.time = t_new
+        self._advance(dt, u_new, v_half, a_new, v_new, f)
+
+    @property
+    def _supports_move(self) -> bool:
+        """Whether some Dirichlet DOF has a prescribed displacement (its reaction works)."""
+        return bool(self.fixed.size) and self._prescribed is not None
+
+    def _advance(self, dt: float, u: np.ndarray, v_half: np.ndarray, a: np.ndarray,
+                 v: np.ndarray, f: np.ndarray) -> None:
+        """Take the new state at the end of a step of ``dt`` (s)."""
+        self.u, self.v_half, self.a, self.v, self.f_ext = u, v_half, a, v, f
+        self.time += dt
         self.last_dt = float(dt)
 
     def _book_work(self, du: np.ndarray, f: np.ndarray, f_damp_old: np.ndarray,

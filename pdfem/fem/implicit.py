@@ -89,10 +89,10 @@ class Newmark(CentralDifference):
         """Factorise ``A = (1 + alpha dt/2) M + (beta dt/2 + dt^2/4) K`` on the free DOFs."""
         A = (sp.diags((1.0 + 0.5 * self.alpha * dt) * self.m)
              + (0.5 * self.beta * dt + 0.25 * dt * dt) * self.K).tocsc()
-        f = self._free_idx
-        self._lu = spla.splu(A[f][:, f].tocsc(), permc_spec="MMD_AT_PLUS_A",
+        rows = A[self._free_idx]
+        self._lu = spla.splu(rows[:, self._free_idx].tocsc(), permc_spec="MMD_AT_PLUS_A",
                              options={"SymmetricMode": True})
-        self._a_fc = A[f][:, self.fixed].tocsr() if self.fixed.size else None
+        self._a_fc = rows[:, self.fixed].tocsr() if self.fixed.size else None
         self._lu_dt = dt
         self.factorizations += 1
 
@@ -134,13 +134,6 @@ class Newmark(CentralDifference):
             u_new[self.fixed] = g  # exactly, not to round-off
         f_damp_old = self.f_damp
         self.f_damp = self._damping_force(v_new)
-        moving = self.fixed.size and self._prescribed is not None
-        self._book_work(u_new - self.u, f, f_damp_old, self.k_op @ u_new if moving else None,
-                        a_new)
-        self.u = u_new
-        self.v = v_new
-        self.v_half = v_new
-        self.a = a_new
-        self.f_ext = f
-        self.time = t_new
-        self.last_dt = float(dt)
+        self._book_work(u_new - self.u, f, f_damp_old,
+                        self.k_op @ u_new if self._supports_move else None, a_new)
+        self._advance(dt, u_new, v_new, a_new, v_new, f)   # no mid-step velocity: v_half = v

@@ -34,8 +34,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pdfem.forces.short_range_kernels import NOT_FINITE, in_box, load_owned
-from pdfem.geometry.cell_hash import bounding_box
+from pdfem.forces.short_range_kernels import NOT_FINITE, load_owned
+from pdfem.geometry.cell_hash import bounding_box, in_box
 
 #: the Verlet skin s over the cut-off h (see the module text for the choice)
 SKIN_FRACTION = 0.3

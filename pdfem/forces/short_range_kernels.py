@@ -9,7 +9,7 @@ indexed by a sparse table of the occupied buckets (:func:`sparse_table`, :func:`
 the table is sized from the particles, not from the grid. :func:`find_dense` and
 :func:`find_folded` find the interacting pairs per chunk of sorted positions (the physics of
 a pair: :func:`interact`); :func:`sum_pairs` adds them up in chunk order (bit-identical for any
-chunk or thread count). :func:`load_owned`, :func:`add_owned` and :func:`in_box` serve a rank's
+chunk or thread count). :func:`load_owned` and :func:`add_owned` serve a rank's
 contact halo (:mod:`pdfem.forces.short_range_halo`).
 """
 
@@ -408,16 +408,3 @@ def add_owned(f, idx, pos, acc, touched, nt, mark):
                 f[i, k] += acc[p, k]
     for t in range(nt):
         mark[touched[t]] = 0
-
-
-@numba.njit(cache=True)
-def in_box(y, lo, hi):
-    """Indices (int64) of the points of ``y`` inside the box [lo, hi] (bounds included)."""
-    out = np.empty(y.shape[0], dtype=np.int64)
-    n = 0
-    for i in range(y.shape[0]):
-        if (lo[0] <= y[i, 0] <= hi[0] and lo[1] <= y[i, 1] <= hi[1]
-                and lo[2] <= y[i, 2] <= hi[2]):
-            out[n] = i
-            n += 1
-    return out[:n]

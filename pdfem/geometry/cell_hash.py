@@ -173,3 +173,17 @@ def bin_boxes(lo, hi, dims, start, items):
                     c = cell_id(i, j, k, ny, nz)
                     items[fill[c]] = f
                     fill[c] += 1
+
+
+@numba.njit(cache=True)
+def in_box(y, lo, hi):
+    """Indices (int64, ascending) of the points of ``y`` (N, 3) inside the box [lo, hi] (bounds
+    included): a rank's particles near another's box, the particles near a contact surface."""
+    out = np.empty(y.shape[0], dtype=np.int64)
+    n = 0
+    for i in range(y.shape[0]):
+        if (lo[0] <= y[i, 0] <= hi[0] and lo[1] <= y[i, 1] <= hi[1]
+                and lo[2] <= y[i, 2] <= hi[2]):
+            out[n] = i
+            n += 1
+    return out[:n]

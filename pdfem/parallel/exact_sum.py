@@ -38,7 +38,7 @@ def expansions(values, rows, every, out):
             if not np.isfinite(x):
                 m = -1
                 break
-            if x == 0.0:  # adds nothing to the exact sum (block matrices are mostly zeros)
+            if x == 0.0:  # adds nothing to the exact sum
                 continue
             i = 0
             for q in range(m):
@@ -81,16 +81,26 @@ def round_expansions(parts: list[list], plain: np.ndarray | float) -> np.ndarray
     return out
 
 
+def exact_sums(arrays: list, comm, rows: np.ndarray | None = None) -> list:
+    """:func:`exact_sum` of each array of ``arrays`` over ``rows`` (default every row), with one
+    gather of the expansions for all of them (collective under MPI)."""
+    parts = comm.allgather([local_expansion(values, rows) for values in arrays])
+    out = []
+    for k, values in enumerate(arrays):
+        mine = [p[k] for p in parts]
+        if any(c is None for p in mine for c in p):
+            a = np.asarray(values, dtype=np.float64)
+            a = a if rows is None else a[np.asarray(rows, dtype=np.int64)]
+            plain = comm.allreduce_sum(a.sum(axis=0))
+        else:
+            plain = 0.0
+        total = round_expansions(mine, plain)
+        out.append(float(total[0]) if np.ndim(values) == 1
+                   else total.reshape(np.shape(values)[1:]))
+    return out
+
+
 def exact_sum(values: np.ndarray, comm, rows: np.ndarray | None = None):
     """The correctly rounded sum over all ranks of ``values`` ((n,) -> float, (n, k) -> (k,)
     array) over ``rows`` (default every row; collective under MPI)."""
-    mine = local_expansion(values, rows)
-    parts = comm.allgather(mine)
-    if any(c is None for p in parts for c in p):
-        a = np.asarray(values, dtype=np.float64)
-        a = a if rows is None else a[np.asarray(rows, dtype=np.int64)]
-        plain = comm.allreduce_sum(a.sum(axis=0))
-    else:
-        plain = 0.0
-    total = round_expansions(parts, plain)
-    return float(total[0]) if np.ndim(values) == 1 else total.reshape(np.shape(values)[1:])
+    return exact_sums([values], comm, rows)[0]

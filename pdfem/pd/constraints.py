@@ -106,22 +106,15 @@ def reaction_forces(body) -> np.ndarray:
     summed over the region's particles on every process, correctly rounded (the body's layout:
     the same on 1 and N ranks; collective)."""
     cs = body.constraints
-    if not cs:
-        return np.zeros((0, 3))
-    # every region's sum_i V_i and sum_i V_i f_i in one exact sum: region k's rows fill
-    # columns 4k..4k+3 of a block matrix, zero elsewhere (zeros leave an exact sum as it is)
-    block = np.zeros((sum(len(c.index) for c in cs), 4 * len(cs)))
-    row = 0
-    for k, c in enumerate(cs):
+    arrays = []   # per region sum_i V_i and sum_i V_i f_i, all summed in one collective
+    for c in cs:
         vol = body.vol[c.index]
-        block[row:row + len(vol), 4 * k] = vol
-        block[row:row + len(vol), 4 * k + 1:4 * k + 4] = vol[:, None] * body.f[c.index]
-        row += len(vol)
-    sums = np.asarray(body.layout.total(block)).reshape(len(cs), 4)
+        arrays += [vol, vol[:, None] * body.f[c.index]]
+    sums = body.layout.totals(arrays)
     rho, out = body.material.density, np.zeros((len(cs), 3))
     for k, c in enumerate(cs):
-        mass = rho * float(sums[k, 0])
-        out[k] = mass * (c.acceleration(body.time) - body.gravity) - sums[k, 1:]
+        mass = rho * float(sums[2 * k])
+        out[k] = mass * (c.acceleration(body.time) - body.gravity) - sums[2 * k + 1]
     return out
 
 

@@ -20,7 +20,8 @@ from pdfem.parallel.comm import SerialComm
 from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.coupler import ContactPair, Coupler
 from pdfem.forces.short_range import ShortRangeContact
-from pdfem.forces.short_range_kernels import in_box, sparse_table
+from pdfem.forces.short_range_kernels import sparse_table
+from pdfem.geometry.cell_hash import in_box
 from pdfem.run.build_structures import build_all
 from pdfem.motion.rigid import RigidBody
 from pdfem.pd.body import IceBody

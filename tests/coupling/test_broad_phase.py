@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pdfem.coupling.broad_phase import Candidates, in_box, moved_beyond
+from pdfem.coupling.broad_phase import moved_beyond
+from pdfem.geometry.cell_hash import in_box
 from pdfem.coupling.contact import SurfaceContact
 
 

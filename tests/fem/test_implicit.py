@@ -17,6 +17,8 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
+from pdfem.case.schema import load_case
+from pdfem.errors import InputError
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.implicit import Newmark
 from pdfem.fem.mesh import load_mesh
@@ -115,9 +117,7 @@ def test_held_load_swings_about_the_static_deflection(beam_mesh):
 def test_implicit_structure_refuses_ice_contact(tmp_path):
     """A case whose ice meets an implicit structure stops with one clear message (exit 2): the
     contact needs the surface's mobility over the step, which the nodal masses do not give."""
-    from pdfem.case.schema import load_case
-    from pdfem.errors import InputError
-    src = (tmp_path / "case.toml")
+    src = tmp_path / "case.toml"
     src.write_text("""
 [run]
 end_time = 1e-3

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from pdfem.parallel.comm import SerialComm
-from pdfem.parallel.exact_sum import exact_sum
+from pdfem.parallel.exact_sum import exact_sum, exact_sums
 
 
 def test_columns_are_the_correctly_rounded_sums_in_any_order():
@@ -34,3 +34,12 @@ def test_zeros_and_non_finite_values():
     assert exact_sum(np.zeros(10), SerialComm()) == 0.0
     assert exact_sum(np.zeros((0, 4)), SerialComm()).tolist() == [0.0] * 4
     assert math.isinf(exact_sum(np.array([1.0, np.inf, 0.0]), SerialComm()))
+
+
+def test_several_arrays_in_one_collective_give_each_array_s_sum():
+    rng = np.random.default_rng(8)
+    arrays = [rng.normal(size=40), rng.normal(size=(7, 3)) * 1e8, np.zeros((0, 3))]
+    got = exact_sums(arrays, SerialComm())
+    assert got[0] == math.fsum(arrays[0])
+    assert got[1].tolist() == [math.fsum(arrays[1][:, c]) for c in range(3)]
+    assert got[2].tolist() == [0.0, 0.0, 0.0]

@@ -25,7 +25,7 @@ from typing import Protocol
 import numpy as np
 
 from pdfem.parallel.comm import SerialComm
-from pdfem.parallel.exact_sum import exact_sum
+from pdfem.parallel.exact_sum import exact_sum, exact_sums
 
 
 class Layout(Protocol):
@@ -55,6 +55,9 @@ class Layout(Protocol):
     def total(self, values: np.ndarray):
         """Correctly rounded sum of every row of ``values`` (rows of owned particles only)
         over every process (collective)."""
+
+    def totals(self, arrays: list) -> list:
+        """:meth:`total` of each array of ``arrays``, in one collective."""
 
     def allsum(self, value):
         """A per-process value summed over the processes, in rank order (collective)."""
@@ -95,6 +98,10 @@ class WholeLayout:
     def total(self, values: np.ndarray):
         """The correctly rounded sum of every row of ``values``."""
         return exact_sum(values, self.comm)
+
+    def totals(self, arrays: list) -> list:
+        """:meth:`total` of each array of ``arrays``."""
+        return exact_sums(arrays, self.comm)
 
     def allsum(self, value):
         """``value`` itself."""

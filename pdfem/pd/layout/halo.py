@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from pdfem.parallel.exact_sum import exact_sum
+from pdfem.parallel.exact_sum import exact_sum, exact_sums
 from pdfem.pd.layout.base import WholeLayout
 
 
@@ -128,6 +128,10 @@ class HaloLayout:
         """Correctly rounded sum of every row of ``values`` (rows of owned particles) over
         every rank (collective)."""
         return exact_sum(values, self.comm)
+
+    def totals(self, arrays: list) -> list:
+        """:meth:`total` of each array of ``arrays``, in one collective."""
+        return exact_sums(arrays, self.comm)
 
     def allsum(self, value):
         """``value`` summed over the ranks in rank order (collective)."""
