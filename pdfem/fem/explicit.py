@@ -165,6 +165,7 @@ class CentralDifference:
         self._lam = None if max_eigenvalue is None else float(max_eigenvalue)
         self.power_iterations = 0
         self.u = np.zeros(n)
+        self._ku = np.zeros(n)                  # K u of the state (kept from the step)
         self.v = np.zeros(n)
         self.a = np.zeros(n)
         self.v_half = np.zeros(n)
@@ -262,7 +263,8 @@ class CentralDifference:
         self.v_half = self.v.copy()
         self.f_ext = np.zeros(self.n) if f_ext is None else np.array(f_ext, dtype=np.float64)
         self.f_damp = self._damping_force(self.v)
-        self.a = (self.f_ext - self.k_op @ self.u - self.f_damp) / self.m
+        self._ku = self.k_op @ self.u
+        self.a = (self.f_ext - self._ku - self.f_damp) / self.m
         self.a[self.fixed] = 0.0
         self._reaction = self.residual_force()[self.fixed]
 
@@ -294,6 +296,11 @@ class CentralDifference:
         # increment: with it the scheme's energy balance holds exactly (module docstring)
         self._book_work(dt * v_half, f, f_damp_old, ku if moving else None, a_new)
         self._advance(dt, u_new, v_half, a_new, v_new, f)
+        self._ku = ku
+
+    def stiffness_force(self) -> np.ndarray:
+        """``K u`` (N) of the current state (the step's product, kept; do not change it)."""
+        return self._ku
 
     @property
     def _supports_move(self) -> bool:
@@ -359,9 +366,10 @@ class CentralDifference:
             self.f_damp = self._zero  # as _damping_force gives it, so step() skips it
         for k in self.STATE_SCALARS:
             setattr(self, k, float(state[k]))
+        self._ku = self.k_op @ self.u
         self._reaction = self.residual_force()[self.fixed]
 
     def residual_force(self) -> np.ndarray:
         """``K u + C v_half + M a - f_ext`` (N) per DOF: zero on free DOFs, the support reaction
         (the force the support exerts on the body) on Dirichlet DOFs."""
-        return self.k_op @ self.u + self.f_damp + self.m * self.a - self.f_ext
+        return self.stiffness_force() + self.f_damp + self.m * self.a - self.f_ext

@@ -74,6 +74,10 @@ class Newmark(CentralDifference):
         """0 J: the scheme conserves ``1/2 v . M v + 1/2 u . K u`` itself."""
         return 0.0
 
+    def stiffness_force(self) -> np.ndarray:
+        """``K u`` (N) of the current state (one product: the step does not form it)."""
+        return self.k_op @ self.u
+
     def apply_impulse(self, dofs: np.ndarray, impulse: np.ndarray) -> None:
         """Give the DOFs ``dofs`` the impulses ``impulse`` (N s) now: their velocity jumps by
         impulse / mass; with damping, the damping force and the acceleration follow the new

@@ -195,6 +195,11 @@ class SurfaceBody:
     def surface_velocities(self) -> np.ndarray:  # pragma: no cover - implemented by subclasses
         raise TypeError(f"{type(self).__name__} must implement surface_velocities()")
 
+    def surface_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """New (Ns, 3) arrays of the surface's positions (m) and velocities (m/s) now (a
+        subclass that finds both in one pass gives them together)."""
+        return self.surface_points().copy(), self.surface_velocities().copy()
+
     @property
     def n_surface_nodes(self) -> int:
         """Number of contact-surface nodes Ns."""

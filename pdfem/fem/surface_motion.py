@@ -33,9 +33,7 @@ class PredictedSurface:
     def over(self, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(start, end, velocity)`` of the surface over the next ``h`` (s), predicted from
         the structure's state now; the structure steps in :meth:`after`."""
-        s = self.structure
-        p0 = s.surface_points().copy()
-        v0 = s.surface_velocities().copy()
+        p0, v0 = self.structure.surface_state()
         return p0, p0 + h * v0, v0
 
     def begin(self, step: float) -> None:

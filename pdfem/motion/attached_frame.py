@@ -80,16 +80,13 @@ class ShipFrame:
         return {"R": s.R, "c": s.c, "c_dot": s.v, "c_ddot": s.acceleration, "w": s.omega,
                 "w_dot": s.angular_acceleration}
 
-    def inertial_force(self, t: float, r: np.ndarray, v: np.ndarray,
-                       mass: np.ndarray) -> np.ndarray:
-        """(N, 3) inertial loads (N, body axes) on nodes at ``r`` = X - c_G + u_e (m) with
-        relative velocities ``v`` = u_e' (m/s) and lumped masses ``mass`` (kg)."""
+    def inertial_rates(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The ship's motion in body axes now, as the inertial loads need it
+        (:func:`pdfem.motion.frame_kernels.inertial_loads`): ``R^T a_G`` (m/s^2),
+        ``R^T w'`` (rad/s^2) and ``R^T w`` (rad/s)."""
         f = self.state(t)
         R = f["R"]
-        w, w_dot = R.T @ f["w"], R.T @ f["w_dot"]
-        acc = (R.T @ f["c_ddot"])[None, :] + cross(w_dot, r) \
-            + cross(w, cross(w, r)) + 2.0 * cross(w, v)
-        return -mass[:, None] * acc
+        return R.T @ f["c_ddot"], R.T @ f["w_dot"], R.T @ f["w"]
 
     def to_world(self, t: float, r: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World positions (m) and velocities (m/s) of nodes at ``r`` with relative velocities

@@ -28,6 +28,7 @@ import scipy.sparse as sp
 
 from pdfem.fem.node_blocks import NodeBlockOperator
 from pdfem.fem.structure import ElasticStructure
+from pdfem.motion.frame_kernels import inertial_loads, subtract_scaled, surface_world
 from pdfem.motion.moving_frame import MovingFrame
 from pdfem.motion.shaft_loads import ShaftLoads
 from pdfem.motion.stress_stiffening import centrifugal_stiffness
@@ -51,6 +52,9 @@ class FrameStructure(ElasticStructure):
         super().__init__(*args, **kwargs)
         self.frame = frame
         self._r0 = self.node_points - np.asarray(frame.center, dtype=np.float64)
+        self._dofs = np.ascontiguousarray(self.dofmap.nodal_dofs)         # (3, Nn)
+        self._surface_r0 = np.ascontiguousarray(self._r0[self.surface_nodes])
+        self._surface_table = np.ascontiguousarray(self._surface_dofs.reshape(-1, 3))
         self.node_mass = self.dofmap.to_nodal(self.solver.m)[:, 0].copy()
         self.K_sigma = (centrifugal_stiffness(self, frame, self._r0, self.node_mass)
                         if stress_stiffening and np.any(frame.angular_velocity) else None)
@@ -69,10 +73,11 @@ class FrameStructure(ElasticStructure):
 
     def _inertial_dofs(self, t: float) -> np.ndarray:
         """Inertial loads (N, DOF vector, frame axes) at time ``t`` (s) on the current state."""
-        r, v = self.relative_motion()
-        f = self.dofmap.to_dofs(self.frame.inertial_force(t, r, v, self.node_mass))
+        f = np.empty(self.dofmap.n_dofs)
+        inertial_loads(self._r0, self.solver.u, self.solver.v, self._dofs, self.node_mass,
+                       *self.frame.inertial_rates(t), f)
         if self._k_sigma is not None:
-            f -= self.frame.speed_factor(t)[0] ** 2 * (self._k_sigma @ self.solver.u)
+            subtract_scaled(f, self.frame.speed_factor(t)[0] ** 2, self._k_sigma @ self.solver.u)
         return f
 
     def rotating_stiffness(self, t: float | None = None) -> sp.csr_matrix:
@@ -130,15 +135,24 @@ class FrameStructure(ElasticStructure):
     # ------------------------------------------------------------------ contact interface
     def surface_points(self) -> np.ndarray:
         """(Ns, 3) true positions (m, world) of the contact-surface nodes."""
-        r, v = self.relative_motion()
-        x, _ = self.frame.to_world(self.solver.time, r[self.surface_nodes], v[self.surface_nodes])
-        return x
+        return self.surface_state()[0]
 
     def surface_velocities(self) -> np.ndarray:
         """(Ns, 3) true velocities (m/s, world) of the contact-surface nodes."""
-        r, v = self.relative_motion()
-        _, w = self.frame.to_world(self.solver.time, r[self.surface_nodes], v[self.surface_nodes])
-        return w
+        return self.surface_state()[1]
+
+    def surface_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """(Ns, 3) true positions (m) and velocities (m/s) of the surface nodes, world axes,
+        in one pass (:func:`pdfem.motion.frame_kernels.surface_world`)."""
+        f = self.frame.state(self.solver.time)
+        x, v = np.empty_like(self._surface_r0), np.empty_like(self._surface_r0)
+        surface_world(self._surface_r0, self.solver.u, self.solver.v, self._surface_table,
+                      f["R"], f["c"], f["c_dot"], f["w"], x, v)
+        return x, v
+
+    def _surface_relative(self) -> np.ndarray:
+        """(Ns, 3) r = X - c0 + u_e (m, frame axes) of the surface nodes."""
+        return self._surface_r0 + self.solver.u[self._surface_table]
 
     def set_surface_forces(self, forces: np.ndarray) -> None:
         """Contact forces (N, (Ns, 3), world axes), turned into frame axes (R^T F)."""
@@ -150,13 +164,13 @@ class FrameStructure(ElasticStructure):
         which move with the frame, ``v_frame . J``); the part ``v_frame . J`` goes to the drive
         (``support_work``)."""
         j = np.asarray(impulse, dtype=np.float64).reshape(-1, 3)
-        r, _ = self.relative_motion()
-        vf = self.frame.frame_velocity(self.solver.time, r[self.surface_nodes])
+        r = self._surface_relative()
+        vf = self.frame.frame_velocity(self.solver.time, r)
         drive = float(np.sum(vf * j))   # supports too: the frame carries them into the ice
         work = super().apply_surface_impulse(j @ self.rotation())
         self.drive_impulse_work += drive
         if self.shaft is not None:
-            self.shaft.add_impulse(j, self.rotation(), r[self.surface_nodes], work + drive)
+            self.shaft.add_impulse(j, self.rotation(), r, work + drive)
         return work + drive
 
     # ------------------------------------------------------------------ results

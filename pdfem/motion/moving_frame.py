@@ -14,7 +14,9 @@ elastic motion in frame axes gets the inertial (d'Alembert) loads, per lumped ma
 
     f = -m [ R^T a_c + w' x r + w x (w x r) + 2 w x u_e' ],     r = X - c0 + u_e,
 
-(translation, Euler, centrifugal, Coriolis; ``a_c = s'(t) V``). SI units: m, s, rad, N.
+(translation, Euler, centrifugal, Coriolis; ``a_c = s'(t) V``), evaluated by
+:func:`pdfem.motion.frame_kernels.inertial_loads` from :meth:`MovingFrame.inertial_rates`.
+SI units: m, s, rad, N.
 
 Instead of ``velocity`` the centre may follow a piecewise-linear translation ``path`` (the same
 ``[[t, ux, uy, uz], ...]`` as a towed rigid hull's, :class:`pdfem.geometry.path.DisplacementPath`):
@@ -109,15 +111,13 @@ class MovingFrame:
         self._last.update(t=t, state=state)
         return state
 
-    def inertial_force(self, t: float, r: np.ndarray, v: np.ndarray,
-                       mass: np.ndarray) -> np.ndarray:
-        """(N, 3) inertial loads (N, frame axes) on nodes at ``r`` = X - c0 + u_e (m, (N, 3))
-        with relative velocities ``v`` = u_e' (m/s) and lumped masses ``mass`` (kg, (N,))."""
+    def inertial_rates(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The frame's motion in frame axes at time ``t`` (s), as its inertial loads need it
+        (:func:`pdfem.motion.frame_kernels.inertial_loads`): the centre's acceleration
+        ``R^T c''`` (m/s^2), the angular acceleration and velocity (rad/s^2, rad/s; the same
+        components in both axes, the axis being fixed)."""
         f = self.state(t)
-        w, w_dot = f["w"], f["w_dot"]
-        acc = (f["R"].T @ f["c_ddot"])[None, :] + cross(w_dot, r) \
-            + cross(w, cross(w, r)) + 2.0 * cross(w, v)
-        return -mass[:, None] * acc
+        return f["R"].T @ f["c_ddot"], f["w_dot"], f["w"]
 
     def to_world(self, t: float, r: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World positions (m) and velocities (m/s), (N, 3), of nodes at ``r`` = X - c0 + u_e

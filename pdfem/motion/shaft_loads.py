@@ -67,6 +67,7 @@ import scipy.sparse as sp
 
 from pdfem.fem.stress import von_mises
 from pdfem.geometry.vectors import cross
+from pdfem.motion.frame_kernels import StepVectors, support_torque_power
 
 BLADE_SURFACE = re.compile(r"blade(\d+)_surface\Z")
 """Name of blade k's surface group (its faces but the root)."""
@@ -157,8 +158,9 @@ class ShaftLoads:
             axes = np.array([e_r, cross(self.axis, e_r), self.axis])  # rows: e_r, e_t, e_a
             self.blades.append((label, mask, p, axes))
         self._held = structure.solver.fixed                       # held DOFs
-        self._k_held = structure.K.tocsr()[self._held]
+        self._held_mask = ~structure.solver.free
         table = structure.dofmap.nodal_dofs                       # (3, Nn) DOF of each node
+        self._dofs = np.ascontiguousarray(table, dtype=np.int64)
         node = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
         node[table.ravel()] = np.tile(np.arange(table.shape[1]), 3)
         comp = np.empty(structure.dofmap.n_dofs, dtype=np.int64)
@@ -202,7 +204,7 @@ class ShaftLoads:
         """(H, 3) force (N, frame axes) of the supports on each held node (``_held_nodes``)."""
         sol = self.structure.solver
         d = self._held
-        reaction = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
+        reaction = sol.stiffness_force()[d] + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
         force = np.zeros((len(self._held_nodes), 3))
         np.add.at(force, (self._held_row, self._held_comp), reaction)
         return force
@@ -212,22 +214,17 @@ class ShaftLoads:
         its power (W) now: the supports' forces on the held nodes (``K u + C v + M a - f_ext``
         on the held DOFs), plus the Rayleigh mass-damping forces ``-alpha m u_e'`` on the free
         nodes (a force between the structure and the frame, which the shaft drives; the
-        stiffness-proportional part is internal), on the frame's velocity at the nodes."""
+        stiffness-proportional part is internal), on the frame's velocity at the nodes
+        (one pass, :func:`pdfem.motion.frame_kernels.support_torque_power`)."""
         s = self.structure
         sol = s.solver
-        d = self._held
-        reaction = self._k_held @ sol.u + sol.f_damp[d] + sol.m[d] * sol.a[d] - sol.f_ext[d]
-        if sol.alpha:
-            g = -sol.alpha * sol.m * sol.v_half
-            g[d] = reaction
-            nodes, force = self._all_nodes, s.dofmap.to_nodal(g)
-        else:
-            nodes, force = self._held_nodes, np.zeros((len(self._held_nodes), 3))
-            np.add.at(force, (self._held_row, self._held_comp), reaction)
-        r = self._r0[nodes] + sol.u[s.dofmap.nodal_dofs[:, nodes].T]
         f = s.frame.state(sol.time)
-        v = f["R"].T @ f["c_dot"] + cross(f["w"], r)       # frame velocity, frame axes
-        return float(cross(r, force).sum(axis=0) @ self.axis), float(np.sum(force * v))
+        torque, power = support_torque_power(
+            self._all_nodes if sol.alpha else self._held_nodes, self._r0, self._dofs,
+            self._held_mask, StepVectors(sol.u, sol.stiffness_force(), sol.f_damp, sol.m, sol.a,
+                                         sol.f_ext, sol.v_half),
+            sol.alpha, np.array([f["R"].T @ f["c_dot"], f["w"], self.axis]))
+        return float(torque), float(power)
 
     def after_step(self, dt: float) -> None:
         """After a structure step of ``dt`` (s): integrate the shaft's torque and power."""
@@ -266,13 +263,9 @@ class ShaftLoads:
         return von_mises(sigma.transpose(2, 0, 1))
 
     def strain_energy(self) -> float:
-        """Strain energy ``1/2 u . K u`` (J) without a product with K: ``K u`` is ``f_ext -
-        C v - M a`` on the free DOFs (the integrator's equation at the step's end) and the held
-        rows of K on the held DOFs."""
+        """Strain energy ``1/2 u . K u`` (J), with the integrator's ``K u`` (no product)."""
         sol = self.structure.solver
-        ku = sol.f_ext - sol.f_damp - sol.m * sol.a
-        ku[self._held] = self._k_held @ sol.u
-        return 0.5 * float(np.einsum("i,i", sol.u, ku))   # not BLAS: no thread start-up
+        return 0.5 * float(np.einsum("i,i", sol.u, sol.stiffness_force()))  # not BLAS
 
     def _stress_peak(self, vm: np.ndarray, elements: np.ndarray | None
                      ) -> tuple[float, np.ndarray]:
