@@ -44,7 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from pdfem.fem.central_difference_kernels import correct, predict
-from pdfem.fem.node_blocks import NodeBlockOperator
+from pdfem.fem.node_blocks import NodeBlockOperator, NodeBlockPair
 
 Prescribed = Callable[[float], np.ndarray]
 
@@ -166,6 +166,8 @@ class CentralDifference:
         self.power_iterations = 0
         self.u = np.zeros(n)
         self._ku = np.zeros(n)                  # K u of the state (kept from the step)
+        self._pair: NodeBlockPair | None = None  # K and a companion matrix, applied together
+        self._cu: np.ndarray | None = None      # the companion's product with u
         self.v = np.zeros(n)
         self.a = np.zeros(n)
         self.v_half = np.zeros(n)
@@ -263,7 +265,7 @@ class CentralDifference:
         self.v_half = self.v.copy()
         self.f_ext = np.zeros(self.n) if f_ext is None else np.array(f_ext, dtype=np.float64)
         self.f_damp = self._damping_force(self.v)
-        self._ku = self.k_op @ self.u
+        self._ku, self._cu = self._products(self.u)
         self.a = (self.f_ext - self._ku - self.f_damp) / self.m
         self.a[self.fixed] = 0.0
         self._reaction = self.residual_force()[self.fixed]
@@ -287,7 +289,7 @@ class CentralDifference:
         f = self._zero if f_ext is None else np.array(f_ext, dtype=np.float64)
         f_damp_old = self.f_damp
         self.f_damp = self._damping_force(v_half)
-        ku = self.k_op @ u_new
+        ku, cu = self._products(u_new)
         # Dirichlet DOFs: acceleration from the change of their mid-step velocity (zero when
         # held still)
         correct(f, ku, self.f_damp, self.f_damp is not self._zero, self.m, dt, v_half,
@@ -296,11 +298,28 @@ class CentralDifference:
         # increment: with it the scheme's energy balance holds exactly (module docstring)
         self._book_work(dt * v_half, f, f_damp_old, ku if moving else None, a_new)
         self._advance(dt, u_new, v_half, a_new, v_new, f)
-        self._ku = ku
+        self._ku, self._cu = ku, cu
 
     def stiffness_force(self) -> np.ndarray:
         """``K u`` (N) of the current state (the step's product, kept; do not change it)."""
         return self._ku
+
+    def add_companion(self, op: NodeBlockOperator) -> None:
+        """Form ``op @ u`` with every ``K u``, in the same pass over the blocks when ``op``
+        has K's pattern (a spinning structure's geometric stiffness, which its inertial loads
+        need every step); :meth:`companion_force` gives it."""
+        self._pair = NodeBlockPair(self.k_op, op)
+        self._ku, self._cu = self._products(self.u)
+
+    def companion_force(self) -> np.ndarray:
+        """``op @ u`` (N) of the current state for the matrix of :meth:`add_companion`."""
+        return self._cu
+
+    def _products(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """``K u`` and the companion's product (None without one)."""
+        if self._pair is None:
+            return self.k_op @ u, None
+        return self._pair @ u
 
     @property
     def _supports_move(self) -> bool:
@@ -366,7 +385,7 @@ class CentralDifference:
             self.f_damp = self._zero  # as _damping_force gives it, so step() skips it
         for k in self.STATE_SCALARS:
             setattr(self, k, float(state[k]))
-        self._ku = self.k_op @ self.u
+        self._ku, self._cu = self._products(self.u)
         self._reaction = self.residual_force()[self.fixed]
 
     def residual_force(self) -> np.ndarray:

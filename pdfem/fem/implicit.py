@@ -78,6 +78,11 @@ class Newmark(CentralDifference):
         """``K u`` (N) of the current state (one product: the step does not form it)."""
         return self.k_op @ self.u
 
+    def companion_force(self) -> np.ndarray:
+        """The companion matrix's product with ``u`` (N; one product: the step does not
+        form it)."""
+        return self._pair.b @ self.u
+
     def apply_impulse(self, dofs: np.ndarray, impulse: np.ndarray) -> None:
         """Give the DOFs ``dofs`` the impulses ``impulse`` (N s) now: their velocity jumps by
         impulse / mass; with damping, the damping force and the acceleration follow the new

@@ -66,26 +66,63 @@ def _fill_blocks(indptr, indices, data, bptr, bcols, bdata):
 
 
 @numba.njit(cache=True, inline="always")
+def _add_block(b, k, x0, x1, x2, s0, s1, s2):
+    """``(s0, s1, s2)`` plus block ``b[k]`` times ``(x0, x1, x2)``, each row's three products
+    added one by one in storage order (as scipy's CSR product adds them)."""
+    s0 += b[k, 0, 0] * x0
+    s0 += b[k, 0, 1] * x1
+    s0 += b[k, 0, 2] * x2
+    s1 += b[k, 1, 0] * x0
+    s1 += b[k, 1, 1] * x1
+    s1 += b[k, 1, 2] * x2
+    s2 += b[k, 2, 0] * x0
+    s2 += b[k, 2, 1] * x1
+    s2 += b[k, 2, 2] * x2
+    return s0, s1, s2
+
+
+@numba.njit(cache=True, inline="always")
 def _node_rows(bptr, bcols, bdata, x, out, i):
     """The three rows of node ``i``, each summed in CSR storage order from zero."""
-    s0 = 0.0
-    s1 = 0.0
-    s2 = 0.0
+    s0 = s1 = s2 = 0.0
     for k in range(bptr[i], bptr[i + 1]):
         j = 3 * bcols[k]
-        x0, x1, x2 = x[j], x[j + 1], x[j + 2]
-        s0 += bdata[k, 0, 0] * x0
-        s0 += bdata[k, 0, 1] * x1
-        s0 += bdata[k, 0, 2] * x2
-        s1 += bdata[k, 1, 0] * x0
-        s1 += bdata[k, 1, 1] * x1
-        s1 += bdata[k, 1, 2] * x2
-        s2 += bdata[k, 2, 0] * x0
-        s2 += bdata[k, 2, 1] * x1
-        s2 += bdata[k, 2, 2] * x2
+        s0, s1, s2 = _add_block(bdata, k, x[j], x[j + 1], x[j + 2], s0, s1, s2)
     out[3 * i] = s0
     out[3 * i + 1] = s1
     out[3 * i + 2] = s2
+
+
+@numba.njit(cache=True, inline="always")
+def _node_rows_pair(bptr, bcols, bdata, cdata, x, out, out2, i):
+    """:func:`_node_rows` of two matrices on one pattern (``bdata`` into ``out``, ``cdata``
+    into ``out2``), each row summed in the same order: the bits of two products."""
+    s0 = s1 = s2 = t0 = t1 = t2 = 0.0
+    for k in range(bptr[i], bptr[i + 1]):
+        j = 3 * bcols[k]
+        x0, x1, x2 = x[j], x[j + 1], x[j + 2]
+        s0, s1, s2 = _add_block(bdata, k, x0, x1, x2, s0, s1, s2)
+        t0, t1, t2 = _add_block(cdata, k, x0, x1, x2, t0, t1, t2)
+    out[3 * i] = s0
+    out[3 * i + 1] = s1
+    out[3 * i + 2] = s2
+    out2[3 * i] = t0
+    out2[3 * i + 1] = t1
+    out2[3 * i + 2] = t2
+
+
+@numba.njit(parallel=True, cache=True)
+def block_matvec_pair(bptr, bcols, bdata, cdata, x, out, out2):
+    """``out = A x``, ``out2 = B x`` for A, B in node blocks on one pattern, nodes in parallel."""
+    for i in prange(bptr.shape[0] - 1):
+        _node_rows_pair(bptr, bcols, bdata, cdata, x, out, out2, i)
+
+
+@numba.njit(cache=True)
+def block_matvec_pair_serial(bptr, bcols, bdata, cdata, x, out, out2):
+    """:func:`block_matvec_pair` on one thread."""
+    for i in range(bptr.shape[0] - 1):
+        _node_rows_pair(bptr, bcols, bdata, cdata, x, out, out2, i)
 
 
 @numba.njit(parallel=True, cache=True)
@@ -140,3 +177,34 @@ class NodeBlockOperator:
         out = np.empty(self.matrix.shape[0])
         self._kernel(*self.blocks, np.ascontiguousarray(x, dtype=np.float64), out)
         return out
+
+
+class NodeBlockPair:
+    """Two operators applied to one vector together: ``pair @ x`` is ``(a @ x, b @ x)`` with
+    the bits of the two products, in one pass over the blocks when both have the same
+    node-block pattern (a structure's stiffness and its geometric stiffness), else two.
+
+    Parameters
+    ----------
+    a, b
+        Operators of the same size.
+    """
+
+    def __init__(self, a: NodeBlockOperator, b: NodeBlockOperator) -> None:
+        self.a, self.b = a, b
+        self.fused = (a.blocks is not None and b.blocks is not None
+                      and np.array_equal(a.blocks[0], b.blocks[0])
+                      and np.array_equal(a.blocks[1], b.blocks[1]))
+        self._kernel = (block_matvec_pair if self.fused and a.blocks[0][-1] >= PARALLEL_BLOCKS
+                        else block_matvec_pair_serial)
+
+    def __matmul__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(a @ x, b @ x)`` (new (n,) arrays)."""
+        if not self.fused:
+            return self.a @ x, self.b @ x
+        n = self.a.matrix.shape[0]
+        out, out2 = np.empty(n), np.empty(n)
+        bptr, bcols, bdata = self.a.blocks
+        self._kernel(bptr, bcols, bdata, self.b.blocks[2],
+                     np.ascontiguousarray(x, dtype=np.float64), out, out2)
+        return out, out2

@@ -35,7 +35,7 @@ from pdfem.fem.loads import AppliedLoads
 from pdfem.fem.mesh import FEMesh, load_mesh
 from pdfem.fem.probe import Probe, make_probe, probe_values
 from pdfem.fem.stress import (centre_basis, element_stress, kinetic_energy, nodal_average,
-                              strain_energy, von_mises)
+                              von_mises)
 from pdfem.fem.supports import (constrained_dofs, prescribed_values, support_reaction,
                                 support_table)
 from pdfem.meshing.quality import check_cells
@@ -292,8 +292,8 @@ class ElasticStructure(AppliedLoads, Structure):
         return self.dofmap.to_nodal(self.solver.m * self.solver.v).sum(axis=0)
 
     def strain_energy(self) -> float:
-        """Strain energy 1/2 u.K u (J)."""
-        return strain_energy(self.solver.k_op, self.solver.u)
+        """Strain energy 1/2 u.K u (J), with the integrator's K u."""
+        return 0.5 * float(self.solver.u @ self.solver.stiffness_force())
 
     def stresses(self) -> np.ndarray:
         """(Ne, 3, 3) element stress tensors (Pa), at the element centres."""

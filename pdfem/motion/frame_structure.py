@@ -58,7 +58,8 @@ class FrameStructure(ElasticStructure):
         self.node_mass = self.dofmap.to_nodal(self.solver.m)[:, 0].copy()
         self.K_sigma = (centrifugal_stiffness(self, frame, self._r0, self.node_mass)
                         if stress_stiffening and np.any(frame.angular_velocity) else None)
-        self._k_sigma = None if self.K_sigma is None else NodeBlockOperator(self.K_sigma)
+        if self.K_sigma is not None:   # K_sigma u with every K u (one pass over the blocks)
+            self.solver.add_companion(NodeBlockOperator(self.K_sigma))
         self.inertial_work = 0.0     # J, work of the inertial loads on u_e
         self.drive_impulse_work = 0.0  # J, work of contact impulses on the frame's velocity
         self._f_inertial = self._inertial_dofs(0.0)
@@ -76,8 +77,8 @@ class FrameStructure(ElasticStructure):
         f = np.empty(self.dofmap.n_dofs)
         inertial_loads(self._r0, self.solver.u, self.solver.v, self._dofs, self.node_mass,
                        *self.frame.inertial_rates(t), f)
-        if self._k_sigma is not None:
-            subtract_scaled(f, self.frame.speed_factor(t)[0] ** 2, self._k_sigma @ self.solver.u)
+        if self.K_sigma is not None:
+            subtract_scaled(f, self.frame.speed_factor(t)[0] ** 2, self.solver.companion_force())
         return f
 
     def rotating_stiffness(self, t: float | None = None) -> sp.csr_matrix:

@@ -1,8 +1,9 @@
 """The structures' stiffness product by node blocks (:mod:`pdfem.fem.node_blocks`).
 
 Reference: scipy's CSR product ``K @ x``, bit for bit (each row summed in storage order from
-zero, as scipy sums it), on one and two numba threads, by the serial and the parallel kernel;
-scipy's own product for a matrix without node blocks.
+zero, as scipy sums it), on one and two numba threads, by the serial and the parallel kernel,
+alone and paired with a second matrix on the same pattern; scipy's own product for a matrix
+without node blocks.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from pdfem.fem import node_blocks
 from pdfem.fem.elasticity import ElasticMaterial, stiffness_matrix
 from pdfem.fem.fe_space import fe_space
 from pdfem.fem.mesh import load_mesh
-from pdfem.fem.node_blocks import NodeBlockOperator
+from pdfem.fem.node_blocks import NodeBlockOperator, NodeBlockPair
 
 
 def _on_threads(n, fn):
@@ -43,6 +44,14 @@ def test_stiffness_product_has_scipy_s_bits(order, parallel_from, gmsh_box, tmp_
     u = np.random.default_rng(order).normal(size=K.shape[0]) * 1e-3
     for n in (1, 2):
         assert np.array_equal(_on_threads(n, lambda: op @ u), K @ u)
+    # a second matrix on the same pattern (a geometric stiffness: here a scaled, shifted K)
+    # in the same pass: the bits of the two products
+    K2 = sp.csr_matrix((np.cos(K.data) * K.data, K.indices, K.indptr), shape=K.shape)
+    pair = NodeBlockPair(op, NodeBlockOperator(K2))
+    assert pair.fused
+    for n in (1, 2):
+        a, b = _on_threads(n, lambda: pair @ u)
+        assert np.array_equal(a, K @ u) and np.array_equal(b, K2 @ u)
 
 
 def test_matrix_without_node_blocks_keeps_scipy_s_product():
@@ -53,3 +62,5 @@ def test_matrix_without_node_blocks_keeps_scipy_s_product():
     op = NodeBlockOperator(a)
     x = rng.normal(size=300)
     assert op.blocks is None and np.array_equal(op @ x, a @ x)
+    pair = NodeBlockPair(op, op)
+    assert not pair.fused and all(np.array_equal(y, a @ x) for y in pair @ x)
