@@ -43,7 +43,7 @@ from collections.abc import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from pdfem.fem.central_difference_kernels import correct, predict
+from pdfem.fem.central_difference_kernels import NO_OFFSET, correct, predict, trapezoid_work
 from pdfem.fem.node_blocks import NodeBlockOperator, NodeBlockPair
 
 Prescribed = Callable[[float], np.ndarray]
@@ -340,9 +340,9 @@ class CentralDifference:
         ``f``), of the damping (old and new ``f_damp``) and, given the new ``K u`` as ``ku``
         (moving supports), of the support reactions."""
         if f.any() or self.f_ext.any():  # else the work is +-0 (the same sum, no passes)
-            self.work_external += 0.5 * float((self.f_ext + f) @ du)
+            self.work_external += trapezoid_work(self.f_ext, f, du, NO_OFFSET)
         if self.f_damp is not self._zero:
-            self.damping_dissipated += 0.5 * float((f_damp_old + self.f_damp) @ du)
+            self.damping_dissipated += trapezoid_work(f_damp_old, self.f_damp, du, NO_OFFSET)
         if ku is not None:
             fx = self.fixed
             reaction = ku[fx] + self.f_damp[fx] + self.m[fx] * a_new[fx] - f[fx]

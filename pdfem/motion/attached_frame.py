@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from pdfem.geometry.vectors import cross
+from pdfem.fem.central_difference_kernels import trapezoid_work
 from pdfem.motion.frame_structure import FrameStructure
 from pdfem.motion.rotation import rotation_vector
 from pdfem.motion.ship import Ship
@@ -133,7 +134,7 @@ class AttachedStructure(FrameStructure):
         f_in = self._inertial_dofs(t_new)
         u_old = self.solver.u
         self.solver.step(dt, f_load + f_in)
-        self.inertial_work += 0.5 * float((self._f_inertial + f_in) @ (self.solver.u - u_old))
+        self.inertial_work += trapezoid_work(self._f_inertial, f_in, self.solver.u, u_old)
         self._f_inertial = f_in
         R = self.ship.R
         self._pending += 0.5 * dt * (self.dofmap.to_nodal(self._f_load) @ self._R.T

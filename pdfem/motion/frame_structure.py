@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from pdfem.fem.central_difference_kernels import trapezoid_work
 from pdfem.fem.node_blocks import NodeBlockOperator
 from pdfem.fem.structure import ElasticStructure
 from pdfem.motion.frame_kernels import inertial_loads, subtract_scaled, surface_world
@@ -117,7 +118,7 @@ class FrameStructure(ElasticStructure):
         f_in = self._inertial_dofs(t_new)
         u_old = self.solver.u
         self.solver.step(dt, self.external_force_dofs(t_new) + f_in)
-        self.inertial_work += 0.5 * float((self._f_inertial + f_in) @ (self.solver.u - u_old))
+        self.inertial_work += trapezoid_work(self._f_inertial, f_in, self.solver.u, u_old)
         self._f_inertial = f_in
         if self.shaft is not None:
             self.shaft.after_step(dt)

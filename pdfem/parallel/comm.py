@@ -106,7 +106,10 @@ def launched_by_mpi() -> bool:
 def world():
     """The communicator of this process: :class:`MPIComm` under an MPI launcher with more than
     one rank, else :class:`SerialComm`. With more than one rank, this rank's threads are limited
-    to its share of the node's cores (:func:`pdfem.parallel.threads.share_node_cores`)."""
+    to its share of the node's cores (:func:`pdfem.parallel.threads.share_node_cores`). BLAS
+    runs on one thread (:func:`pdfem.parallel.threads.single_thread_blas`)."""
+    from pdfem.parallel.threads import single_thread_blas
+    single_thread_blas()
     if not launched_by_mpi():
         return SerialComm()
     from mpi4py import MPI

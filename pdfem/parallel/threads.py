@@ -1,12 +1,17 @@
 """Threads per rank: ranks that share a node share its cores.
 
-A rank runs two thread pools: numba's (the bond, contact and water kernels) and the BLAS
-library's under numpy (vector dot products of the structures' energy and work accounts). Each
-pool starts as many threads as the node has cores, so K ranks on one node would run K times
-too many threads; the waiting threads of one rank then spin on the cores the others compute
-on. Measured on 2 cores, 2 ranks (models/panel_pressure_pulse.toml shortened to 2 ms): 17.4 s
-with both pools at 2 threads per rank, 5.0 s with BLAS at 1 (docs/parallel.md). So under MPI
-each rank takes ``max(1, cores // ranks on its node)`` threads in both pools.
+A rank runs two thread pools: numba's (the bond, contact, water and structure kernels) and
+the BLAS library's under numpy. Each pool starts as many threads as the node has cores, so K
+ranks on one node would run K times too many threads; the waiting threads of one rank then
+spin on the cores the others compute on. Measured on 2 cores, 2 ranks
+(models/panel_pressure_pulse.toml shortened to 2 ms): 17.4 s with both pools at 2 threads per
+rank, 5.0 s with BLAS at 1 (docs/parallel.md). So under MPI each rank takes
+``max(1, cores // ranks on its node)`` threads in numba's pool.
+
+BLAS runs on one thread always (:func:`single_thread_blas`, every run): what a run asks of it
+are small products (a structure's work accounts, 3 x 3 rotations), which its threads' start-up
+only slows down. Measured on 2 cores with the other core busy: ``(a + b) @ (c - d)`` on
+14,967 values takes 5.3 ms with BLAS on 2 threads, 15 us on 1.
 
 Results do not depend on the number of threads: the kernels' sums are taken in a fixed order
 (docs/parallel.md, "Determinism").
@@ -63,7 +68,7 @@ def share_node_cores(world_size: int) -> int:
 
 
 def limit_threads(n: int) -> int:
-    """Run numba's kernels and the loaded BLAS and OpenMP libraries on at most ``n`` threads.
+    """Run numba's kernels and the loaded OpenMP libraries on at most ``n`` threads, BLAS on one.
 
     Returns
     -------
@@ -76,4 +81,12 @@ def limit_threads(n: int) -> int:
     n = min(max(1, n), numba.config.NUMBA_NUM_THREADS)
     numba.set_num_threads(n)
     threadpool_limits(limits=n)
+    single_thread_blas()
     return n
+
+
+def single_thread_blas() -> None:
+    """Run the loaded BLAS library on one thread (module docstring)."""
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=1, user_api="blas")

@@ -7,6 +7,7 @@ Reference: the sum over ranks of (rank + 1) for 2 ranks is 3.
 from __future__ import annotations
 
 import os
+import subprocess
 import sys
 
 
@@ -24,8 +25,9 @@ def test_two_ranks_allreduce():
 
 
 def test_ranks_on_a_node_share_its_cores():
-    """Two ranks on this node each run numba, BLAS and OpenMP on cores // 2 threads (at least
-    1): the pools of K ranks together never exceed the node's cores."""
+    """Two ranks on this node each run numba and OpenMP on cores // 2 threads (at least 1):
+    the pools of K ranks together never exceed the node's cores; BLAS on one (on this 2-core
+    machine also cores // 2)."""
     # rank 0 prints both ranks' counts (two ranks printing to one pipe may interleave)
     code = ("from pdfem.parallel.comm import world; import numba; "
             "from threadpoolctl import threadpool_info; w = world(); "
@@ -45,3 +47,14 @@ def test_threads_per_rank_and_the_launchers_local_size(monkeypatch):
     assert ranks_on_node(6) == 6
     monkeypatch.setenv("OMPI_COMM_WORLD_LOCAL_SIZE", "3")
     assert ranks_on_node(6) == 3
+
+
+def test_a_serial_run_keeps_blas_on_one_thread():
+    """A run's communicator (one process) leaves BLAS on one thread: its threads' start-up
+    made a structure's 15,000-value dot product 350 times slower (pdfem.parallel.threads)."""
+    code = ("from threadpoolctl import threadpool_info; from pdfem.parallel.comm import world; "
+            "world(); print(sorted({p['num_threads'] for p in threadpool_info() "
+            "if p['user_api'] == 'blas'}))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env={k: v for k, v in os.environ.items() if "MPI" not in k and "PMI" not in k})
+    assert r.stdout.strip() == "[1]", r.stdout + r.stderr
