@@ -53,7 +53,7 @@ from pdfem.coupling.broad_phase import Candidates
 from pdfem.coupling.facet_grid import FacetGrid
 from pdfem.coupling.facets import FACE, FacetTopology, closest_point_on_triangle, pseudo_normals
 from pdfem.coupling.nodal_impulse import ContactRecords
-from pdfem.pd.bonds.chunk_kernels import twin
+from pdfem.parallel.kernels import twin
 
 
 class GridArrays(NamedTuple):

@@ -59,7 +59,7 @@ from pdfem.coupling.facet_loads import FacetLoads, collect_facet_loads
 from pdfem.coupling.impulse_work import ImpulseWork
 from pdfem.geometry.vectors import cross
 from pdfem.parallel.comm import SerialComm
-from pdfem.pd.bonds.workspace import SERIAL_BELOW_PARTICLES
+from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
 
 
 @dataclass

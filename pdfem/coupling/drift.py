@@ -6,14 +6,14 @@ first half kick D/2 a_t, ``c = (2 j + 1) / n - 1`` for substep j; ``u = v`` when
 the contact then needs the positions before the move. :func:`drift` does the three in one pass
 (the copy, the velocity and the move), with numpy's operations and order: the same bits as
 ``before = y.copy(); u = v + kick * c; y += h * u``. Called as ``drift(parallel, ...)``
-(:func:`pdfem.pd.bonds.chunk_kernels.twin`): threaded for large bodies, else on one thread. Units: m, m/s, s.
+(:func:`pdfem.parallel.kernels.twin`): threaded for large bodies, else on one thread. Units: m, m/s, s.
 """
 
 from __future__ import annotations
 
 from numba import prange
 
-from pdfem.pd.bonds.chunk_kernels import twin
+from pdfem.parallel.kernels import twin
 
 
 @twin(fastmath=False)

@@ -99,7 +99,7 @@ from pdfem.forces.short_range_kernels import (
     sum_pairs,
 )
 from pdfem.geometry.cell_hash import bounding_box, counting_sort
-from pdfem.pd.bonds.workspace import SERIAL_BELOW_PARTICLES
+from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
 
 __all__ = ["ShortRangeContact", "short_range_constant", "DENSE_CELLS_PER_PARTICLE"]
 

@@ -23,7 +23,7 @@ import numpy as np
 from numba import prange
 
 from pdfem.geometry.cell_hash import HALF_STENCIL_COLUMNS, cell_id, cell_index, forward_column
-from pdfem.pd.bonds.chunk_kernels import twin
+from pdfem.parallel.kernels import twin
 
 
 class Table(NamedTuple):

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numba import prange
 
-from pdfem.pd.bonds.chunk_kernels import twin
-from pdfem.pd.bonds.workspace import SERIAL_BELOW_PARTICLES
+from pdfem.parallel.kernels import twin
+from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
 
 @twin(fastmath=False)
 def _kick(v, f, inv_rho, half_dt, g, free):

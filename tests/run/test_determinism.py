@@ -9,7 +9,7 @@ This caught a real bug: a ``parallel=True`` kernel compiled with the fastmath fl
 ``contract`` ran different machine code in the process that compiled it (the parfor body as
 optimized on its own) than in a process that loaded it from the cache (the copy of that body
 linked into the kernel and optimized again), and the FMA contractions of the two differed
-(see :mod:`pdfem.pd.bonds.chunk_kernels`). The ice block has more than
+(see :mod:`pdfem.parallel.kernels`). The ice block has more than
 :data:`pdfem.pd.bonds.workspace.SERIAL_BELOW_PAIRS` bonds and two numba threads are asked for, so
 the threaded pair loops run.
 """

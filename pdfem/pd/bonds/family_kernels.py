@@ -12,7 +12,8 @@ from __future__ import annotations
 import numba
 from numba import prange
 
-from pdfem.pd.bonds.chunk_kernels import FASTMATH, U64, fma
+from pdfem.parallel.kernels import FASTMATH, fma
+from pdfem.pd.bonds.chunk_kernels import U64
 from pdfem.pd.bonds.lps_law import (
     bond_length,
     bond_vector,

@@ -32,7 +32,8 @@ import numba
 import numpy as np
 from numba import prange
 
-from pdfem.pd.bonds.chunk_kernels import U64, fma, twin
+from pdfem.parallel.kernels import fma, twin
+from pdfem.pd.bonds.chunk_kernels import U64
 
 _INLINE = dict(cache=True, inline="always")
 

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numba
 
-from pdfem.pd.bonds.chunk_kernels import FASTMATH, U64, fma
+from pdfem.parallel.kernels import FASTMATH, fma
+from pdfem.pd.bonds.chunk_kernels import U64
 from pdfem.pd.bonds.lps_law import crushed_shear
 
 

@@ -8,7 +8,7 @@ race-free deterministic threading (:mod:`pdfem.pd.bonds.chunk_kernels`). The phy
 ``signed`` / ``store_r`` (``use_r``): each flag is then a constant inside its copy of the hot
 loop (no per-bond tests of it, fewer live registers). Index arithmetic is unsigned (``U64``):
 numba then emits no negative-index wraparound code for the gathers and scatters. The
-multiply-adds into the sums are explicit :func:`~pdfem.pd.bonds.chunk_kernels.fma` calls, not
+multiply-adds into the sums are explicit :func:`~pdfem.parallel.kernels.fma` calls, not
 fastmath contraction: a cache-loaded kernel then computes the same bits as a fresh compile.
 
 The kernels take the named tuples of :mod:`pdfem.pd.bonds.data` and take their arrays out
@@ -25,7 +25,8 @@ import numba
 import numpy as np
 from numba import prange
 
-from pdfem.pd.bonds.chunk_kernels import FASTMATH, U64, add_overflow1, add_overflow3, fma, twin
+from pdfem.parallel.kernels import FASTMATH, fma, twin
+from pdfem.pd.bonds.chunk_kernels import U64, add_overflow1, add_overflow3
 from pdfem.pd.bonds.pair_force_kernels import apply_crushed_shear, apply_pair_force
 from pdfem.pd.bonds.lps_law import (
     bond_length,

@@ -6,7 +6,7 @@ its ends: :func:`family_sum_pairs` (weighted volume and the time-step sums),
 :func:`energy_pairs` (strain energy density, :mod:`pdfem.pd.bonds.lps_law`) and
 :func:`damage_pairs` (broken fraction of the initial bonds), and
 :func:`contact_bond_energy_pairs` (the energy stored in crushed bonds). Float flags: ``FASTMATH`` of
-:mod:`pdfem.pd.bonds.chunk_kernels` (no FMA contraction, so the code compiled in this process and the
+:mod:`pdfem.parallel.kernels` (no FMA contraction, so the code compiled in this process and the
 code loaded from numba's cache give the same bits). The kernels take the named tuples of
 :mod:`pdfem.pd.bonds.data` and take their arrays out before the ``prange`` (numba loses writes
 through tuples there: :mod:`pdfem.pd.bonds.pair_step_kernels`).
@@ -17,7 +17,8 @@ from __future__ import annotations
 import numba
 from numba import prange
 
-from pdfem.pd.bonds.chunk_kernels import U64, add_overflow1, twin
+from pdfem.parallel.kernels import twin
+from pdfem.pd.bonds.chunk_kernels import U64, add_overflow1
 from pdfem.pd.bonds.lps_law import (bond_length, crushed_bond_energy, deviatoric_extension,
                               energy_density, is_broken)
 

@@ -37,7 +37,7 @@ is symmetrised so that it fits the one-weight-per-bond storage and costs nothing
 The setup cost is a pass over the pairs per iteration (``iterations + 1`` passes), threaded
 with the blocked, deterministic pair loop of :mod:`pdfem.pd.bonds.workspace` (on a rank's part
 of a body with the halo's tensors exchanged after every pass), under the float flags
-``FASTMATH`` of :mod:`pdfem.pd.bonds.chunk_kernels` (no FMA contraction: freshly compiled and cached
+``FASTMATH`` of :mod:`pdfem.parallel.kernels` (no FMA contraction: freshly compiled and cached
 code give the same bits).
 """
 
@@ -46,7 +46,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from pdfem.pd.bonds.chunk_kernels import FASTMATH
+from pdfem.parallel.kernels import FASTMATH
 from pdfem.pd.bonds.data import Bonds
 from pdfem.pd.bonds.workspace import PairWorkspace
 

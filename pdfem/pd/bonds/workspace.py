@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
 from pdfem.pd.bonds.chunk_kernels import chunk_split, max_reach, pairs_forward
 from pdfem.pd.bonds.data import Blocks
 
@@ -31,7 +32,6 @@ from pdfem.pd.bonds.data import Blocks
 # work, and a lot more when the machine is oversubscribed (the threads wait at a barrier for a
 # descheduled peer).
 SERIAL_BELOW_PAIRS = 50_000
-SERIAL_BELOW_PARTICLES = 20_000
 PAIRS_PER_BLOCK = 1 << 16
 """Bonds per block (about 1,000 interior particles): bodies from twice this share out."""
 MAX_BLOCKS = 64
