@@ -42,12 +42,23 @@ class LoadBalance:
         self.active = comm.size > 1 and bool(self.bodies)  # whole bodies never move
         self.size = comm.size
         self._left: dict[str, float] = {}  # body -> imbalance right after its last re-partition
+        self._levels: dict[str, tuple[int, float]] = {}  # body -> (layout version, imbalance)
         if self.active:
-            levels = ", ".join(f"'{b.name}' {b.imbalance():.3f}" for b in self.bodies)
+            levels = ", ".join(f"'{b.name}' {self.imbalance(b):.3f}" for b in self.bodies)
             when = " and ".join(w for w in ((f"every {self.every:,} steps" if self.every else ""),
                                             (f"above {self.limit:g}" if self.limit else "")) if w)
             say(f"  load balance (largest rank's bond work / mean): {levels}; re-partition "
                 f"{when or 'never (run.rebalance_every, run.rebalance_imbalance)'}")
+
+    def imbalance(self, body) -> float:
+        """The imbalance of ``body`` (:meth:`pdfem.pd.body.IceBody.imbalance`), measured again
+        only when its particles have moved: a rank's work, the bonds of its owned particles
+        broken or not, changes by a migration only (collective)."""
+        version, level = self._levels.get(body.name, (None, 1.0))
+        if version != body.layout_version:
+            level = body.imbalance()
+            self._levels[body.name] = (body.layout_version, level)
+        return level
 
     def after_step(self, step: int, t: float, writer) -> None:
         """Measure, re-partition where due, write the history rows of step ``step`` ending at
@@ -56,7 +67,7 @@ class LoadBalance:
             return
         moved = False
         for b in self.bodies:
-            level = b.imbalance()
+            level = self.imbalance(b)
             # above the limit, unless it is what the last re-partition left (the work only
             # changes by a migration: re-partitioning again would give the same)
             over = self.limit and level > self.limit and level != self._left.get(b.name)
@@ -70,7 +81,7 @@ class LoadBalance:
                 for i, f in enumerate(forces):
                     f.moved_state(b, {k.split(":", 1)[1]: v for k, v in carried.items()
                                       if k.split(":", 1)[0] == str(i)})
-                level, moved = b.imbalance(), True
+                level, moved = self.imbalance(b), True
                 self._left[b.name] = level
                 self.say(f"  t = {t:.6e} s (step {step:,}): re-partitioned '{b.name}' over "
                          f"{self.size} ranks, imbalance {before:.3f} -> {level:.3f} "

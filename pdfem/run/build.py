@@ -12,7 +12,7 @@ ranks and reports what it built with ``say``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +25,6 @@ from pdfem.meshing.quality import MeshQualityError
 from pdfem.run.build_forces import build_forces
 from pdfem.run.build_ice import build_ice_body
 from pdfem.run.parallel import build_structures, report_partitions
-from pdfem.run.parallel import reference as parallel_reference
 from pdfem.run.timesteps import choose_time_steps
 
 
@@ -47,7 +46,6 @@ class Setup:
     particles: int
     bonds: int
     cut: int                     # bonds broken before the run (pre-cracks)
-    reference: dict = field(default_factory=dict)  # body name -> (x0 m, vol m^3), global order
 
 
 def check_mesh(st, cfg, file: str) -> None:
@@ -179,7 +177,6 @@ def build(case: Case, out: Path, comm, say, steps: tuple[float, int, int] | None
     for b, (n, nb, _) in zip(bodies, sizes):
         say(f"  ice '{b.name}': {n:,} particles, {nb:,} bonds, dx = {b.dx:g} m, "
             f"horizon = {b.delta:g} m, s0 = {b.s0:.3e}, stable step {stable[b.name]:.3e} s")
-    reference = {b.name: parallel_reference(b) for b in bodies}
     counts = tuple(sum(c) for c in zip(*sizes)) if sizes else (0, 0, 0)
     report_partitions(bodies, comm, say)
     pairs = contact_pairs(case, bodies, structures, comm)
@@ -201,4 +198,4 @@ def build(case: Case, out: Path, comm, say, steps: tuple[float, int, int] | None
     forces = build_forces(case, bodies)
     coupler = Coupler(bodies, structures, pairs, dt, n_ice, n_st, forces, comm)
     return Setup(bodies, structures, pairs, forces, coupler, probes, dt, n_ice, n_st, nsteps,
-                 stable, *counts, reference=reference)
+                 stable, *counts)

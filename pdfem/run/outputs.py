@@ -246,8 +246,8 @@ class Outputs:
                     self.ice_writer.add_ice_body(b.name, x0, vol, index=index)
                     counts = rank_grid_files(self.writer.path, b.layout.comm.allgather(len(index)))
                     self.writer.add_rank_ice_body(b.name, counts, vol is not None)
-                else:
-                    self.ice_writer.add_ice_body(b.name, *setup.reference[b.name])
+                else:  # gathered to rank 0 for the writer, not kept
+                    self.ice_writer.add_ice_body(b.name, b.gather(b.x0), b.gather(b.vol))
         except ValueError as exc:  # only when appending: the file holds other particles
             raise InputError(str(self.ice_writer.path), "--restart", f"the results file does "
                              f"not fit this run ({exc}); a run with run.output_per_rank "

@@ -47,12 +47,6 @@ def build_structures(configs, out: Path, file: str, comm) -> list:
     return build_all(configs, out, file, remesh=False)
 
 
-def reference(b) -> tuple:
-    """``(x0 m, vol m^3)`` of the whole body in global order on rank 0 (``(None, None)``
-    elsewhere; collective)."""
-    return b.gather(b.x0), b.gather(b.vol)
-
-
 def report_partitions(bodies: list, comm, say=lambda s: None) -> None:
     """Report how each body is split over the ranks (nothing on one rank; collective)."""
     if comm.size == 1:

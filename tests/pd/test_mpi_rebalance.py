@@ -354,3 +354,41 @@ def test_bad_rebalance_settings_are_refused(extra, field):
     with pytest.raises(InputError) as err:
         parse_case(CASE.format(extra=extra), "case.toml")
     assert err.value.field == field and ("rebalance" in err.value.message or "> 1" in err.value.message)
+
+
+def test_bond_work_counts_both_ends_and_is_measured_once_per_layout():
+    """A rank's bond work (the weights of the bisection and the imbalance) counts each local
+    bond at both ends, as the two bincounts of its row and its partner did; the run's load
+    balance measures a body again only after its particles moved (the work changes by a
+    migration only)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from pdfem.geometry.shapes import Box
+    from pdfem.pd.body import IceBody
+    from pdfem.pd.layout.migration import bond_work
+    from pdfem.pd.materials.lps import IceMaterial
+    from pdfem.run.balance import LoadBalance
+
+    mat = IceMaterial(density=900.0, youngs_modulus=4e9, poisson_ratio=0.3, fracture_energy=1.0)
+    b = IceBody.from_shape("b", Box((0, 0, 0), (0.07, 0.05, 0.04)), mat, 0.01, 0.03015)
+    rows = np.repeat(np.arange(b.n), np.diff(b.row_ptr))
+    expected = np.bincount(rows, minlength=b.n) + np.bincount(b.nbr, minlength=b.n)
+    work = bond_work(b.row_ptr, b.nbr, b.n)
+    assert work.dtype == np.int64 and np.array_equal(work, expected)
+    assert np.array_equal(bond_work(np.zeros(1, np.int64), np.zeros(0, np.int32), 0), [])
+
+    calls = []
+    body = SimpleNamespace(name="b", layout_version=0,
+                           imbalance=lambda: calls.append(1) or 1.25)
+    balance = LoadBalance(SimpleNamespace(run=SimpleNamespace(rebalance_every=0,
+                                                              rebalance_imbalance=0.0)),
+                          SimpleNamespace(bodies=[body], coupler=None), SimpleNamespace(size=2))
+    history = []
+    writer = SimpleNamespace(append_history=lambda group, t, row: history.append(row))
+    for step in range(1, 4):
+        balance.after_step(step, 1e-6 * step, writer)
+    body.layout_version = 1  # the particles moved
+    balance.after_step(4, 4e-6, writer)
+    assert len(calls) == 2 and [r["imbalance"] for r in history] == [1.25] * 4
