@@ -8,7 +8,8 @@ and power. Written with numpy these were a dozen small-array operations each (``
 quadratic-element propeller. Here each is one pass over its nodes, with no temporaries:
 
 * :func:`inertial_loads`: ``f = -m [R^T a_c + w' x r + w x (w x r) + 2 w x u_e']`` per node,
-  written into the DOF vector, ``r = X - c0 + u_e`` (:mod:`pdfem.motion.moving_frame`; the
+  less the geometric stiffness force ``s^2 K_sigma u``, written into the DOF vector,
+  ``r = X - c0 + u_e`` (:mod:`pdfem.motion.moving_frame`; the
   same products and sums in numpy's order, so the same bits);
 * :func:`surface_world`: ``x = c + R r`` and ``v = c' + w x (R r) + R u_e'`` of the surface
   nodes (world axes);
@@ -47,8 +48,10 @@ def _cross(p0, p1, p2, q0, q1, q2):
 
 
 @numba.njit(cache=True)
-def inertial_loads(r0, u, v, dofs, mass, acc_c, w_dot, w, out):
-    """Inertial loads (N, DOF vector ``out``, frame axes) on every node.
+def inertial_loads(r0, u, v, dofs, mass, acc_c, w_dot, w, s2, ksu, out):
+    """Inertial loads (N, DOF vector ``out``, frame axes) on every node, less ``s2 * ksu``
+    (the centrifugal prestress's geometric stiffness force ``s^2 K_sigma u``; none when
+    ``ksu`` is empty).
 
     Parameters
     ----------
@@ -64,9 +67,12 @@ def inertial_loads(r0, u, v, dofs, mass, acc_c, w_dot, w, out):
         (3,) the centre's acceleration in frame axes, R^T c'' (m/s^2).
     w_dot, w
         (3,) angular acceleration (rad/s^2) and velocity (rad/s).
+    s2, ksu
+        The ramp's ``s(t)^2`` and ``K_sigma u`` (N, (n,) or empty).
     out
         (n,) the loads, written.
     """
+    stiff = ksu.shape[0] == out.shape[0]
     for k in range(r0.shape[0]):
         d0, d1, d2 = dofs[0, k], dofs[1, k], dofs[2, k]
         r_0, r_1, r_2 = r0[k, 0] + u[d0], r0[k, 1] + u[d1], r0[k, 2] + u[d2]
@@ -75,16 +81,14 @@ def inertial_loads(r0, u, v, dofs, mass, acc_c, w_dot, w, out):
         g0, g1, g2 = _cross(w[0], w[1], w[2], c0, c1, c2)
         k0, k1, k2 = _cross(w[0], w[1], w[2], v[d0], v[d1], v[d2])
         m = -mass[k]
-        out[d0] = m * (acc_c[0] + e0 + g0 + 2.0 * k0)
-        out[d1] = m * (acc_c[1] + e1 + g1 + 2.0 * k1)
-        out[d2] = m * (acc_c[2] + e2 + g2 + 2.0 * k2)
-
-
-@numba.njit(cache=True)
-def subtract_scaled(f, factor, x):
-    """``f -= factor * x`` in place (numpy's product, then the difference)."""
-    for i in range(f.shape[0]):
-        f[i] = f[i] - factor * x[i]
+        f0 = m * (acc_c[0] + e0 + g0 + 2.0 * k0)
+        f1 = m * (acc_c[1] + e1 + g1 + 2.0 * k1)
+        f2 = m * (acc_c[2] + e2 + g2 + 2.0 * k2)
+        if stiff:   # numpy's product, then the difference
+            f0, f1, f2 = f0 - s2 * ksu[d0], f1 - s2 * ksu[d1], f2 - s2 * ksu[d2]
+        out[d0] = f0
+        out[d1] = f1
+        out[d2] = f2
 
 
 @numba.njit(cache=True)

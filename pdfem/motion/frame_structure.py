@@ -29,10 +29,14 @@ import scipy.sparse as sp
 from pdfem.fem.central_difference_kernels import trapezoid_work
 from pdfem.fem.node_blocks import NodeBlockOperator
 from pdfem.fem.structure import ElasticStructure
-from pdfem.motion.frame_kernels import inertial_loads, subtract_scaled, surface_world
+from pdfem.motion.frame_kernels import inertial_loads, surface_world
 from pdfem.motion.moving_frame import MovingFrame
 from pdfem.motion.shaft_loads import ShaftLoads
 from pdfem.motion.stress_stiffening import centrifugal_stiffness
+
+
+_NONE = np.zeros(0)
+"""No geometric stiffness force (:func:`pdfem.motion.frame_kernels.inertial_loads`)."""
 
 
 class FrameStructure(ElasticStructure):
@@ -76,10 +80,9 @@ class FrameStructure(ElasticStructure):
     def _inertial_dofs(self, t: float) -> np.ndarray:
         """Inertial loads (N, DOF vector, frame axes) at time ``t`` (s) on the current state."""
         f = np.empty(self.dofmap.n_dofs)
+        ksu = _NONE if self.K_sigma is None else self.solver.companion_force()
         inertial_loads(self._r0, self.solver.u, self.solver.v, self._dofs, self.node_mass,
-                       *self.frame.inertial_rates(t), f)
-        if self.K_sigma is not None:
-            subtract_scaled(f, self.frame.speed_factor(t)[0] ** 2, self.solver.companion_force())
+                       *self.frame.inertial_rates(t), self.frame.speed_factor(t)[0] ** 2, ksu, f)
         return f
 
     def rotating_stiffness(self, t: float | None = None) -> sp.csr_matrix:

@@ -26,11 +26,17 @@ def test_inertial_loads_are_the_dalembert_loads_bit_for_bit():
     mass = rng.uniform(0.1, 2.0, len(r0))
     acc_c, w_dot, w = rng.standard_normal((3, 3))
     out = np.empty(len(u))
-    inertial_loads(r0, u, v, dofs, mass, acc_c, w_dot, w, out)
+    inertial_loads(r0, u, v, dofs, mass, acc_c, w_dot, w, 0.3, np.zeros(0), out)
     r, ve = r0 + u[dofs.T], v[dofs.T]
     acc = acc_c[None, :] + np.cross(w_dot, r) + np.cross(w, np.cross(w, r)) \
         + 2.0 * np.cross(w, ve)
     assert np.array_equal(out[dofs.T], -mass[:, None] * acc)
+    # with the geometric stiffness force s^2 K_sigma u: numpy's f - s^2 (K_sigma u)
+    ksu = rng.standard_normal(len(u))
+    inertial_loads(r0, u, v, dofs, mass, acc_c, w_dot, w, 0.3, ksu, out)
+    f = np.empty(len(u))
+    f[dofs.T] = -mass[:, None] * acc
+    assert np.array_equal(out, f - 0.3 * ksu)
 
 
 def test_surface_world_is_the_rigid_motion_plus_the_elastic_one():
