@@ -33,7 +33,7 @@ import skfem
 
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.static import static_displacement
-from pdfem.fem.stress import von_mises
+from pdfem.fem.stress import hooke_stress, von_mises
 from pdfem.fem.structure import ElasticStructure
 from pdfem.models import propeller
 
@@ -59,7 +59,6 @@ def point_von_mises(structure: ElasticStructure, points: np.ndarray) -> np.ndarr
     finder = corners.element_finder()
     elements = np.array([_find(finder, p) for p in points])
     out = np.full(len(points), np.nan)
-    lam, mu = structure.material.lame
     mapping = corners._mapping()
     for k in np.flatnonzero(elements >= 0):
         e = elements[k]
@@ -67,8 +66,7 @@ def point_von_mises(structure: ElasticStructure, points: np.ndarray) -> np.ndarr
         b = skfem.Basis(mesh, structure.basis.elem, quadrature=(X, np.ones(1)),
                         elements=np.array([e]))
         g = b.interpolate(structure.solver.u).grad[:, :, 0, 0]
-        eps = 0.5 * (g + g.T)
-        out[k] = float(von_mises(2.0 * mu * eps + lam * np.trace(eps) * np.eye(3)))
+        out[k] = float(von_mises(hooke_stress(g, structure.material)))
     return out
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import skfem
 
-from pdfem.fem.stress import von_mises
+from pdfem.fem.stress import hooke_stress, von_mises
 
 
 @dataclass(frozen=True)
@@ -53,9 +53,6 @@ def probe_values(structure, probe: Probe) -> tuple[np.ndarray, float, np.ndarray
     """Displacement (m, (3,)) of the probe's node, von Mises stress (Pa) of its element and
     its six stress components (Pa, (6,), order of ``VOIGT``: signed, for fatigue counting)."""
     u = structure.solver.u
-    g = (probe.gradient @ u[probe.element_dofs]).reshape(3, 3)
-    eps = 0.5 * (g + g.T)
-    lam, mu = structure.material.lame
-    sigma = 2.0 * mu * eps + lam * np.trace(eps) * np.eye(3)
+    sigma = hooke_stress((probe.gradient @ u[probe.element_dofs]).reshape(3, 3), structure.material)
     return (u[probe.node_dofs].copy(), float(von_mises(sigma)),
             np.array([sigma[i, j] for i, j in VOIGT]))

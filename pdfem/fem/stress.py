@@ -27,6 +27,30 @@ def centre_basis(mesh: FEMesh, element: skfem.Element | None = None) -> skfem.Ce
     return skfem.Basis(mesh.mesh, element or element_for(mesh), quadrature=(X, np.ones(1)))
 
 
+def hooke_stress(grad: np.ndarray, material: ElasticMaterial) -> np.ndarray:
+    """Cauchy stress (Pa) of the linear isotropic material from a displacement gradient.
+
+    Parameters
+    ----------
+    grad
+        (3, 3, ...) ``du_i / dx_j`` (any trailing axes: elements, points).
+    material
+        The elastic material (its Lame constants).
+
+    Returns
+    -------
+    numpy.ndarray
+        (3, 3, ...) ``2 mu eps + lam tr(eps) I``, ``eps`` the symmetric part of ``grad``.
+    """
+    eps = 0.5 * (grad + np.swapaxes(grad, 0, 1))
+    lam, mu = material.lame
+    tr = eps[0, 0] + eps[1, 1] + eps[2, 2]
+    sigma = 2.0 * mu * eps
+    for i in range(3):
+        sigma[i, i] += lam * tr
+    return sigma
+
+
 def element_stress(basis: skfem.CellBasis, u: np.ndarray, material: ElasticMaterial) -> np.ndarray:
     """Cauchy stress (Pa) per element at the evaluation point of ``basis``.
 
@@ -45,13 +69,7 @@ def element_stress(basis: skfem.CellBasis, u: np.ndarray, material: ElasticMater
         (Ne, 3, 3) symmetric stress tensors.
     """
     grad = basis.interpolate(u).grad[:, :, :, 0]          # (3, 3, Ne): du_i / dx_j
-    eps = 0.5 * (grad + grad.transpose(1, 0, 2))
-    lam, mu = material.lame
-    tr = eps[0, 0] + eps[1, 1] + eps[2, 2]
-    sigma = 2.0 * mu * eps
-    for i in range(3):
-        sigma[i, i] += lam * tr
-    return np.ascontiguousarray(sigma.transpose(2, 0, 1))
+    return np.ascontiguousarray(hooke_stress(grad, material).transpose(2, 0, 1))
 
 
 def von_mises(sigma: np.ndarray) -> np.ndarray:

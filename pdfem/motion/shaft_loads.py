@@ -65,7 +65,7 @@ import re
 import numpy as np
 import scipy.sparse as sp
 
-from pdfem.fem.stress import von_mises
+from pdfem.fem.stress import hooke_stress, von_mises
 from pdfem.geometry.vectors import cross
 from pdfem.motion.frame_kernels import StepVectors, support_torque_power
 
@@ -254,13 +254,7 @@ class ShaftLoads:
         :meth:`pdfem.fem.structure.ElasticStructure.von_mises` (one sparse product)."""
         s = self.structure
         grad = (self._grad @ s.solver.u).reshape(3, 3, -1)
-        eps = 0.5 * (grad + grad.transpose(1, 0, 2))
-        lam, mu = s.material.lame
-        sigma = 2.0 * mu * eps
-        tr = eps[0, 0] + eps[1, 1] + eps[2, 2]
-        for i in range(3):
-            sigma[i, i] += lam * tr
-        return von_mises(sigma.transpose(2, 0, 1))
+        return von_mises(hooke_stress(grad, s.material).transpose(2, 0, 1))
 
     def strain_energy(self) -> float:
         """Strain energy ``1/2 u . K u`` (J), with the integrator's ``K u`` (no product)."""

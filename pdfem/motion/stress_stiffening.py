@@ -21,6 +21,7 @@ import scipy.sparse as sp
 
 from pdfem.fem.assembly import assemble, initial_stress_matrices
 from pdfem.fem.static import static_displacement
+from pdfem.fem.stress import hooke_stress
 from pdfem.geometry.vectors import cross
 
 if TYPE_CHECKING:
@@ -32,14 +33,7 @@ def prestress(structure: ElasticStructure, force: np.ndarray) -> np.ndarray:
     """(3, 3, Ne, Nq) linear static stress (Pa) at the quadrature points of the structure's
     basis under the DOF force vector ``force`` (N), its supports held."""
     u = structure.dofmap.to_dofs(static_displacement(structure, force))
-    grad = structure.basis.interpolate(u).grad
-    eps = 0.5 * (grad + grad.transpose(1, 0, 2, 3))
-    lam, mu = structure.material.lame
-    sigma = 2.0 * mu * eps
-    tr = eps[0, 0] + eps[1, 1] + eps[2, 2]
-    for i in range(3):
-        sigma[i, i] += lam * tr
-    return sigma
+    return hooke_stress(structure.basis.interpolate(u).grad, structure.material)
 
 
 def centrifugal_stiffness(structure: ElasticStructure, frame: MovingFrame,
