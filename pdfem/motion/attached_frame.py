@@ -36,9 +36,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pdfem.geometry.vectors import cross
 from pdfem.fem.central_difference_kernels import trapezoid_work
 from pdfem.motion.frame_structure import FrameStructure
+from pdfem.motion.moving_frame import frame_point_velocity, world_motion
 from pdfem.motion.rotation import rotation_vector
 from pdfem.motion.ship import Ship
 
@@ -92,14 +92,11 @@ class ShipFrame:
     def to_world(self, t: float, r: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World positions (m) and velocities (m/s) of nodes at ``r`` with relative velocities
         ``v`` (body axes)."""
-        f = self.state(t)
-        rr = r @ f["R"].T
-        return f["c"] + rr, f["c_dot"] + cross(f["w"], rr) + v @ f["R"].T
+        return world_motion(self.state(t), r, v)
 
     def frame_velocity(self, t: float, r: np.ndarray) -> np.ndarray:
         """(N, 3) world velocity (m/s) of the hull's points at the nodes ``r``."""
-        f = self.state(t)
-        return f["c_dot"] + cross(f["w"], r @ f["R"].T)
+        return frame_point_velocity(self.state(t), r)
 
 
 class AttachedStructure(FrameStructure):

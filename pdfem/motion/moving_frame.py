@@ -122,12 +122,23 @@ class MovingFrame:
     def to_world(self, t: float, r: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World positions (m) and velocities (m/s), (N, 3), of nodes at ``r`` = X - c0 + u_e
         with relative velocities ``v`` = u_e' (frame axes)."""
-        f = self.state(t)
-        rr = r @ f["R"].T
-        return f["c"] + rr, f["c_dot"] + cross(f["w"], rr) + v @ f["R"].T
+        return world_motion(self.state(t), r, v)
 
     def frame_velocity(self, t: float, r: np.ndarray) -> np.ndarray:
         """(N, 3) world velocity (m/s) of the frame's points that coincide with the nodes at
         ``r`` = X - c0 + u_e (the drive's velocity there, without the elastic motion)."""
-        f = self.state(t)
-        return f["c_dot"] + cross(f["w"], r @ f["R"].T)
+        return frame_point_velocity(self.state(t), r)
+
+
+def world_motion(frame: dict, r: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World positions (m) and velocities (m/s), (N, 3), of nodes at ``r`` = X - c0 + u_e with
+    relative velocities ``v`` = u_e' (frame axes), for a frame ``state`` (``R``, ``c``,
+    ``c_dot``, ``w`` in world axes): ``c + R r`` and ``c' + w x (R r) + R v``."""
+    rr = r @ frame["R"].T
+    return frame["c"] + rr, frame["c_dot"] + cross(frame["w"], rr) + v @ frame["R"].T
+
+
+def frame_point_velocity(frame: dict, r: np.ndarray) -> np.ndarray:
+    """(N, 3) world velocity (m/s) of the frame's points at ``r`` (frame axes, from its centre),
+    for a frame ``state``: ``c' + w x (R r)``."""
+    return frame["c_dot"] + cross(frame["w"], r @ frame["R"].T)
