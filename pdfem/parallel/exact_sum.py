@@ -23,6 +23,27 @@ MAX_PARTIALS = 64
 about 40 (the exponent range over the mantissa width)."""
 
 
+@numba.njit(cache=True, inline="always")
+def grow(x, partials, m):
+    """Add the finite value ``x`` to the expansion ``partials[:m]`` (Shewchuk's grow-expansion,
+    as :func:`math.fsum`); returns its new length."""
+    if x == 0.0:  # adds nothing to the exact sum
+        return m
+    i = 0
+    for q in range(m):
+        y = partials[q]
+        if abs(x) < abs(y):
+            x, y = y, x
+        hi = x + y
+        lo = y - (hi - x)
+        if lo != 0.0:
+            partials[i] = lo
+            i += 1
+        x = hi
+    partials[i] = x
+    return i + 1
+
+
 @numba.njit(cache=True)
 def expansions(values, rows, every, out):
     """Exact expansions of the column sums of ``values`` (n, k) over ``rows`` (indices; all
@@ -38,23 +59,30 @@ def expansions(values, rows, every, out):
             if not np.isfinite(x):
                 m = -1
                 break
-            if x == 0.0:  # adds nothing to the exact sum
-                continue
-            i = 0
-            for q in range(m):
-                y = out[col, q]
-                if abs(x) < abs(y):
-                    x, y = y, x
-                hi = x + y
-                lo = y - (hi - x)
-                if lo != 0.0:
-                    out[col, i] = lo
-                    i += 1
-                x = hi
-            out[col, i] = x
-            m = i + 1
+            m = grow(x, out[col], m)
         count[col] = m
     return count
+
+
+@numba.njit(cache=True)
+def weighted_segment_expansions(w, values, idx, ptr, out, count):
+    """Per segment s (rows ``idx[ptr[s]:ptr[s+1]]``), the exact expansions of ``sum w_i`` and
+    of ``sum w_i values[i, c]`` (each product rounded once, as numpy's ``w[:, None] * values``)
+    into ``out[s, 0]`` and ``out[s, 1 + c]`` ((S, 1 + k, MAX_PARTIALS)), their lengths into
+    ``count`` ((S, 1 + k); -1 where a term is not finite)."""
+    k = values.shape[1]
+    for s in range(ptr.shape[0] - 1):
+        for col in range(k + 1):
+            partials = out[s, col]
+            m = 0
+            for t in range(ptr[s], ptr[s + 1]):
+                i = idx[t]
+                x = w[i] if col == 0 else w[i] * values[i, col - 1]
+                if not np.isfinite(x):
+                    m = -1
+                    break
+                m = grow(x, partials, m)
+            count[s, col] = m
 
 
 def local_expansion(values: np.ndarray, rows: np.ndarray | None = None) -> list:
@@ -98,6 +126,48 @@ def exact_sums(arrays: list, comm, rows: np.ndarray | None = None) -> list:
         out.append(float(total[0]) if np.ndim(values) == 1
                    else total.reshape(np.shape(values)[1:]))
     return out
+
+
+def exact_weighted_sums(w: np.ndarray, values: np.ndarray, segments: list, comm) -> np.ndarray:
+    """Per segment of rows, the correctly rounded totals over all ranks of ``sum w_i`` and
+    ``sum w_i values[i]``, the products rounded once: ``(S, 1 + k)``, column 0 the weights'
+    sum (one kernel pass and one gather for all segments; collective under MPI).
+
+    Parameters
+    ----------
+    w
+        (n,) weights (e.g. particle volumes, m^3).
+    values
+        (n, k) values per row (e.g. force densities, N/m^3).
+    segments
+        S arrays of row indices (this process's rows of each segment).
+    comm
+        The communicator (``allgather``, ``allreduce_sum``).
+    """
+    w = np.ascontiguousarray(w, dtype=np.float64)
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    ptr = np.zeros(len(segments) + 1, dtype=np.int64)
+    ptr[1:] = np.cumsum([len(g) for g in segments])
+    idx = (np.concatenate(segments).astype(np.int64, copy=False) if segments
+           else np.zeros(0, dtype=np.int64))
+    k = 1 + values.shape[1]
+    out = np.empty((len(segments), k, MAX_PARTIALS))
+    count = np.empty((len(segments), k), dtype=np.int64)
+    weighted_segment_expansions(w, values, idx, ptr, out, count)
+    mine = [[row[:c] if c >= 0 else None for row, c in zip(rows, counts)]
+            for rows, counts in zip(out.tolist(), count.tolist())]
+    parts = comm.allgather(mine)
+    total = np.empty((len(segments), k))
+    for s in range(len(segments)):
+        for col in range(k):
+            terms = [p[s][col] for p in parts]
+            if any(t is None for t in terms):  # not finite somewhere: a plain sum
+                rows = idx[ptr[s]:ptr[s + 1]]
+                x = w[rows] if col == 0 else w[rows] * values[rows, col - 1]
+                total[s, col] = comm.allreduce_sum(float(x.sum()))
+            else:
+                total[s, col] = math.fsum([x for t in terms for x in t])
+    return total
 
 
 def exact_sum(values: np.ndarray, comm, rows: np.ndarray | None = None):

@@ -51,6 +51,7 @@ from pdfem.pd.failure.crushed_shear import CrushedShear
 from pdfem.pd.failure.damaged_volume import IntactVolume
 from pdfem.pd.failure.fracture import FractureLedger
 from pdfem.pd.failure.strain_rate import RateTracker
+from pdfem.pd.integrate import verlet_kick
 from pdfem.pd.layout import rebalance as balance
 from pdfem.pd.layout.base import Layout, WholeLayout
 from pdfem.pd.layout.blocks import layout_workspace
@@ -127,6 +128,7 @@ class IceBody:
         self.failure = failure or CriticalStretch.from_material(material, self.delta)
         self.nofail = np.zeros(n, dtype=np.uint8) if nofail is None else nofail
         self.fixed = np.zeros(n, dtype=bool) if fixed is None else fixed
+        self._fixed_rows = (self.fixed, np.flatnonzero(self.fixed))  # (the mask, its rows)
         self.y = s.get("y", x0.copy())
         self.v = s.get("v", np.zeros_like(x0))
         self.f = s.get("f", np.zeros_like(x0))
@@ -332,6 +334,7 @@ class IceBody:
         region's reaction."""
         self.add_velocity_constraint(mask, name=name or next_name(self.constraints, "fixed"))
         self.fixed |= mask
+        self._fixed_rows = (self.fixed, np.flatnonzero(self.fixed))
 
     def stable_time_step(self) -> float:
         """A stable velocity-Verlet step (s) of the whole body, safe for every body shape
@@ -383,7 +386,10 @@ class IceBody:
 
     def apply_constraints(self, t: float, step: float = 0.0) -> None:
         """The prescribed motion at ``t`` (s); with ``step``, the drift velocity over it."""
-        self.v[self.fixed] = 0.0
+        mask, rows = self._fixed_rows
+        if mask is not self.fixed:  # a new fixed set (taken from elsewhere)
+            self._fixed_rows = mask, rows = self.fixed, np.flatnonzero(self.fixed)
+        self.v[rows] = 0.0
         for c in self.constraints:
             c.impose(self, t, step)
 
@@ -407,8 +413,11 @@ class IceBody:
         t0 = self.time
         if self.rates is not None:
             self.rates.advance(self.theta, dt)
-        self._force0 = applied_forces(self) if self.constraints else None
-        self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
+        # the forces on the prescribed regions at the step's start, for the work of those
+        # that move (a held region does none)
+        moving = any(c.moves for c in self.constraints)
+        self._force0 = applied_forces(self) if moving else None
+        verlet_kick(self.v, self.f, 1.0 / self.material.density, half, self.gravity)
         self.apply_constraints(t0, dt)
         y_old = self.y.copy() if keep_old else None
         if self.shear is not None:  # the springs advance by this step's change of the bonds
@@ -422,9 +431,9 @@ class IceBody:
         """Second half of the step begun by :meth:`begin_step`, once ``f`` holds the forces at
         the new positions: half kick, constraints, work of the constraints."""
         half = 0.5 * dt
-        self.v += half * (self.f * (1.0 / self.material.density) + self.gravity)
+        verlet_kick(self.v, self.f, 1.0 / self.material.density, half, self.gravity)
         self.apply_constraints(self.time)
-        if self.constraints:
+        if self._force0 is not None:
             self.local_external_work += step_work(self, self._force0, dt)
 
     def step(self, dt: float, after_drift=None) -> int:
@@ -476,10 +485,12 @@ class IceBody:
         """Kinetic energy of the whole body, J."""
         return diagnostics.kinetic_energy(self)
 
-    def strain_energy(self) -> float:
+    def strain_energy(self, forces_current: bool = False) -> float:
         """Elastic energy of the unbroken bonds (and of the crushed bonds that still push) at
-        the current positions, the whole body, J."""
-        return diagnostics.strain_energy(self)
+        the current positions, the whole body, J; ``forces_current``: the forces were last
+        computed at these positions with these bonds (after a time step; skips a pass,
+        :func:`pdfem.pd.diagnostics.strain_energy`)."""
+        return diagnostics.strain_energy(self, forces_current)
 
     def momentum(self) -> np.ndarray:
         """Linear momentum (3,) of the whole body, kg m/s."""

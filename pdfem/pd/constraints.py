@@ -106,15 +106,12 @@ def reaction_forces(body) -> np.ndarray:
     summed over the region's particles on every process, correctly rounded (the body's layout:
     the same on 1 and N ranks; collective)."""
     cs = body.constraints
-    arrays = []   # per region sum_i V_i and sum_i V_i f_i, all summed in one collective
-    for c in cs:
-        vol = body.vol[c.index]
-        arrays += [vol, vol[:, None] * body.f[c.index]]
-    sums = body.layout.totals(arrays)
+    # per region sum_i V_i and sum_i V_i f_i, all in one pass and one collective
+    sums = body.layout.weighted_sums(body.vol, body.f, [c.index for c in cs])
     rho, out = body.material.density, np.zeros((len(cs), 3))
     for k, c in enumerate(cs):
-        mass = rho * float(sums[2 * k])
-        out[k] = mass * (c.acceleration(body.time) - body.gravity) - sums[2 * k + 1]
+        mass = rho * float(sums[k, 0])
+        out[k] = mass * (c.acceleration(body.time) - body.gravity) - sums[k, 1:]
     return out
 
 

@@ -27,14 +27,23 @@ def kinetic_energy(body) -> float:
     return 0.5 * body.material.density * float(body.layout.owned_sum(body.vol * vv))
 
 
-def strain_energy(body) -> float:
+def strain_energy(body, forces_current: bool = False) -> float:
     """Elastic energy (J) of the whole body at the current positions: the unbroken bonds, with
     the dilatation of the current bond set (bonds broken this step excluded), and the crushed
-    bonds that still push (:mod:`pdfem.pd.failure.crushed_shear`)."""
+    bonds that still push (:mod:`pdfem.pd.failure.crushed_shear`).
+
+    With ``forces_current`` the body's own dilatation ``theta`` is taken instead of a
+    dilatation pass: right when the last force computation was at the current positions and
+    broke no bond (so after every time step, which recomputes the forces once bonds broke, and
+    after a restart, which restores ``theta``); the pair loop made it with the same kernel, so
+    the same bits (the full-family reference loop sums in another order and takes its pass)."""
     mat, b, lay = body.material, body.bonds, body.layout
-    theta = np.empty(body.n)
-    kernels.dilatation(body.y, b.row_ptr, b.nbr, b.xi_len, b.weight, SIGNED, body.vol, body.m,
-                       theta, body.workspace)
+    if forces_current and body.family is None:
+        theta = body.theta.copy()
+    else:
+        theta = np.empty(body.n)
+        kernels.dilatation(body.y, b.row_ptr, b.nbr, b.xi_len, b.weight, SIGNED, body.vol,
+                           body.m, theta, body.workspace)
     lay.exchange(theta)
     W = kernels.strain_energy(body.y, b.row_ptr, b.nbr, b.xi_len, b.weight, SIGNED, body.vol,
                               body.m, theta, mat.K, mat.mu, body.workspace)

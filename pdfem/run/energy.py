@@ -79,7 +79,7 @@ class EnergyBalance:
         b, s, c = self.bodies, self.structures, self.coupler
         terms = [x.energy_terms() for x in s]
         e = {"kinetic": sum(x.kinetic_energy() for x in b),
-             "strain": sum(x.strain_energy() for x in b),
+             "strain": sum(x.strain_energy(forces_current=True) for x in b),
              "external_work": sum(x.external_work for x in b),
              "fracture_dissipated": sum(x.fracture_dissipated for x in b),
              "structure_kinetic": sum(x.kinetic_energy() for x in s),

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from pdfem.parallel.comm import SerialComm
-from pdfem.parallel.exact_sum import exact_sum, exact_sums
+from pdfem.parallel.exact_sum import exact_sum, exact_sums, exact_weighted_sums
 
 
 def test_columns_are_the_correctly_rounded_sums_in_any_order():
@@ -43,3 +43,41 @@ def test_several_arrays_in_one_collective_give_each_array_s_sum():
     assert got[0] == math.fsum(arrays[0])
     assert got[1].tolist() == [math.fsum(arrays[1][:, c]) for c in range(3)]
     assert got[2].tolist() == [0.0, 0.0, 0.0]
+
+
+class _TwoRanks(SerialComm):
+    """A serial communicator that reports this process's part twice, as two ranks holding the
+    same rows would (the gathered expansions of both are rounded once)."""
+
+    def allgather(self, obj):
+        return [obj, obj]
+
+    def allreduce_sum(self, value):
+        return value + value
+
+
+def test_weighted_segment_sums_are_the_correctly_rounded_sums_of_the_rounded_products():
+    rng = np.random.default_rng(12)
+    w = rng.uniform(1e-7, 2e-6, 900)                     # particle volumes, m^3
+    f = rng.normal(size=(900, 3)) * 1e9                  # force densities, N/m^3
+    f[100:200] = -f[:100]                                # cancelling rows
+    segments = [rng.permutation(900)[:160], np.arange(300, 600), np.zeros(0, dtype=np.int64)]
+    got = exact_weighted_sums(w, f, segments, SerialComm())
+    assert got.shape == (3, 4)
+    for s, rows in enumerate(segments):
+        prod = w[rows, None] * f[rows]                   # numpy's rounded products
+        assert got[s, 0] == math.fsum(w[rows])
+        assert got[s, 1:].tolist() == [math.fsum(prod[:, c]) for c in range(3)]
+    doubled = exact_weighted_sums(w, f, segments, _TwoRanks())
+    for s, rows in enumerate(segments):
+        prod = w[rows, None] * f[rows]
+        assert doubled[s, 1:].tolist() == [math.fsum(np.concatenate([prod[:, c]] * 2))
+                                           for c in range(3)]
+
+
+def test_weighted_segment_sums_with_a_non_finite_value_fall_back_to_a_plain_sum():
+    w = np.ones(4)
+    f = np.array([[1.0, 0.0, 0.0], [np.nan, 0.0, 0.0], [2.0, 1.0, 0.0], [3.0, 0.0, 0.0]])
+    got = exact_weighted_sums(w, f, [np.array([0, 1, 2]), np.array([2, 3])], SerialComm())
+    assert math.isnan(got[0, 1]) and got[0, 2] == 1.0 and got[0, 0] == 3.0
+    assert got[1].tolist() == [2.0, 5.0, 1.0, 0.0]

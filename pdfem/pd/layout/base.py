@@ -25,7 +25,7 @@ from typing import Protocol
 import numpy as np
 
 from pdfem.parallel.comm import SerialComm
-from pdfem.parallel.exact_sum import exact_sum, exact_sums
+from pdfem.parallel.exact_sum import exact_sum, exact_weighted_sums
 
 
 class Layout(Protocol):
@@ -56,8 +56,10 @@ class Layout(Protocol):
         """Correctly rounded sum of every row of ``values`` (rows of owned particles only)
         over every process (collective)."""
 
-    def totals(self, arrays: list) -> list:
-        """:meth:`total` of each array of ``arrays``, in one collective."""
+    def weighted_sums(self, w: np.ndarray, values: np.ndarray, segments: list) -> np.ndarray:
+        """Per segment of rows (this process's rows, owned particles only), the correctly
+        rounded ``sum w`` and ``sum w values`` over every process, ``(S, 1 + k)``
+        (:func:`pdfem.parallel.exact_sum.exact_weighted_sums`; collective)."""
 
     def allsum(self, value):
         """A per-process value summed over the processes, in rank order (collective)."""
@@ -99,9 +101,10 @@ class WholeLayout:
         """The correctly rounded sum of every row of ``values``."""
         return exact_sum(values, self.comm)
 
-    def totals(self, arrays: list) -> list:
-        """:meth:`total` of each array of ``arrays``."""
-        return exact_sums(arrays, self.comm)
+    def weighted_sums(self, w: np.ndarray, values: np.ndarray, segments: list) -> np.ndarray:
+        """Per segment of rows, ``sum w`` and ``sum w values``, correctly rounded over the
+        processes (:func:`pdfem.parallel.exact_sum.exact_weighted_sums`; collective)."""
+        return exact_weighted_sums(w, values, segments, self.comm)
 
     def allsum(self, value):
         """``value`` itself."""

@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from pdfem.parallel.exact_sum import exact_sum, exact_sums
+from pdfem.parallel.exact_sum import exact_sum, exact_weighted_sums
 from pdfem.pd.layout.base import WholeLayout
 
 
@@ -129,9 +129,10 @@ class HaloLayout:
         every rank (collective)."""
         return exact_sum(values, self.comm)
 
-    def totals(self, arrays: list) -> list:
-        """:meth:`total` of each array of ``arrays``, in one collective."""
-        return exact_sums(arrays, self.comm)
+    def weighted_sums(self, w: np.ndarray, values: np.ndarray, segments: list) -> np.ndarray:
+        """Per segment of rows, ``sum w`` and ``sum w values``, correctly rounded over the
+        processes (:func:`pdfem.parallel.exact_sum.exact_weighted_sums`; collective)."""
+        return exact_weighted_sums(w, values, segments, self.comm)
 
     def allsum(self, value):
         """``value`` summed over the ranks in rank order (collective)."""
