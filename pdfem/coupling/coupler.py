@@ -57,7 +57,7 @@ from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.drift import drift
 from pdfem.coupling.facet_loads import FacetLoads, collect_facet_loads
 from pdfem.coupling.impulse_work import ImpulseWork
-from pdfem.geometry.vectors import cross
+from pdfem.geometry.vectors import resultant
 from pdfem.parallel.comm import SerialComm
 from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
 
@@ -279,8 +279,8 @@ class Coupler:
         D = self.dt
         for p, impulse in zip(self.pairs, pair_impulse):
             p.contacts = int(self.comm.allreduce_sum(p.contacts))
-            p.force = impulse.sum(axis=0) / D
-            p.moment = cross(p.structure.surface_points(), impulse).sum(axis=0) / D
+            force, moment = resultant(p.structure.surface_points(), impulse)
+            p.force, p.moment = force / D, moment / D
         collect_facet_loads(self.records, D)
         self.time += D
         return broken

@@ -154,8 +154,9 @@ def exact_weighted_sums(w: np.ndarray, values: np.ndarray, segments: list, comm)
     out = np.empty((len(segments), k, MAX_PARTIALS))
     count = np.empty((len(segments), k), dtype=np.int64)
     weighted_segment_expansions(w, values, idx, ptr, out, count)
+    used = out[:, :, :max(int(count.max(initial=0)), 0)].tolist()
     mine = [[row[:c] if c >= 0 else None for row, c in zip(rows, counts)]
-            for rows, counts in zip(out.tolist(), count.tolist())]
+            for rows, counts in zip(used, count.tolist())]
     parts = comm.allgather(mine)
     total = np.empty((len(segments), k))
     for s in range(len(segments)):
