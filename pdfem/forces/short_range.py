@@ -207,9 +207,7 @@ class ShortRangeContact(ParticleForce):
         self.n_buckets = 0
         self._size = -1
         self._start = np.empty(1, dtype=np.int64)
-        self._cap = _INITIAL_CAPACITY
-        self._pair = np.empty((self._chunks_wanted * self._cap, 2), dtype=np.int32)
-        self._val = np.empty((self._chunks_wanted * self._cap, 2))
+        self._cap = _INITIAL_CAPACITY  # candidate slots per chunk of the search (grows)
         # the list: owned rows, CSR of partners with the pairs' r_ij and k_ij V_i V_j
         self._rows = np.empty(0, dtype=np.int64)
         self._row_ptr = np.zeros(1, dtype=np.int64)
@@ -268,11 +266,11 @@ class ShortRangeContact(ParticleForce):
         self.n_buckets = int(np.prod(fold))
         return dims, pad, fold, self.n_buckets
 
-    def _find(self, y) -> np.ndarray:
-        """The candidate pairs of the local particles at ``y`` into ``self._pair``,
-        ``self._val``; returns the count per chunk (chunk c in slots ``[c cap, (c+1) cap)``)."""
+    def _find(self, y) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The candidate pairs of the local particles at ``y``: their count per chunk and the
+        buffers ``pair``, ``val`` of :class:`Found` (chunk c in slots ``[c cap, (c+1) cap)``)."""
         h, n = self.halo, y.shape[0]
-        lo, hi, _ = bounding_box(y)
+        lo, hi, _ = bounding_box(y) if n else (np.zeros(3), np.zeros(3), True)
         dims, pad, fold, nb = self._grid(lo, hi, n)
         ijk, key, bucket, perm = self._ijk[:n], self._key[:n], self._bucket[:n], self._perm[:n]
         ys, ijks, keys, buckets = self._ys[:n], self._ijks[:n], self._keys[:n], self._buckets[:n]
@@ -289,14 +287,13 @@ class ShortRangeContact(ParticleForce):
         grid = Grid(self._side, dims, fold, self.distance_factor, self.radius_factor, self.skin)
         par = n >= SERIAL_BELOW_PARTICLES
         while True:
-            if self._pair.shape[0] < n_chunks * self._cap:
-                self._pair = np.empty((n_chunks * self._cap, 2), dtype=np.int32)
-                self._val = np.empty((n_chunks * self._cap, 2))
-            found = Found(chunk_ptr, self._cap, self._pair, self._val, counts)
+            pair = np.empty((n_chunks * self._cap, 2), dtype=np.int32)
+            val = np.empty((n_chunks * self._cap, 2))
+            found = Found(chunk_ptr, self._cap, pair, val, counts)
             (find_dense if self.dense else find_folded)(par, table, consts, grid, found)
             most = int(counts.max())
             if most <= self._cap:
-                return counts
+                return counts, pair, val
             self._cap = 2 * most
 
     def _build(self) -> None:
@@ -307,7 +304,7 @@ class ShortRangeContact(ParticleForce):
         self.builds += 1
         self._reserve(m)
         self._rows = np.flatnonzero(h.owned).astype(np.int64)
-        counts = self._find(h.y) if m >= 2 else np.zeros(1, dtype=np.int64)
+        counts, pair, val = self._find(h.y)
         entries = 2 * int(counts.sum())
         if self._nbr.shape[0] < entries:
             size = max(entries, self._nbr.shape[0] + self._nbr.shape[0] // 4)
@@ -315,8 +312,8 @@ class ShortRangeContact(ParticleForce):
             self._crit = np.empty(size)
             self._kvv = np.empty(size)
         self._row_ptr = np.empty(m + 1, dtype=np.int64)
-        pair_rows(counts, self._cap, self._pair, self._val, h.owned, self._row_ptr, self._nbr,
-                  self._crit, self._kvv)
+        pair_rows(counts, self._cap, pair, val, h.owned, self._row_ptr, self._nbr, self._crit,
+                  self._kvv)
 
     def _evaluate(self) -> float:
         """The forces at the current positions (rebuilding the list when the halo was

@@ -18,9 +18,11 @@ refresh adds one point-to-point count exchange and one exchange of the ghosts' p
 constants (global number, reference position, volume, contact constant, radius, body).
 
 The skin: 0.3 h. A thicker skin means fewer refreshes but more ghosts (the shell of ghosts is
-``h + s`` thick, so 0.3 h costs 30 % more ghosts than the bare cut-off); a refresh is due when
-a particle moved 0.15 h ~ 0.2 dx, which ice fragments at 20 m/s with steps of 1e-7-1e-6 s take
-hundreds of steps to do, so refreshes are rare and the ghost shell stays thin.
+``h + s`` thick, so 0.3 h costs 30 % more ghosts than the bare cut-off) and more candidates in
+the pair list (an intact cubic lattice has 26 per particle, the sites out to sqrt(3) dx <
+1.35 dx + s = 1.755 dx, none of them interacting); a refresh is due when a particle moved
+0.15 h ~ 0.2 dx, which ice fragments at 20 m/s with steps of 1e-7-1e-6 s take hundreds of
+steps to do, so refreshes are rare and the ghost shell stays thin.
 
 The owned set can change during a run (load balancing moves particles between ranks): a change
 of a body's layout (its ``layout``, ``layout.gid`` or ``layout.owned`` objects) is detected at
