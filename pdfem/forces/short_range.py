@@ -43,10 +43,10 @@ then when some particle, on any rank, has moved more than s/2 from where it was 
 refresh, or when the owned set changed or :meth:`ShortRangeContact.invalidate` was called. The
 skin is the halo's, ``s = 0.3 h``, with the cut-off ``h = max r_ij = 1.35 max(dx)`` (times
 1 + 1e-12). A pair is a candidate when ``|p| < r_ij + s`` at the build (its own r_ij; s
-enlarged by a relative 1e-6 against rounding). Why that is enough: until the next build every
-particle moves less than s/2 from its position at the build, so a pair's distance changes by
-less than s, and every pair with ``|p| < r_ij`` now was a candidate; its partner is local,
-since the halo holds every particle within h + s of the rank's owned ones at the refresh.
+enlarged by a relative 1e-6 against rounding). Why that is enough: until the next build no
+particle is more than s/2 from its position at the build, so a pair's distance changes by at
+most s, and every pair with ``|p| < r_ij`` now was a candidate; its partner is local, since the
+halo holds every particle within h + s of the rank's owned ones at the refresh.
 
 The build: a cell grid of side h + s over the box of the local particles, the particles
 counting-sorted by cell, every pair examined once, from the particle earlier in sorted order
@@ -329,7 +329,7 @@ class ShortRangeContact(ParticleForce):
         pair_forces(rows.shape[0] >= SERIAL_BELOW_PARTICLES, rows, self._row_ptr, self._nbr,
                     self._crit, self._kvv, h.y, h.vol, self._acc, self._hit, self._n_up,
                     self._e_up)
-        n_pairs, energy = tally(rows, self._n_up, self._e_up)
+        n_pairs, energy = tally(rows, self._hit, self._n_up, self._e_up)
         self.n_active = int(n_pairs)
         return float(energy)
 

@@ -69,10 +69,11 @@ def pair_rows(counts, cap, pair, val, owned, row_ptr, nbr, crit, kvv):
 
 @twin(fastmath=False, one_thread="serial")
 def pair_forces(rows, row_ptr, nbr, crit, kvv, y, vol, acc, hit, n_up, e_up):
-    """Short-range force density (N/m^3) of each particle i of ``rows`` (local indices) at the
-    positions ``y`` into ``acc[i]``, from its partners ``nbr[row_ptr[i]:row_ptr[i + 1]]`` in
-    that order; per particle also whether any partner interacts (``hit``), and the number and
-    potential (J) of its interacting pairs with a higher-numbered partner (``n_up``, ``e_up``).
+    """Whether each particle i of ``rows`` (local indices) has an interacting partner at the
+    positions ``y`` (``hit[i]``); if so its short-range force density (N/m^3) into ``acc[i]``,
+    summed over its partners ``nbr[row_ptr[i]:row_ptr[i + 1]]`` in that order, and the number
+    and potential (J) of its interacting pairs with a higher-numbered partner (``n_up[i]``,
+    ``e_up[i]``; all three left as they were where not hit).
 
     A partner j interacts when d = |p| < r_ij, p = y_j - y_i: the force on i is
     -k_ij V_i V_j (r_ij - d) / d p, its potential 1/2 k_ij V_i V_j (r_ij - d)^2. The others add
@@ -108,24 +109,27 @@ def pair_forces(rows, row_ptr, nbr, crit, kvv, y, vol, acc, hit, n_up, e_up):
             if j > i:
                 up += 1
                 e += 0.5 * kvv[s] * (r - d) * (r - d)
-        inv_v = 1.0 / vol[i]
-        acc[i, 0] = fx * inv_v
-        acc[i, 1] = fy * inv_v
-        acc[i, 2] = fz * inv_v
         hit[i] = found
-        n_up[i] = up
-        e_up[i] = e
+        if found:  # the rest is read only where hit
+            inv_v = 1.0 / vol[i]
+            acc[i, 0] = fx * inv_v
+            acc[i, 1] = fy * inv_v
+            acc[i, 2] = fz * inv_v
+            n_up[i] = up
+            e_up[i] = e
 
 
 @numba.njit(cache=True)
-def tally(rows, n_up, e_up):
-    """Interacting pairs and their potential (J) over the particles ``rows``, summed in that
-    order."""
+def tally(rows, hit, n_up, e_up):
+    """Interacting pairs and their potential (J) over the particles ``rows`` that are ``hit``,
+    summed in that order."""
     n = 0
     energy = 0.0
     for t in range(rows.shape[0]):
-        n += n_up[rows[t]]
-        energy += e_up[rows[t]]
+        i = rows[t]
+        if hit[i]:
+            n += n_up[i]
+            energy += e_up[i]
     return n, energy
 
 
