@@ -36,39 +36,49 @@ potential (J)::
 (-dU_ij/dy_i = V_i f_i from this pair), reported by :meth:`ShortRangeContact.potential_energy`.
 The force acts between all pairs closer than r_ij, bonded or not, as in Silling & Askari and Emu.
 
-Search, every call over all bodies' current positions (no state kept between calls): a cell grid
-of side ``h = max r_ij = 1.35 max(dx)`` (times 1 + 1e-12, so that rounding of the cell
-coordinates cannot lose a pair at exactly h), over the box of the current positions, with the
-particles counting-sorted by cell. Every pair is examined once, from the particle earlier in
-sorted order:
+Verlet pair list. Each process evaluates the force from a list of candidate pairs that it
+builds only when its contact halo (:mod:`pdfem.forces.short_range_halo`: its owned particles
+and the other ranks' particles near them, none on one process) is refreshed: at the first call,
+then when some particle, on any rank, has moved more than s/2 from where it was at the last
+refresh, or when the owned set changed or :meth:`ShortRangeContact.invalidate` was called. The
+skin is the halo's, ``s = 0.3 h``, with the cut-off ``h = max r_ij = 1.35 max(dx)`` (times
+1 + 1e-12). A pair is a candidate when ``|p| < r_ij + s`` at the build (its own r_ij; s
+enlarged by a relative 1e-6 against rounding). Why that is enough: until the next build no
+particle is more than s/2 from its position at the build, so a pair's distance changes by at
+most s, and every pair with ``|p| < r_ij`` now was a candidate; its partner is local, since the
+halo holds every particle within h + s of the rank's owned ones at the refresh.
+
+The build: a cell grid of side h + s over the box of the local particles, the particles
+counting-sorted by cell, every pair examined once, from the particle earlier in sorted order
+(:mod:`pdfem.forces.short_range_kernels`):
 
 - dense grid (at most ``DENSE_CELLS_PER_PARTICLE`` cells per particle, the usual case), padded
   by one empty cell: the forward half stencil of a cell is five contiguous runs of sorted
   positions (own cell after the particle and cell +z; the three cells +y; three columns +x);
 - folded grid, when fragments fly apart and the box would need more cells: the longest axes are
   folded in halves (cell ix goes to bucket ix mod F) until the table has at most
-  ``DENSE_CELLS_PER_PARTICLE * N`` buckets, and coordinates are clamped to 2^20 cells per axis
-  (clamping and folding never separate neighbouring cells, so no pair is lost). Each particle
-  scans the buckets of its 27 neighbour cells that come at or after its own, and within them
-  only the particles of the cell asked for.
+  ``DENSE_CELLS_PER_PARTICLE * max(m, 1024)`` buckets (m local particles), and coordinates are
+  clamped to 2^20 cells per axis (clamping and folding never separate neighbouring cells, so no
+  pair is lost). Each particle scans the buckets of its 27 neighbour cells that come at or
+  after its own, and within them only the particles of the cell asked for.
 
-The scan runs in parallel (above ``SERIAL_BELOW_PARTICLES``) over contiguous chunks of sorted
-positions, each chunk writing the pairs it finds into its own buffer; the buffers are then
-summed serially in chunk order, i.e. in sorted-position order, so the forces are bit-identical
-from run to run and for any thread or chunk count. Candidates further apart than h are rejected
-with one squared distance, which is all the work an intact body costs (about 30 candidates per
-particle).
+The scan runs in parallel (above ``SERIAL_BELOW_PARTICLES``) over chunks of sorted positions,
+each into its own buffer. A candidate's constants, r_ij and k_ij V_i V_j, are computed once,
+from the side of its lower-numbered particle, and stored with it. The list is a CSR over the
+local particles (:mod:`pdfem.forces.short_range_list_kernels`): row i holds every partner of
+an owned particle i (both directions of each pair), ascending by local index, which is the
+global particle order (body offset + index in the body), since the halo keeps its arrays in
+that order on every rank.
 
-One search serves every layout of the bodies (whole, or split over MPI ranks): each process
-searches its owned particles and a contact halo of other ranks' particles kept with a Verlet
-skin (:mod:`pdfem.forces.short_range_halo`; none on one process), in global order, on the cells
-of the grid over all particles (box and dense/folded choice from the global extent and particle
-count) with a table sized from the local particles: the cells of the local particles' box when
-that is small, else a sparse table of the occupied buckets. The stable sort keeps the local
-particles in the global sorted order, so every owned particle meets its partners in the same
-order on 1 and N ranks and its force is the same bit for bit. Each pair's potential is counted
-on the rank that owns the pair's first particle (in sorted order), so once over the ranks. The
-kernels (cell hash, pair search, sums) are :mod:`pdfem.forces.short_range_kernels`.
+Per step, one pass over the list, a ``prange`` over the owned particles: each particle sums
+its own force from its interacting partners in row order and skips the other candidates
+entirely. Its force is therefore a function of the current positions alone: the same bit for
+bit whenever the list was built (a list built long ago only holds more candidates, which add
+nothing), for any thread count and on 1 and N ranks; so a run restarted from a checkpoint,
+whose list is built afresh at its first call, continues bit for bit. Pair i-j evaluated from
+j's row gives exactly the negated force (p negated exactly, the same distance and stored
+constants). A pair's potential and count go to the rank that owns its lower-numbered
+particle, once over the ranks, summed per particle in global order.
 
 Units: m, m^3, Pa, N/m^3 (force density), J.
 """
@@ -84,20 +94,16 @@ import numpy as np
 from pdfem.forces.base import ParticleForce
 from pdfem.forces.short_range_halo import ContactHalo
 from pdfem.forces.short_range_kernels import (
-    NO_SHIFT,
     Constants,
     Found,
     Grid,
     Table,
-    add_owned,
     cells,
-    counted_pairs,
     find_dense,
     find_folded,
     gather,
-    sparse_table,
-    sum_pairs,
 )
+from pdfem.forces.short_range_list_kernels import add_owned, pair_forces, pair_rows, tally
 from pdfem.geometry.cell_hash import bounding_box, counting_sort
 from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
 
@@ -107,7 +113,10 @@ __all__ = ["ShortRangeContact", "short_range_constant", "DENSE_CELLS_PER_PARTICL
 DENSE_CELLS_PER_PARTICLE = 4
 #: cell coordinates are clamped to [0, _AXIS_CELLS) per axis (keys pack 21 bits per axis)
 _AXIS_CELLS = 1 << 20
-_INITIAL_CAPACITY = 1024  # pair slots per chunk before the first growth
+_INITIAL_CAPACITY = 1024  # candidate slots per chunk before the first growth
+#: the list's skin over the halo's: a relative 1e-6 more, so that the rounding of distances
+#: cannot lose a pair that the halo's drift rule lets come into range
+_SKIN_MARGIN = 1.0 + 1e-6
 
 
 def short_range_constant(K: float, delta: float, factor: float = 15.0) -> float:
@@ -116,7 +125,6 @@ def short_range_constant(K: float, delta: float, factor: float = 15.0) -> float:
     ``delta`` (m), with 18 K / (pi delta^4) the bond-based micromodulus c (N/m^6) and ``factor``
     = c_S / c (Silling & Askari 2005: 15)."""
     return factor * 18.0 * float(K) / (math.pi * float(delta) ** 5)
-
 
 
 class ShortRangeContact(ParticleForce):
@@ -135,18 +143,23 @@ class ShortRangeContact(ParticleForce):
     radius_factor
         Cap of the critical distance in particle radii dx / 2 (Silling & Askari: 1.35).
     n_chunks
-        Chunks of the parallel scan (default: 4 per numba thread). The forces do not depend on it.
+        Chunks of the parallel candidate search (default: 4 per numba thread). Neither the
+        list's contents nor the forces depend on it.
 
     Attributes
     ----------
     n_active
-        Number of interacting pairs found by the last call that this process counts (those
-        whose first particle it owns; :meth:`total_pairs` sums over ranks).
+        Number of interacting pairs at the last call that this process counts (those whose
+        lower-numbered particle it owns; :meth:`total_pairs` sums over ranks).
     cell_size
-        Side of the search cells, m (the largest critical distance).
+        The cut-off h, m: the largest critical distance (the list's cells are h + s).
+    skin
+        The pair list's Verlet skin s, m (the contact halo's).
+    builds
+        How many times this process has built the pair list (once per refresh of the halo).
     dense, n_buckets
-        Whether the last search used the dense grid (else the folded one), and its number of
-        buckets (at most ``DENSE_CELLS_PER_PARTICLE * max(N, 1024)``).
+        Whether the last build used the dense grid (else the folded one), and its number of
+        buckets (at most ``DENSE_CELLS_PER_PARTICLE * max(m, 1024)`` for m local particles).
     halo
         The :class:`~pdfem.forces.short_range_halo.ContactHalo`: this process's owned particles
         and ghosts.
@@ -185,25 +198,29 @@ class ShortRangeContact(ParticleForce):
         self.comm = self.bodies[0].layout.comm
         self.halo = ContactHalo(self.bodies, self.offsets, k_body, r_body, self.cell_size,
                                 self.comm)
-        self._size = -1
-        self._no_ub = np.empty(0, dtype=np.int64)
-        self._start = np.empty(1, dtype=np.int64)
-        self._n_touched = 0
+        self.skin = self.halo.skin * _SKIN_MARGIN
+        self._side = (self.cell_size + self.skin) * (1.0 + 1e-12)  # the list's cell side
+        self.builds = 0
+        self._built = -1  # the halo's refresh count at the last build
         self.n_active = 0
         self.dense = True
         self.n_buckets = 0
-        self.grid_buckets = 0  # buckets of the grid over all particles (not allocated here)
-        self._cap = _INITIAL_CAPACITY
-        self._pair = np.empty((self._chunks_wanted * self._cap, 2), dtype=np.int32)
-        self._val = np.empty((self._chunks_wanted * self._cap, 4))
-        self._counts = np.zeros(1, dtype=np.int64)
+        self._size = -1
+        self._start = np.empty(1, dtype=np.int64)
+        self._cap = _INITIAL_CAPACITY  # candidate slots per chunk of the search (grows)
+        # the list: owned rows, CSR of partners with the pairs' r_ij and k_ij V_i V_j
+        self._rows = np.empty(0, dtype=np.int64)
+        self._row_ptr = np.zeros(1, dtype=np.int64)
+        self._nbr = np.empty(0, dtype=np.int32)
+        self._crit = np.empty(0)
+        self._kvv = np.empty(0)
         self._reserve(0)
 
     label = "short-range contact"
     energy_key = "short_range_potential"
     """Key of :meth:`potential_energy` in the energy history (:class:`ParticleForce`)."""
 
-    # -- search ---------------------------------------------------------------------------------
+    # -- the pair list ----------------------------------------------------------------------------
     def _reserve(self, n: int) -> None:
         """Per-particle work arrays for at least ``n`` particles (grown by a quarter at least)."""
         if n <= self._size:
@@ -220,23 +237,22 @@ class ShortRangeContact(ParticleForce):
         self._keys = np.empty(n, dtype=np.int64)
         self._buckets = np.empty(n, dtype=np.int64)
         self._acc = np.zeros((n, 3))
-        self._mark = np.zeros(n, dtype=np.uint8)
-        self._touched = np.empty(n, dtype=np.int32)
-        self._ub = np.empty(n, dtype=np.int64)
-        self._sstart = np.empty(n + 1, dtype=np.int64)
+        self._hit = np.zeros(n, dtype=np.uint8)
+        self._n_up = np.zeros(n, dtype=np.int64)
+        self._e_up = np.zeros(n)
 
     @staticmethod
     def budget(n: int) -> int:
         """Most cells (buckets) of a table for ``n`` particles."""
         return DENSE_CELLS_PER_PARTICLE * max(n, 1024)
 
-    def _grid(self, lo, hi, n_total: int):
-        """Cell geometry over the box [lo, hi] for ``n_total`` particles: dims, pad, fold and
-        the number of buckets (sets ``dense``)."""
-        inv_h = 1.0 / self.cell_size
+    def _grid(self, lo, hi, n: int):
+        """Cell geometry of side h + s over the box [lo, hi] of ``n`` particles: dims, pad,
+        fold and the number of buckets (sets ``dense`` and ``n_buckets``)."""
+        inv_h = 1.0 / self._side
         dims = np.array([min(int((hi[k] - lo[k]) * inv_h) + 1, _AXIS_CELLS) for k in range(3)],
                         dtype=np.int64)
-        budget = self.budget(n_total)
+        budget = self.budget(n)
         self.dense = float(np.prod(dims + 2)) <= budget
         if self.dense:  # one empty cell around the grid: the stencil needs no bounds checks
             pad = 1
@@ -247,102 +263,85 @@ class ShortRangeContact(ParticleForce):
             while float(np.prod(fold)) > budget:
                 k = int(np.argmax(fold))
                 fold[k] = (fold[k] + 1) // 2
-        return dims, pad, fold, int(np.prod(fold))
+        self.n_buckets = int(np.prod(fold))
+        return dims, pad, fold, self.n_buckets
 
-    def _local_table(self, y, glo, dims, fold, nb, m: int):
-        """The table of the local particles: the cells of their box on the global grid when
-        that is small (a shifted dense table), else a sparse table of the occupied buckets;
-        returns (shift, sparse, fold, buckets)."""
-        if not self.dense:
-            return NO_SHIFT, True, fold, nb
-        llo, lhi, _ = bounding_box(y)
-        inv_h = 1.0 / self.cell_size
-        first = np.array([int(min((llo[k] - glo[k]) * inv_h, float(dims[k] - 1)))
-                          for k in range(3)], dtype=np.int64)
-        last = np.array([int(min((lhi[k] - glo[k]) * inv_h, float(dims[k] - 1)))
-                         for k in range(3)], dtype=np.int64)
-        box = last - first + 3
-        if float(np.prod(box)) <= self.budget(m):
-            return first, False, box, int(np.prod(box))
-        return NO_SHIFT, True, fold, nb
-
-    def _scan(self, y, lo, dims, pad, fold, nb, chunk_ptr, counts, shift, sparse):
-        """Sort the local particles ``y`` into the grid and find the interacting pairs into
-        ``self._pair``, ``self._val``, ``counts`` (per chunk). ``sparse``: a stable sort and a
-        table of the occupied buckets only (else a counting sort into all ``nb`` buckets)."""
+    def _find(self, y) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The candidate pairs of the local particles at ``y``: their count per chunk and the
+        buffers ``pair``, ``val`` of :class:`Found` (chunk c in slots ``[c cap, (c+1) cap)``)."""
         h, n = self.halo, y.shape[0]
+        lo, hi, _ = bounding_box(y) if n else (np.zeros(3), np.zeros(3), True)
+        dims, pad, fold, nb = self._grid(lo, hi, n)
         ijk, key, bucket, perm = self._ijk[:n], self._key[:n], self._bucket[:n], self._perm[:n]
         ys, ijks, keys, buckets = self._ys[:n], self._ijks[:n], self._keys[:n], self._buckets[:n]
-        cells(y, lo, 1.0 / self.cell_size, dims, pad, fold, ijk, key, bucket, shift)
-        if sparse:
-            perm[:] = np.argsort(bucket, kind="stable")
-            k = sparse_table(bucket[perm], self._ub, self._sstart)
-            start, ub = self._sstart[:k + 1], self._ub[:k]
-        else:
-            if self._start.shape[0] != nb + 1:
-                self._start = np.empty(nb + 1, dtype=np.int64)
-            counting_sort(bucket, nb, self._start, perm)
-            start, ub = self._start, self._no_ub
+        cells(y, lo, 1.0 / self._side, dims, pad, fold, ijk, key, bucket)
+        if self._start.shape[0] != nb + 1:
+            self._start = np.empty(nb + 1, dtype=np.int64)
+        counting_sort(bucket, nb, self._start, perm)
         gather(perm, y, ijk, key, bucket, ys, ijks, keys, buckets, not self.dense)
-        n_chunks = chunk_ptr.shape[0] - 1
-        if self._pair.shape[0] < n_chunks * self._cap:
-            self._pair = np.empty((n_chunks * self._cap, 2), dtype=np.int32)
-            self._val = np.empty((n_chunks * self._cap, 4))
-        table = Table(ys, ijks, keys, buckets, start, ub, perm)
+        n_chunks = max(1, min(self._chunks_wanted, n))
+        chunk_ptr = (np.arange(n_chunks + 1, dtype=np.int64) * n) // n_chunks
+        counts = np.zeros(n_chunks, dtype=np.int64)
+        table = Table(ys, ijks, keys, buckets, self._start, perm)
         consts = Constants(h.x0, h.vol, h.stiffness, h.radius, h.body)
-        grid = Grid(self.cell_size, dims, fold, self.distance_factor, self.radius_factor)
+        grid = Grid(self._side, dims, fold, self.distance_factor, self.radius_factor, self.skin)
+        par = n >= SERIAL_BELOW_PARTICLES
         while True:
-            par = n >= SERIAL_BELOW_PARTICLES
-            found = Found(chunk_ptr, self._cap, self._pair, self._val, counts)
-            if self.dense:
-                find_dense(par, table, consts, grid, found)
-            else:
-                find_folded(par, table, consts, grid, found)
+            pair = np.empty((n_chunks * self._cap, 2), dtype=np.int32)
+            val = np.empty((n_chunks * self._cap, 2))
+            found = Found(chunk_ptr, self._cap, pair, val, counts)
+            (find_dense if self.dense else find_folded)(par, table, consts, grid, found)
             most = int(counts.max())
             if most <= self._cap:
-                break
+                return counts, pair, val
             self._cap = 2 * most
-            self._pair = np.empty((n_chunks * self._cap, 2), dtype=np.int32)
-            self._val = np.empty((n_chunks * self._cap, 4))
 
-    def _search(self) -> float:
-        """Find the pairs of the local particles at the current positions; returns the
-        potential (J) of the pairs this process counts. Collective."""
-        h = self.halo
-        self._n_touched = 0
+    def _build(self) -> None:
+        """The pair list of the local particles at their current positions (those of the
+        halo's last refresh)."""
+        h, m = self.halo, self.halo.m
+        self._built = h.refreshes
+        self.builds += 1
+        self._reserve(m)
+        self._rows = np.flatnonzero(h.owned).astype(np.int64)
+        counts, pair, val = self._find(h.y)
+        entries = 2 * int(counts.sum())
+        if self._nbr.shape[0] < entries:
+            size = max(entries, self._nbr.shape[0] + self._nbr.shape[0] // 4)
+            self._nbr = np.empty(size, dtype=np.int32)
+            self._crit = np.empty(size)
+            self._kvv = np.empty(size)
+        self._row_ptr = np.empty(m + 1, dtype=np.int64)
+        pair_rows(counts, self._cap, pair, val, h.owned, self._row_ptr, self._nbr, self._crit,
+                  self._kvv)
+
+    def _evaluate(self) -> float:
+        """The forces at the current positions (rebuilding the list when the halo was
+        refreshed); returns the potential (J) of the pairs this process counts. Collective."""
         self.n_active = 0
         if self.n < 2:
             return 0.0
-        glo, ghi = h.update()
-        m = h.m
-        dims, pad, fold, nb = self._grid(glo, ghi, self.n)  # the grid over all particles
-        self.grid_buckets = nb
-        if m < 2:
-            return 0.0
-        self._reserve(m)
-        shift, sparse, fold, nb = self._local_table(h.y, glo, dims, fold, nb, m)
-        self.n_buckets = m if sparse else nb
-        n_chunks = max(1, min(self._chunks_wanted, m))
-        chunk_ptr = (np.arange(n_chunks + 1, dtype=np.int64) * m) // n_chunks
-        counts = np.zeros(n_chunks, dtype=np.int64)
-        self._scan(h.y, glo, dims, pad, fold, nb, chunk_ptr, counts, shift, sparse)
-        self._counts = counts
-        n_pairs, energy = counted_pairs(counts, self._cap, self._pair, self._val, h.owned)
+        h = self.halo
+        h.update()
+        if h.refreshes != self._built:
+            self._build()
+        rows = self._rows
+        pair_forces(rows.shape[0] >= SERIAL_BELOW_PARTICLES, rows, self._row_ptr, self._nbr,
+                    self._crit, self._kvv, h.y, h.vol, self._acc, self._hit, self._n_up,
+                    self._e_up)
+        n_pairs, energy = tally(rows, self._hit, self._n_up, self._e_up)
         self.n_active = int(n_pairs)
-        if counts.sum():
-            self._n_touched, _ = sum_pairs(counts, self._cap, self._pair, self._val, h.vol,
-                                           self._acc, self._mark, self._touched)
         return float(energy)
 
     def _add_into(self, fs: list) -> None:
-        """Add the last search's force density of each owned particle into ``fs`` (one local
-        array per body)."""
-        h, nt = self.halo, self._n_touched
-        if nt == 0:
+        """Add the last evaluation's force density of each owned particle into ``fs`` (one
+        local array per body)."""
+        h = self.halo
+        if self._built < 0:
             return
         k = 0
         for f, o in zip(fs, h.own):
-            add_owned(f, o, h.own_pos[k:k + len(o)], self._acc, self._touched, nt, self._mark)
+            add_owned(f, o, h.own_pos[k:k + len(o)], self._acc, self._hit)
             k += len(o)
 
     # -- public ---------------------------------------------------------------------------------
@@ -361,7 +360,7 @@ class ShortRangeContact(ParticleForce):
         FloatingPointError
             If a position is NaN or infinite.
         """
-        self._search()
+        self._evaluate()
         self._add_into([b.f for b in self.bodies])
         return self.n_active
 
@@ -374,7 +373,7 @@ class ShortRangeContact(ParticleForce):
         list of ndarray
             One (n_b, 3) array per body; the bodies' ``f`` are not touched.
         """
-        self._search()
+        self._evaluate()
         out = [np.zeros((b.x0.shape[0], 3)) for b in self.bodies]
         self._add_into(out)
         return out
@@ -385,13 +384,13 @@ class ShortRangeContact(ParticleForce):
         ``sum over interacting pairs of 1/2 k_ij V_i V_j (r_ij - |y_j - y_i|)^2`` (over all
         ranks: collective).
         """
-        return float(self.comm.allreduce_sum(self._search()))
+        return float(self.comm.allreduce_sum(self._evaluate()))
 
     def total_pairs(self) -> int:
         """Interacting pairs found by the last call, over all ranks (collective)."""
         return int(self.comm.allreduce_sum(np.int64(self.n_active)))
 
     def invalidate(self) -> None:
-        """Rebuild the contact halo at the next call (e.g. after particles moved between
-        ranks; a change of a body's layout is also noticed by itself)."""
+        """Rebuild the contact halo and the pair list at the next call (e.g. after particles
+        moved between ranks; a change of a body's layout is also noticed by itself)."""
         self.halo.invalidate()

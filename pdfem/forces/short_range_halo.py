@@ -11,16 +11,18 @@ Between refreshes the ghost set is fixed and only the ghosts' positions travel, 
 between the neighbour ranks found at the refresh. A refresh is due when some particle (any
 rank) has moved more than s/2 from where it was at the last refresh: until then every pair
 closer than h at the current positions was closer than h + s at the refresh (each end moved
-less than s/2), so every partner of an owned particle is local. Each step costs one collective
-(an all-gather of each rank's box, its largest squared drift and two flags), which also gives
-the global box of the serial run's search grid; a refresh adds one point-to-point count
-exchange and one exchange of the ghosts' positions and constants (global number, reference
-position, volume, contact constant, radius, body).
+less than s/2), so every partner of an owned particle is local. The contact's Verlet pair list
+is built at each refresh, for the same reason with the same skin. Each step costs one
+collective (an all-gather of each rank's box, its largest squared drift and two flags); a
+refresh adds one point-to-point count exchange and one exchange of the ghosts' positions and
+constants (global number, reference position, volume, contact constant, radius, body).
 
 The skin: 0.3 h. A thicker skin means fewer refreshes but more ghosts (the shell of ghosts is
-``h + s`` thick, so 0.3 h costs 30 % more ghosts than the bare cut-off); a refresh is due when
-a particle moved 0.15 h ~ 0.2 dx, which ice fragments at 20 m/s with steps of 1e-7-1e-6 s take
-hundreds of steps to do, so refreshes are rare and the ghost shell stays thin.
+``h + s`` thick, so 0.3 h costs 30 % more ghosts than the bare cut-off) and more candidates in
+the pair list (an intact cubic lattice has 26 per particle, the sites out to sqrt(3) dx <
+1.35 dx + s = 1.755 dx, none of them interacting); a refresh is due when a particle moved
+0.15 h ~ 0.2 dx, which ice fragments at 20 m/s with steps of 1e-7-1e-6 s take hundreds of
+steps to do, so refreshes are rare and the ghost shell stays thin.
 
 The owned set can change during a run (load balancing moves particles between ranks): a change
 of a body's layout (its ``layout``, ``layout.gid`` or ``layout.owned`` objects) is detected at
@@ -127,9 +129,9 @@ class ContactHalo:
         return np.concatenate([b.y[o] for b, o in zip(self.bodies, self.own)])
 
     # -- every call ------------------------------------------------------------------------------
-    def update(self) -> tuple[np.ndarray, np.ndarray]:
-        """Bring the local positions up to date (refreshing the ghosts when due); returns the
-        global box (lo, hi) of all particles, m. Collective."""
+    def update(self) -> None:
+        """Bring the local positions up to date, refreshing the ghosts when due (then
+        ``refreshes`` grows by one). Collective."""
         if self._owned_changed():
             self._take_owned()
         box = np.array([[np.inf] * 3, [-np.inf] * 3])
@@ -155,7 +157,6 @@ class ContactHalo:
             self._refresh(self.positions(), table)
         else:
             self._move()
-        return table[:, :3].min(axis=0), table[:, 3:6].max(axis=0)
 
     def _move(self) -> None:
         """Between refreshes: the ghosts' positions from their owners (point to point)."""

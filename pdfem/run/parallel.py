@@ -20,7 +20,6 @@ from pdfem.parallel.comm import SerialComm
 from pdfem.coupling.contact import SurfaceContact
 from pdfem.coupling.coupler import ContactPair, Coupler
 from pdfem.forces.short_range import ShortRangeContact
-from pdfem.forces.short_range_kernels import sparse_table
 from pdfem.geometry.cell_hash import in_box
 from pdfem.run.build_structures import build_all
 from pdfem.motion.rigid import RigidBody
@@ -88,10 +87,8 @@ def warm_up() -> None:
     c.start()
     for _ in range(2):
         c.step()
-    lone = np.zeros((2, 3))  # the refresh's and the sparse table's kernels too
+    lone = np.zeros((2, 3))  # the refresh's kernel too
     in_box(lone, lone[0], lone[1])
-    sparse_table(np.zeros(2, dtype=np.int64), np.empty(2, dtype=np.int64),
-                 np.empty(3, dtype=np.int64))
     ice.kinetic_energy()
     ice.strain_energy()
     ice.gather(ice.damage())

@@ -63,6 +63,14 @@ def build():
     b.v[:, 0] = -speed
     return [a, b]
 
+def interacting(sr):
+    """The interacting pairs (i < j, local numbers) of the pair list at the current positions."""
+    rows = np.repeat(np.arange(sr.halo.m), np.diff(sr._row_ptr))
+    nbr = sr._nbr[:len(rows)]
+    p = sr.halo.y[nbr] - sr.halo.y[rows]
+    act = (np.einsum("ij,ij->i", p, p) < sr._crit[:len(rows)] ** 2) & (nbr > rows)
+    return rows[act], nbr[act]
+
 def run(bodies, comm, steps, dt, owner=None):
     sr = ShortRangeContact(bodies)
     c = Coupler(bodies, [], [], dt, forces=[sr], comm=comm)
@@ -72,10 +80,10 @@ def run(bodies, comm, steps, dt, owner=None):
         c.step()
         most = max(most, sr.halo.m)  # the most local (owned and ghost) particles held
         active.append(sr.total_pairs())
-        if owner is not None:  # pairs whose particles belong to different ranks
-            pairs = np.concatenate([sr._pair[k * sr._cap:k * sr._cap + n]
-                                    for k, n in enumerate(sr._counts)])
-            cross += int((owner[pairs[:, 0]] != owner[pairs[:, 1]]).sum())
+        if owner is not None:  # interacting pairs whose particles belong to different ranks
+            i, j = interacting(sr)
+            assert len(i) == sr.n_active
+            cross += int((owner[i] != owner[j]).sum())
         energy.append(sr.potential_energy())
     return sr, np.array(active), np.array(energy), cross, most
 
@@ -101,8 +109,9 @@ halo = sr.halo
 budget = sr.budget(most)
 local = comm.allgather((most / sr.n, sr._size <= 1.25 * most
                         and sr.n_buckets <= max(budget, most)
-                        and sr._start.shape[0] - 1 <= budget and sr._ub.shape[0] <= 1.25 * most))
+                        and sr._start.shape[0] - 1 <= budget))
 refreshes = halo.refreshes
+assert sr.builds == refreshes  # the pair list is built at each refresh of the halo, only
 out = []
 for r, d in zip(ref, dist):
     y = d.gather(d.y)
