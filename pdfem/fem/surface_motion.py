@@ -75,14 +75,15 @@ class PrescribedSurface:
         """The structure takes its step of ``h`` (s) now; ``(start, end, velocity)`` of what
         its surface did (the mean velocity over the step)."""
         s = self.structure
-        p0 = s.surface_points().copy()
+        p0 = s.surface_points()   # a rigid body's are its own copies (RigidBody)
         s.step(h)
-        return p0, s.surface_points().copy(), (s.surface_points() - p0) / h
+        p1 = s.surface_points()
+        return p0, p1, (p1 - p0) / h
 
     def begin(self, step: float) -> None:
         """The structure takes the coupling step of ``step`` (s) now; :meth:`sample` walks it."""
         s = self.structure
-        self._p0 = s.surface_points().copy()
+        self._p0 = s.surface_points()
         s.step(step)
         self._dp = s.surface_points() - self._p0
         self._step = step

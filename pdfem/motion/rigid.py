@@ -224,7 +224,8 @@ class RigidBody(Structure):
 
     # ------------------------------------------------------------------ surface interface
     def surface_points(self) -> np.ndarray:
-        """(Ns, 3) current surface node positions (m)."""
+        """(Ns, 3) current surface node positions (m), a new array (the prescribed surface
+        motion keeps it as the substep's start)."""
         return self._x.copy()
 
     def surface_velocities(self) -> np.ndarray:
