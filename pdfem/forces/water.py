@@ -23,8 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from pdfem.forces.base import ParticleForce
-from pdfem.forces.water_kernels import (Sea, added_mass_forces, buoyancy_potential, drag_work,
-                                       water_forces)
+from pdfem.forces.water_kernels import (Sea, added_mass_forces, buoyancy_potential, cell_sides,
+                                       drag_work, water_forces)
 
 
 class _BodyWater:
@@ -34,6 +34,8 @@ class _BodyWater:
     def __init__(self, body) -> None:
         n = body.y.shape[0]
         self.owned = np.ascontiguousarray(body.owned, dtype=np.uint8)
+        self.side = np.empty(n)   # cell sides vol^(1/3), m
+        cell_sides(np.ascontiguousarray(body.vol, dtype=np.float64), self.side)
         self.drag = np.zeros((n, 3))
         self.drag_prev = np.zeros((n, 3))
         self.y_prev: np.ndarray | None = None
@@ -89,10 +91,10 @@ class Water(ParticleForce):
         """Add buoyancy and drag (N/m^3) into the bodies' ``f``; count the drag's work since the
         last call."""
         for b, s in zip(self.bodies, self._state):
-            water_forces(b.y, b.v, b.vol, s.owned, self._sea, float(b.material.density), b.f,
+            water_forces(b.y, b.v, s.side, s.owned, self._sea, float(b.material.density), b.f,
                          s.drag)
             if self.added_mass:
-                added_mass_forces(b.y, b.vol, s.owned, self.level, self.density,
+                added_mass_forces(b.y, s.side, s.owned, self.level, self.density,
                                   float(b.material.density), self.added_mass,
                                   np.asarray(b.gravity, dtype=np.float64), b.f, s.am)
             if not (self._drags or self.added_mass):  # buoyancy only: no work to count
@@ -106,7 +108,8 @@ class Water(ParticleForce):
                     drag_work(b.y, s.y_prev, b.vol, s.am, s.am_prev, s.water_kinetic)
                 s.y_prev[:] = b.y
             s.drag_prev[:] = s.drag
-            s.am_prev[:] = s.am
+            if self.added_mass:
+                s.am_prev[:] = s.am
         return None
 
     def potential_energy(self) -> float:
@@ -115,8 +118,8 @@ class Water(ParticleForce):
         with the ice (minus the work of the added-mass force on the ice)."""
         total = 0.0
         for b, s in zip(self.bodies, self._state):
-            buoyancy_potential(b.y, b.x0, b.vol, s.owned, self.level, self.density, self.g,
-                               s.potential)
+            buoyancy_potential(b.y, b.x0, b.vol, s.side, s.owned, self.level, self.density,
+                               self.g, s.potential)
             total += float(b.owned_sum(s.potential + s.water_kinetic * s.owned))
         return total
 

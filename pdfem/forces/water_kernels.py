@@ -56,7 +56,15 @@ class Sea(NamedTuple):
 
 
 @numba.njit(cache=True)
-def water_forces(y, v, vol, owned, sea, rho_ice, f, drag):
+def cell_sides(vol, out):
+    """Each particle's cell side ``vol^(1/3)`` (m) into ``out`` ((n,)): the kernels below take
+    it from there, a power fewer per particle and call."""
+    for i in range(vol.shape[0]):
+        out[i] = vol[i] ** (1.0 / 3.0)
+
+
+@numba.njit(cache=True)
+def water_forces(y, v, side, owned, sea, rho_ice, f, drag):
     """Add buoyancy and drag (N/m^3) into ``f`` for the owned particles; write the drag part
     into ``drag`` ((n, 3), zero elsewhere).
 
@@ -64,8 +72,8 @@ def water_forces(y, v, vol, owned, sea, rho_ice, f, drag):
     ----------
     y, v
         (n, 3) positions (m) and velocities (m/s).
-    vol
-        (n,) particle volumes (m^3); the cell side is ``vol^(1/3)``.
+    side
+        (n,) the particles' cell sides ``vol^(1/3)`` (m, :func:`cell_sides`).
     owned
         (n,) uint8, 1 for the particles this rank answers for.
     sea
@@ -83,7 +91,7 @@ def water_forces(y, v, vol, owned, sea, rho_ice, f, drag):
         drag[i, 2] = 0.0
         if owned[i] == 0:
             continue
-        a = vol[i] ** (1.0 / 3.0)
+        a = side[i]
         phi = submerged_fraction(y[i, 2], a, level)
         if phi == 0.0:
             continue
@@ -113,20 +121,21 @@ def drag_work(y, y_prev, vol, drag, drag_prev, dissipated):
 
 
 @numba.njit(cache=True)
-def buoyancy_potential(y, x0, vol, owned, level, rho_w, g, out):
+def buoyancy_potential(y, x0, vol, side, owned, level, rho_w, g, out):
     """Write into ``out`` ((n,) J) each owned particle's buoyancy potential relative to its
-    reference position: ``rho_w g vol (Phi(z) - Phi(z0))`` (0 for the others)."""
+    reference position: ``rho_w g vol (Phi(z) - Phi(z0))`` (0 for the others; ``side``: the
+    cell sides, :func:`cell_sides`)."""
     for i in range(y.shape[0]):
         out[i] = 0.0
         if owned[i] == 0:
             continue
-        a = vol[i] ** (1.0 / 3.0)
+        a = side[i]
         out[i] = rho_w * g * vol[i] * (buoyancy_depth(y[i, 2], a, level)
                                         - buoyancy_depth(x0[i, 2], a, level))
 
 
 @numba.njit(cache=True)
-def added_mass_forces(y, vol, owned, level, rho_w, rho_ice, ca, gravity, f, am):
+def added_mass_forces(y, side, owned, level, rho_w, rho_ice, ca, gravity, f, am):
     """Give each owned submerged particle the inertia ``rho_ice + ca rho_w phi`` (kg/m^3): its
     acceleration ``(f + rho_ice g) / (rho_ice + ca rho_w phi)`` is what velocity Verlet's kick
     ``f / rho_ice + g`` gives after ``f`` is replaced by ``(f + rho_ice g) s - rho_ice g`` with
@@ -139,7 +148,7 @@ def added_mass_forces(y, vol, owned, level, rho_w, rho_ice, ca, gravity, f, am):
         am[i, 2] = 0.0
         if owned[i] == 0:
             continue
-        phi = submerged_fraction(y[i, 2], vol[i] ** (1.0 / 3.0), level)
+        phi = submerged_fraction(y[i, 2], side[i], level)
         if phi == 0.0:
             continue
         s = rho_ice / (rho_ice + ca * rho_w * phi)
