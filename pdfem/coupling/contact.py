@@ -16,7 +16,17 @@ position and velocity of that instant:
 * the opposite impulse goes to the facet's three nodes by the barycentric weights of the
   contact point (Eqs. 7-8), so the impulse that leaves the ice equals the impulse that reaches
   the structure, exactly. The caller applies it to the structure as a velocity change at the
-  same instant (:meth:`pdfem.fem.base.Structure.apply_surface_impulse`).
+  same instant (:meth:`pdfem.fem.base.Structure.apply_surface_impulse`), or, for a structure
+  advanced by implicit steps, as an amendment of the step just taken.
+
+The surface's inverse mass is its compliance for the contact
+(:meth:`pdfem.fem.base.Structure.surface_compliance`, 1/kg): how far the surface point gives
+way over the contact per unit impulse and time. For an explicit substep that is the lumped
+``1/M`` of the nodes; for an implicit step it is the step's mean response ``A^-1 / 2``, which
+couples neighbouring nodes (:mod:`pdfem.fem.step_compliance`): the contact then takes, for
+every node, its response to the step's whole pattern of contacts, ``S_i = sum_k C_ik s_k``
+with ``s_k`` the contacts' summed weights at node ``k`` (the share below), in world axes as a
+3 x 3 block.
 
 Why the structure's mass matters: with the structure taking the particle's impulse only later
 (the seed paper's load held over the next step) a node lighter than the ice that rides on it
@@ -25,7 +35,8 @@ step, so smaller steps make it worse (energy creation, then blow-up). Taking bot
 same instant makes every contact a plastic collision, which can only dissipate energy.
 
 All contacts of one step see the surface velocities before that step's contacts, and a node's
-mass is split among the contacts touching it in proportion to their barycentric weights, so
+mass is split among the contacts touching it in proportion to their barycentric weights
+(an implicit step's node: the contacts near it too, by the coupling ``C_ik``), so
 the impulses do not depend on the order of the particles or on how they are split over MPI
 ranks, and several particles hitting one light node stop together as one plastic collision
 (by convexity of the kinetic energy the step dissipates at least the sum of what each contact
@@ -82,7 +93,8 @@ class SurfaceArrays(NamedTuple):
 
 class SurfaceState(NamedTuple):
     """The surface's node positions now and at the drift's start (m), velocities (m/s),
-    inverse masses (1/kg), the contacts' share of each node and the triangles."""
+    compliances (1/kg, (Ns, 3, 3) blocks in world axes), the contacts' share of each node (the
+    factor on its block) and the triangles."""
 
     pts: np.ndarray
     pts0: np.ndarray

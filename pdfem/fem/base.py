@@ -94,9 +94,11 @@ class Structure(SurfaceBody, ABC):
 
     def apply_surface_impulse(self, impulse: np.ndarray) -> float:
         """Give the contact-surface nodes the impulses ``impulse`` ((Ns, 3), N s) now, as a jump
-        of their velocity; return the work they did (J: the kinetic-energy change
-        ``v . J + J^2 / (2 m)``). Default: nothing, 0 (a prescribed motion does not respond;
-        the caller books the work its drive does)."""
+        of their velocity (an implicit structure: as an amendment of the step just taken,
+        :meth:`pdfem.fem.implicit.Newmark.end_impulse`); return the work they did (J: the
+        kinetic-energy change ``v . J + J^2 / (2 m)``; implicit: ``J . (u_new - u) / dt``).
+        Default: nothing, 0 (a prescribed motion does not respond; the caller books the work
+        its drive does)."""
         return 0.0
 
     # -- output --------------------------------------------------------------------------------

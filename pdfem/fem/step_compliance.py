@@ -45,6 +45,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 from scipy.spatial import cKDTree
+from threadpoolctl import threadpool_limits
 
 REACH = 5.0
 """Range of the kept couplings, in decay lengths ``c dt / 2`` (module docstring)."""
@@ -137,7 +138,8 @@ def probe(solve: Callable[[np.ndarray], np.ndarray], free_index: np.ndarray,
         for j, (c, d) in enumerate(batch):
             nodes = np.flatnonzero((colour == c) & (free[:, d] >= 0))
             rhs[free[nodes, d], j] = 1.0
-        x = solve(rhs)
+        with threadpool_limits(limits=1, user_api="blas"):   # (SuperLU's many-column solves
+            x = solve(rhs)                                    # thrash on threaded BLAS: 14x)
         for j, (c, d) in enumerate(batch):
             # pairs (i, k), k of colour c: column d of C_ik, the response at i to k's load
             sel = np.flatnonzero((pair_colour == c) & (free[index, d] >= 0))
