@@ -23,9 +23,10 @@ Implicit steps (``integrator = "implicit"``, :mod:`pdfem.fem.implicit`). The ine
 stay explicit, evaluated on the state at the step's start, so the Newmark step remains the
 linear, factorised ``A = M + dt/2 C + dt^2/4 K`` of the structure at rest (no Coriolis or
 softening matrix in it). At the milling case's coupling step (omega dt = 4e-4) this explicit
-part is far inside its stability limit: the largest term, the stress stiffening ``s^2 K_sigma``
-(centrifugal stress / E ~ 1e-4 of K), has ``omega_sigma dt`` below 1, and Coriolis, Euler and
-softening are of order ``omega dt``. The contact impulses amend the step just taken
+part is far inside its stability limit 2: the largest term, the stress stiffening
+``s^2 K_sigma``, has ``omega_sigma dt = 0.20`` (the largest eigenvalue of ``M^-1 K_sigma`` at
+full speed; K's highest mode has ``omega dt = 108``), and Coriolis, Euler and softening are of
+order ``omega dt``. The contact impulses amend the step just taken
 (:meth:`pdfem.fem.implicit.Newmark.end_impulse`) as a force at its end, in frame axes turned by
 the rotation at the step's end, ``R(t + dt)^T J``; so the surface's compliance for the contact
 is the frame-axes blocks of ``A^-1 / 2`` turned into world axes the same way,
@@ -83,7 +84,7 @@ class FrameStructure(ElasticStructure):
         if self.K_sigma is not None:   # K_sigma u with every K u (one pass over the blocks)
             self.solver.add_companion(NodeBlockOperator(self.K_sigma))
         self.inertial_work = 0.0     # J, work of the inertial loads on u_e
-        self._step_start = None      # implicit: (t, surface r, u_e, f_inertial, inertial work)
+        self._step_start = None      # implicit: the step's t, surface r, u_e, inertial loads, work
         self._turned = (None, None)  # implicit: (time, the compliance turned to world axes)
         self.drive_impulse_work = 0.0  # J, work of contact impulses on the frame's velocity
         self._f_inertial = self._inertial_dofs(0.0)
