@@ -58,7 +58,6 @@ class CaseFile(Section):
                 raise fail(f"ice '{c.ice}' and structure '{c.structure}' already have a contact",
                            key=f"{at}.structure")
             seen.append((name, c.ice, c.structure))
-        _no_contact_with_implicit(self)
         kinds = {s.name: s.kind for s in self.structure}
         for k, m in enumerate(self.monitor):
             at = f"monitor[{k}]"
@@ -69,23 +68,3 @@ class CaseFile(Section):
             if kinds[m.structure] != "elastic":
                 raise fail("monitors need an elastic structure", m.structure, key=f"{at}.structure")
         return self
-
-
-IMPLICIT_CONTACT = ("the implicit integrator does not take ice contact yet: the contact stops a "
-                    "particle against the surface's nodal masses, which over one implicit step "
-                    "(many explicit steps long) move about 4 times less than a free mass would "
-                    "(the demo panel), so the contact would be too soft and lose energy; use "
-                    "integrator = \"explicit\" for a structure the ice touches")
-
-
-def _no_contact_with_implicit(case: "CaseFile") -> None:
-    """Refuse ice contact on a structure advanced by implicit steps (:data:`IMPLICIT_CONTACT`);
-    with no ``[[contact]]`` table every ice body meets every structure."""
-    implicit = {s.name: i for i, s in enumerate(case.structure) if s.integrator == "implicit"}
-    for k, c in enumerate(case.contact):
-        if c.structure in implicit:
-            raise fail(IMPLICIT_CONTACT, c.structure, key=f"contact[{k}].structure")
-    if case.ice and implicit and not case.contact:
-        i = next(iter(implicit.values()))
-        raise fail(IMPLICIT_CONTACT + " (the case lists no [[contact]], so every ice body meets "
-                   "every structure)", "implicit", key=f"structure[{i}].integrator")

@@ -223,9 +223,11 @@ class StructureSection(Section):
                                 'inside the ice\'s step) or "implicit" (average-acceleration '
                                 "Newmark, unconditionally stable: one factorisation, then one "
                                 "solve per step; period error (omega dt)^2 / 12; "
-                                "docs/structures_time_integration.md). Implicit: structures at "
-                                "rest (no motion, not on a ship) that the ice does not touch; a "
-                                'case without ice then needs run.time_step. Default: "explicit".')
+                                "docs/structures_time_integration.md). Implicit: elastic "
+                                "structures at rest or in a prescribed moving frame (motion), "
+                                "not attached to a ship; ice contact amends each step by its "
+                                "impulses; a case without ice needs run.time_step. "
+                                'Default: "explicit".')
     contact_group: Name = Field("contact", description='Mesh group facing the ice. '
                                                       'Default: "contact".')
     damping: DampingSection = Field(default_factory=DampingSection,
@@ -301,10 +303,12 @@ class StructureSection(Section):
                                              or "motion" in self.model_fields_set):
             raise fail("only an elastic structure without a motion rides on a ship (its frame is "
                        "the ship's)", self.attached_to, key="attached_to")
-        if self.integrator == "implicit" and (self.kind != "elastic" or self.attached_to
-                                              is not None or "motion" in self.model_fields_set):
-            raise fail("the implicit integrator is for elastic structures at rest (no motion, "
-                       "not attached to a ship); use integrator = \"explicit\" for this one",
+        if self.integrator == "implicit" and (self.kind != "elastic"
+                                              or self.attached_to is not None):
+            raise fail("the implicit integrator is for elastic structures standing still or in "
+                       "a prescribed moving frame (motion), not for rigid bodies or ships nor "
+                       "for a structure attached to a ship (its frame follows the ship's "
+                       "dynamics step by step); use integrator = \"explicit\" for this one",
                        self.integrator, key="integrator")
         if self.kind != "ship" and self.ship is not None:
             raise fail("only a ship (kind = \"ship\") takes a ship table", key="ship")

@@ -16,7 +16,17 @@ position and velocity of that instant:
 * the opposite impulse goes to the facet's three nodes by the barycentric weights of the
   contact point (Eqs. 7-8), so the impulse that leaves the ice equals the impulse that reaches
   the structure, exactly. The caller applies it to the structure as a velocity change at the
-  same instant (:meth:`pdfem.fem.base.Structure.apply_surface_impulse`).
+  same instant (:meth:`pdfem.fem.base.Structure.apply_surface_impulse`), or, for a structure
+  advanced by implicit steps, as an amendment of the step just taken.
+
+The surface's inverse mass is its compliance for the contact
+(:meth:`pdfem.fem.base.Structure.surface_compliance`, 1/kg): how far the surface point gives
+way over the contact per unit impulse and time. For an explicit substep that is the lumped
+``1/M`` of the nodes; for an implicit step it is the step's mean response ``A^-1 / 2``, which
+couples neighbouring nodes (:mod:`pdfem.fem.step_compliance`): the contact then takes, for
+every node, its response to the step's whole pattern of contacts, ``S_i = sum_k C_ik s_k``
+with ``s_k`` the contacts' summed weights at node ``k`` (the share below), in world axes as a
+3 x 3 block.
 
 Why the structure's mass matters: with the structure taking the particle's impulse only later
 (the seed paper's load held over the next step) a node lighter than the ice that rides on it
@@ -25,7 +35,8 @@ step, so smaller steps make it worse (energy creation, then blow-up). Taking bot
 same instant makes every contact a plastic collision, which can only dissipate energy.
 
 All contacts of one step see the surface velocities before that step's contacts, and a node's
-mass is split among the contacts touching it in proportion to their barycentric weights, so
+mass is split among the contacts touching it in proportion to their barycentric weights
+(an implicit step's node: the contacts near it too, by the coupling ``C_ik``), so
 the impulses do not depend on the order of the particles or on how they are split over MPI
 ranks, and several particles hitting one light node stop together as one plastic collision
 (by convexity of the kinetic energy the step dissipates at least the sum of what each contact
@@ -82,7 +93,8 @@ class SurfaceArrays(NamedTuple):
 
 class SurfaceState(NamedTuple):
     """The surface's node positions now and at the drift's start (m), velocities (m/s),
-    inverse masses (1/kg), the contacts' share of each node and the triangles."""
+    compliances (1/kg, (Ns, 3, 3) blocks in world axes), the contacts' share of each node (the
+    factor on its block) and the triangles."""
 
     pts: np.ndarray
     pts0: np.ndarray
@@ -212,6 +224,15 @@ def _shares(facet, weight, tri, share):
             share[tri[f, k]] += np.int64(np.rint(weight[i, k] * SHARE_UNIT))
 
 
+@numba.njit(cache=True, inline="always")
+def _quadratic(start, g, n):
+    """``start + n . g . n`` for a symmetric (3, 3) ``g``: the diagonal terms first, in the
+    order ``start + n0^2 g00 + n1^2 g11 + n2^2 g22``, then the others (zero for a diagonal
+    ``g``: its sum keeps the bits of the diagonal form)."""
+    out = start + n[0] ** 2 * g[0, 0] + n[1] ** 2 * g[1, 1] + n[2] ** 2 * g[2, 2]
+    return out + 2.0 * (n[0] * n[1] * g[0, 1] + n[0] * n[2] * g[0, 2] + n[1] * n[2] * g[1, 2])
+
+
 @numba.njit(cache=True)
 def _respond(rows, facet, weight, ice, dt, surface, friction, particle_impulse, totals):
     """Give each contacting particle and the surface point it hit their impulse (Eq. 5 with the
@@ -239,14 +260,15 @@ def _respond(rows, facet, weight, ice, dt, surface, friction, particle_impulse, 
         m = mass[i]
         cp = np.zeros(3)
         vw = np.zeros(3)
-        gi = np.zeros(3)     # inverse mass of the surface point per component (1/kg)
+        gi = np.zeros((3, 3))  # compliance of the surface point (1/kg), world axes
         for k in range(3):
             node = tri[f, k]
             w = weight[c, k]
             for d in range(3):
                 cp[d] += w * pts[node, d]
                 vw[d] += w * vel[node, d]
-                gi[d] += w * share[node] * invm[node, d]
+                for e in range(3):
+                    gi[d, e] += w * share[node] * invm[node, d, e]
         gap = cp - y[i]
         depth = np.sqrt(gap[0] ** 2 + gap[1] ** 2 + gap[2] ** 2)
         if depth == 0.0:
@@ -263,21 +285,23 @@ def _respond(rows, facet, weight, ice, dt, surface, friction, particle_impulse, 
         closing = depth - max(before, 0.0)
         if closing <= 0.0:
             continue
-        kn = 1.0 / m + nn[0] ** 2 * gi[0] + nn[1] ** 2 * gi[1] + nn[2] ** 2 * gi[2]
+        kn = _quadratic(1.0 / m, gi, nn)
         jn = closing * inv_dt / kn        # closes the gap in the step (Eq. 5 when 1/M_s = 0)
         p = jn * nn                       # impulse on the particle, N s
         if friction > 0.0:
             rt = np.empty(3)
             for d in range(3):
-                rt[d] = v[i, d] + p[d] / m - (vw[d] - gi[d] * p[d])
+                gp = gi[d, d] * p[d]
+                for e in range(3):
+                    if e != d:
+                        gp += gi[d, e] * p[e]
+                rt[d] = v[i, d] + p[d] / m - (vw[d] - gp)
             rn = rt[0] * nn[0] + rt[1] * nn[1] + rt[2] * nn[2]
             for d in range(3):
                 rt[d] -= rn * nn[d]
             vt = np.sqrt(rt[0] ** 2 + rt[1] ** 2 + rt[2] ** 2)
             if vt > 0.0:
-                kt = 1.0 / m
-                for d in range(3):
-                    kt += (rt[d] / vt) ** 2 * gi[d]
+                kt = _quadratic(1.0 / m, gi, rt / vt)
                 jt = min(vt / kt, friction * jn)      # Coulomb: stick, or slide at mu jn
                 for d in range(3):
                     p[d] -= jt * rt[d] / vt
@@ -344,7 +368,11 @@ class SurfaceContact:
         self.friction = float(friction)
         self.reduce = reduce
         points = surface.surface_points()
-        self.inverse_mass = np.ascontiguousarray(surface.surface_inverse_mass(), dtype=np.float64)
+        self._compliance_of = None
+        self.coupled = None
+        self.inverse_mass = np.zeros((len(points), 3, 3))
+        self._ones = np.ones(len(points))
+        self._take_compliance()
         self.topology = FacetTopology.from_triangles(surface.surface_triangles, len(points))
         self.grid = FacetGrid(self.topology.triangles, self.search_radius)
         self.candidates = Candidates(self.search_radius)
@@ -372,9 +400,29 @@ class SurfaceContact:
         self._velocities = np.ascontiguousarray(velocities, dtype=np.float64)
         self._start = (self._points if start is None
                        else np.ascontiguousarray(start, dtype=np.float64))
+        self._take_compliance()
         if normals or self._normals is None:
             self._update_normals()
         self.grid.update(self._points)
+
+    def _take_compliance(self) -> None:
+        """The surface's compliance now (:meth:`pdfem.fem.base.Structure.surface_compliance`,
+        1/kg), when it hands over a new one: (Ns, 3) inverse masses per component become the
+        diagonal blocks of :attr:`inverse_mass`; an implicit step's coupled compliance
+        (:class:`pdfem.fem.step_compliance.StepCompliance`) is kept in :attr:`coupled` and
+        gives each step's blocks from its contacts' shares (:meth:`resolve`)."""
+        g = self.surface.surface_compliance() if hasattr(self.surface, "surface_compliance") \
+            else self.surface.surface_inverse_mass()
+        if g is self._compliance_of:
+            return
+        self._compliance_of = g
+        if not isinstance(g, np.ndarray):
+            self.coupled = g
+            return
+        self.coupled = None
+        self.inverse_mass[:] = 0.0
+        for d in range(3):
+            self.inverse_mass[:, d, d] = g[:, d]
 
     def _update_normals(self) -> None:
         """The pseudo-normals of the surface now: recomputed from the node positions, or, for
@@ -447,10 +495,14 @@ class SurfaceContact:
         counts = np.zeros(len(self._points), dtype=np.int64)
         _shares(self._facet, self._weight, t.triangles, counts)
         share = np.asarray(self.reduce(counts), dtype=np.float64) / SHARE_UNIT
+        compliance = self.inverse_mass
+        if self.coupled is not None:   # each node's response to the step's contacts
+            compliance = self.coupled.response(share)
+            share = self._ones
         totals = np.zeros(4)
         per_row = np.zeros((len(rows), 3))
         _respond(rows, self._facet, self._weight, Drift(y, y_old, v, mass), float(dt),
-                 SurfaceState(self._points, self._start, self._velocities, self.inverse_mass,
+                 SurfaceState(self._points, self._start, self._velocities, compliance,
                               share, t.triangles), self.friction, per_row, totals)
         near = np.flatnonzero(self._facet >= 0)     # only these can have an impulse
         k = near[per_row[near].any(axis=1)]

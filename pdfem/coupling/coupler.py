@@ -12,7 +12,9 @@ One coupling step of length ``D`` (the larger of the ice and structure steps):
    time by linear interpolation between ``p0`` and ``p1`` (``v0`` and ``v1``), plus the
    velocity the impulses of the earlier substeps gave it;
 3. the impulses are applied to the structures as a velocity jump at the end of the coupling
-   step (:meth:`pdfem.fem.base.Structure.apply_surface_impulse`).
+   step (:meth:`pdfem.fem.base.Structure.apply_surface_impulse`); a structure advanced by
+   implicit steps has taken its step first, and the impulses amend it
+   (:class:`pdfem.fem.surface_motion.SteppedSurface`).
 
 One of the two substep counts is 1: the faster side subcycles. When the structure subcycles
 (one ice step per coupling step) the ice meets the structure's surface at the very instant the
@@ -33,8 +35,10 @@ Momentum: the impulse that leaves the ice reaches the structure exactly, in the 
 step, so the total momentum of ice and structures is conserved to round-off when nothing else
 acts. Energy: the coupler keeps the work of the contact impulses on the ice (at the velocity
 the particles hit the surface with) and on each structure (its kinetic-energy change
-``v . J + J^2 / (2 m)`` at the impulse's instant; for a prescribed motion ``v . J``, the work
-its drive does); minus their sum is the energy the contacts dissipated. Units: s, m, N, N s, J.
+``v . J + J^2 / (2 m)`` at the impulse's instant; for an implicit structure the trapezoidal
+work ``J . (u_new - u) / dt`` of the force that amends its step, known when the impulse is
+given; for a prescribed motion ``v . J``, the work its drive does); minus their sum is the
+energy the contacts dissipated. Units: s, m, N, N s, J.
 
 The coupler keeps one record per structure (:class:`StructureRecord`: its surface motion, its
 pending impulse, its contact pairs, its facet loads, the contact work on it) and one per ice

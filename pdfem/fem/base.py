@@ -82,11 +82,23 @@ class Structure(SurfaceBody, ABC):
         treats as infinitely heavy. Default: zeros."""
         return np.zeros((self.n_surface_nodes, 3))
 
+    def surface_compliance(self) -> np.ndarray:
+        """How far (per unit impulse and step) the contact surface gives way under an impulse
+        over the coming contact (1/kg): (Ns, 3) per node and world component, or (Ns, 3, 3)
+        blocks per node in world axes (an implicit structure, whose nodes move together over
+        a step). The contact reads it at every substep, and takes a new array only when
+        handed one. Default: :meth:`surface_inverse_mass` of the first call, kept."""
+        if getattr(self, "_kept_compliance", None) is None:
+            self._kept_compliance = self.surface_inverse_mass()
+        return self._kept_compliance
+
     def apply_surface_impulse(self, impulse: np.ndarray) -> float:
         """Give the contact-surface nodes the impulses ``impulse`` ((Ns, 3), N s) now, as a jump
-        of their velocity; return the work they did (J: the kinetic-energy change
-        ``v . J + J^2 / (2 m)``). Default: nothing, 0 (a prescribed motion does not respond;
-        the caller books the work its drive does)."""
+        of their velocity (an implicit structure: as an amendment of the step just taken,
+        :meth:`pdfem.fem.implicit.Newmark.end_impulse`); return the work they did (J: the
+        kinetic-energy change ``v . J + J^2 / (2 m)``; implicit: ``J . (u_new - u) / dt``).
+        Default: nothing, 0 (a prescribed motion does not respond; the caller books the work
+        its drive does)."""
         return 0.0
 
     # -- output --------------------------------------------------------------------------------

@@ -12,7 +12,8 @@ It is unconditionally stable for linear structures and has no numerical damping:
 step does not follow the elements' critical step, so a structure advanced this way takes the
 ice's coupling step without subcycling. The matrix ``A = M + dt/2 C + dt^2/4 K`` of the free DOFs
 is factorised once per step size (SuperLU, minimum-degree ordering of ``A + A^T``) and each step
-is one matrix-vector product and one pair of triangular solves. Accuracy: the period of a mode
+is two matrix-vector products (``K u_p``, and ``K u_new``, kept for the supports, the strain
+energy and the shaft) and one pair of triangular solves. Accuracy: the period of a mode
 of circular frequency omega lengthens by about ``(omega dt)^2 / 12``; 20 steps per period keep it
 within 1 % (Hughes, Table 9.1.1 and Eq. 9.1.79), so the modes the coupled step resolves (the
 step is the ice's) are integrated as accurately as by the explicit scheme.
@@ -22,9 +23,27 @@ Energy. The two update rules give ``u_new - u = dt (v + v_new) / 2``, and with t
 ``1/2 (F_n + F_n+1) . (u_new - u)`` of the external forces and the supports' reactions, minus the
 damping's ``1/2 (C v_n + C v_n+1) . (u_new - u)`` (>= 0): the balance the explicit integrator
 keeps (:mod:`pdfem.fem.explicit`) holds here to round-off with no kinetic correction (the kinetic
-energy is ``1/2 v . M v`` itself). An impulse J changes the velocity by J / m at an instant, with
-work ``v . J + J^2 / (2 m)``, as in the explicit scheme. Dirichlet DOFs follow their prescribed
-displacement through the same update rules (their acceleration is what takes them there).
+energy is ``1/2 v . M v`` itself). An impulse J given by :meth:`Newmark.apply_impulse` changes
+the velocity by J / m at an instant, with work ``v . J + J^2 / (2 m)``, as in the explicit
+scheme. Dirichlet DOFs follow their prescribed displacement through the same update rules
+(their acceleration is what takes them there).
+
+Contact impulses over a step (:meth:`Newmark.end_impulse`). A contact impulse J found during a
+step (the ice's contacts, resolved against the surface the step moved) acts on that step as a
+force rising from 0 at its start to ``2 J / dt`` at its end: the trapezoidal rule integrates it
+into the impulse ``dt/2 (0 + 2 J / dt) = J``. The scheme being linear, the step is amended by the
+response to that end force, ``A a' = 2 J / dt``::
+
+    a_new += a',   u_new += dt^2/4 a' = (dt/2) A^-1 J,   v_new += dt/2 a' = A^-1 J
+
+and the force is then taken out of the end acceleration (``a_new -= 2 J / (dt m)`` on the free
+DOFs), so the next step starts from ``M a + C v + K u = f`` without it and the impulse acts
+once. Its work is the trapezoidal work of that force, ``J . (u_new - u) / dt``, with the
+amended ``u_new``: the energy identity above then holds with it, to round-off. The mean
+displacement of the step per unit impulse, ``(dt/2) A^-1 / dt = A^-1 / 2``, is the structure's
+compliance for the contact (:mod:`pdfem.fem.step_compliance`); as ``dt -> 0`` it is half the
+explicit scheme's ``M^-1`` (there the impulse is a velocity jump at the substep's start, here
+a force ramp over the step).
 
 Units as in :mod:`pdfem.fem.explicit`: m, m/s, m/s^2, N, kg, s.
 """
@@ -37,7 +56,9 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from pdfem.fem.central_difference_kernels import trapezoid_work
 from pdfem.fem.explicit import CentralDifference
+from pdfem.fem.step_compliance import Coupling, probe
 
 
 class Newmark(CentralDifference):
@@ -60,7 +81,12 @@ class Newmark(CentralDifference):
         self._lu_dt = math.nan
         self._a_fc: sp.csr_matrix | None = None
         self._free_idx = np.flatnonzero(self.free)
+        self._free_index = np.full(self.n, -1, dtype=np.int64)
+        self._free_index[self._free_idx] = np.arange(self._free_idx.size)
         self.factorizations = 0
+        self._last = None            # the last step's start (for end_impulse)
+        self._step_impulse = None    # N s, the contact impulses on the last step
+        self._step_contact_work = 0.0
 
     def critical_time_step(self) -> float:
         """``inf``: the average-acceleration scheme is unconditionally stable."""
@@ -73,15 +99,6 @@ class Newmark(CentralDifference):
     def kinetic_correction(self) -> float:
         """0 J: the scheme conserves ``1/2 v . M v + 1/2 u . K u`` itself."""
         return 0.0
-
-    def stiffness_force(self) -> np.ndarray:
-        """``K u`` (N) of the current state (one product: the step does not form it)."""
-        return self.k_op @ self.u
-
-    def companion_force(self) -> np.ndarray:
-        """The companion matrix's product with ``u`` (N; one product: the step does not
-        form it)."""
-        return self._pair.b @ self.u
 
     def apply_impulse(self, dofs: np.ndarray, impulse: np.ndarray) -> None:
         """Give the DOFs ``dofs`` the impulses ``impulse`` (N s) now: their velocity jumps by
@@ -143,6 +160,62 @@ class Newmark(CentralDifference):
             u_new[self.fixed] = g  # exactly, not to round-off
         f_damp_old = self.f_damp
         self.f_damp = self._damping_force(v_new)
-        self._book_work(u_new - self.u, f, f_damp_old,
-                        self.k_op @ u_new if self._supports_move else None, a_new)
+        self._last = (self.u, self.f_ext, f_damp_old, self._reaction,
+                      (self.work_external, self.work_supports, self.damping_dissipated))
+        self._step_impulse, self._step_contact_work = None, 0.0
+        ku, cu = self._products(u_new)   # K u (and the companion's) of the new state, kept
+        self._book_work(u_new - self.u, f, f_damp_old, ku if self._supports_move else None,
+                        a_new)
         self._advance(dt, u_new, v_new, a_new, v_new, f)   # no mid-step velocity: v_half = v
+        self._ku, self._cu = ku, cu
+
+    def end_impulse(self, dofs: np.ndarray, impulse: np.ndarray) -> float:
+        """Amend the step just taken by contact impulses ``impulse`` (N s) on the DOFs ``dofs``
+        acting over it, as a force rising to ``2 J / dt`` at its end (module docstring); those
+        on Dirichlet DOFs go to their supports. The step's works are booked again with the
+        amended state.
+
+        Returns
+        -------
+        float
+            The work (J) the impulses add to the step's contact work, ``J . (u_new - u) / dt``
+            with every impulse given to this step so far (the increment over the earlier
+            calls), so that the sum of the returns is the step's contact work.
+        """
+        if self._last is None:
+            raise RuntimeError("end_impulse needs a step to amend: take a step first")
+        u_old, f_old, f_damp_old, reaction_old, works = self._last
+        dt = self.last_dt
+        j = np.zeros(self.n)
+        np.add.at(j, dofs, np.asarray(impulse, dtype=np.float64))
+        j[self.fixed] = 0.0
+        force = (2.0 / dt) * j
+        da = np.zeros(self.n)
+        da[self._free_idx] = self._lu.solve(force[self._free_idx])
+        self.u = self.u + 0.25 * dt * dt * da
+        self.v = self.v + 0.5 * dt * da
+        self.v_half = self.v
+        self.a = self.a + da - force / self.m
+        f_new = self.f_ext
+        self.f_ext, self._reaction = f_old, reaction_old
+        self.work_external, self.work_supports, self.damping_dissipated = works
+        self.f_damp = self._damping_force(self.v)
+        self._ku, self._cu = self._products(self.u)
+        self._book_work(self.u - u_old, f_new, f_damp_old,
+                        self._ku if self._supports_move else None, self.a)
+        self.f_ext = f_new
+        self._step_impulse = j if self._step_impulse is None else self._step_impulse + j
+        total = trapezoid_work(self._step_impulse, self._step_impulse, self.u, u_old) / dt
+        added = total - self._step_contact_work
+        self._step_contact_work = total
+        return added
+
+    def compliance_blocks(self, dt: float, node_dofs: np.ndarray, points: np.ndarray,
+                          length: float) -> Coupling:
+        """The blocks (1/kg) of ``A^-1`` for the step ``dt`` (s) between the nodes whose x, y,
+        z DOFs are the rows of ``node_dofs`` (m apart at ``points``), within a few decay
+        lengths ``length`` (m) (zero rows and columns on Dirichlet DOFs), by probing
+        (:func:`pdfem.fem.step_compliance.probe`)."""
+        if dt != self._lu_dt:
+            self._factorize(dt)
+        return probe(self._lu.solve, self._free_index, node_dofs, points, length)

@@ -36,8 +36,10 @@ from pdfem.fem.mesh import FEMesh, load_mesh
 from pdfem.fem.probe import Probe, make_probe, probe_values
 from pdfem.fem.stress import (centre_basis, element_stress, kinetic_energy, nodal_average,
                               von_mises)
+from pdfem.fem.step_compliance import Coupling, StepCompliance, decay_length, wave_speed
 from pdfem.fem.supports import (constrained_dofs, prescribed_values, support_reaction,
                                 support_table)
+from pdfem.fem.surface_motion import PredictedSurface, SteppedSurface
 from pdfem.meshing.quality import check_cells
 
 
@@ -135,6 +137,8 @@ class ElasticStructure(AppliedLoads, Structure):
         self._surface_dofs = self.dofmap.nodal_dofs[:, self.surface_nodes].T.ravel()
         self._surface_points0 = self.node_points[self.surface_nodes]
         self._nodal_forces = np.zeros((self.n_nodes, 3))
+        self.implicit = isinstance(self.solver, Newmark)
+        self._compliance: tuple[float, np.ndarray] | None = None   # (dt, (Ns, 3, 3) 1/kg)
         self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
         self._load_dofs = np.zeros(self.dofmap.n_dofs)   # nodal forces + surface loads, as DOFs
         self._timed_loads: list = []                      # (DOF vector, t -> factor)
@@ -369,11 +373,45 @@ class ElasticStructure(AppliedLoads, Structure):
         dofs = self._surface_dofs
         return np.where(self.solver.free[dofs], 1.0 / self.solver.m[dofs], 0.0).reshape(-1, 3)
 
+    def surface_motion(self):
+        """Explicit: :class:`~pdfem.fem.surface_motion.PredictedSurface` (the structure steps
+        after the contacts, which jump its velocity); implicit:
+        :class:`~pdfem.fem.surface_motion.SteppedSurface` (it steps first, the contacts amend
+        the step)."""
+        return SteppedSurface(self) if self.implicit else PredictedSurface(self)
+
+    def surface_compliance(self) -> np.ndarray | StepCompliance:
+        """Explicit: :meth:`surface_inverse_mass` (Ns, 3), kept. Implicit: the
+        :class:`~pdfem.fem.step_compliance.StepCompliance` of the last step size, the blocks
+        between nearby surface nodes of the mean displacement over a step per unit impulse,
+        ``A^-1 / 2`` (1/kg, :meth:`pdfem.fem.implicit.Newmark.end_impulse`), by probing, once
+        per step size; before the first step, the inverse masses."""
+        dt = self.solver.last_dt
+        if self._compliance is not None and (self._compliance[0] == dt or not self.implicit):
+            return self._compliance[1]
+        if not self.implicit or dt == 0.0:
+            self._compliance = (dt, self.surface_inverse_mass())
+            return self._compliance[1]
+        mat = self.material
+        points = self._surface_points0
+        tri = self.surface_triangles
+        spacing = float(np.max(np.linalg.norm(points[tri] - points[np.roll(tri, 1, axis=1)],
+                                              axis=2))) if len(tri) else 0.0
+        length = decay_length(wave_speed(mat.density, mat.youngs_modulus, mat.poisson_ratio),
+                              dt, spacing)
+        c = self.solver.compliance_blocks(dt, self._surface_dofs.reshape(-1, 3), points, length)
+        self._compliance = (dt, StepCompliance(Coupling(c.start, c.index, 0.5 * c.blocks)))
+        return self._compliance[1]
+
     def apply_surface_impulse(self, impulse: np.ndarray) -> float:
-        """Give the surface nodes the impulses ((Ns, 3), N s) now, as a velocity jump; their
-        work (J), the kinetic-energy change ``v . J + J^2 / (2 m)`` (zero on supports)."""
+        """Give the surface nodes the impulses ((Ns, 3), N s); their work (J), zero on
+        supports. Explicit: now, as a velocity jump, work ``v . J + J^2 / (2 m)``. Implicit: on
+        the step just taken, as a force ramp to ``2 J / dt`` at its end
+        (:meth:`pdfem.fem.implicit.Newmark.end_impulse`), work ``J . (u_new - u) / dt``."""
         j = np.asarray(impulse, dtype=np.float64).ravel()
         dofs = self._surface_dofs
+        if self.implicit:
+            return self.solver.end_impulse(dofs, j)
         free = self.solver.free[dofs]
         work = float(np.sum((self.solver.v[dofs] * j + 0.5 * j * j / self.solver.m[dofs])[free]))
         self.solver.apply_impulse(dofs, j)

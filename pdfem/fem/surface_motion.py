@@ -10,7 +10,12 @@ start and end of every substep. A structure tells it, through the object its
   the structure steps after the contacts;
 * :class:`PrescribedSurface`, a motion that is known whatever the loads (a rigid indenter):
   the structure takes its step first and the surface's motion is what it did; the impulses do
-  not change it, and their work is the work its drive does (v . J).
+  not change it, and their work is the work its drive does (v . J);
+* :class:`SteppedSurface`, a structure advanced by implicit steps (:mod:`pdfem.fem.implicit`):
+  it takes its step first under its loads, the surface's motion is what it did, and the
+  contact impulses of the step then amend that step (the scheme is linear: the response to a
+  force at the step's end is added, :meth:`pdfem.fem.implicit.Newmark.end_impulse`); their
+  work is known at once, the trapezoidal work of that force over the amended step.
 
 Each has two ways of walking a coupling step of length D: :meth:`over` for a structure that
 takes the substep itself (the structure subcycles, or nobody does), :meth:`sample` for one
@@ -107,3 +112,25 @@ class PrescribedSurface:
 
     def after(self, h: float) -> None:
         """Nothing: the step was taken in :meth:`over` or :meth:`begin`."""
+
+
+class SteppedSurface(PrescribedSurface):
+    """The surface of a structure advanced by implicit steps (module docstring): it steps as a
+    prescribed surface does (:meth:`over`, :meth:`begin`, :meth:`sample`: the motion of its free
+    step, which the contacts see exactly), and the impulses then amend that step."""
+
+    def sample(self, h: float, frac: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(start, end, velocity)`` of the substep ending at ``frac`` of the coupling step,
+        along the straight path from the step's start to where the structure is now (its
+        step amended by the impulses so far)."""
+        self._dp = self.structure.surface_points() - self._p0
+        return super().sample(h, frac)
+
+    def respond(self, impulse: np.ndarray) -> float:
+        """The impulses ``impulse`` ((Ns, 3), N s) amend the step just taken; their work (J)
+        (:meth:`pdfem.fem.base.Structure.apply_surface_impulse`)."""
+        return self.structure.apply_surface_impulse(impulse)
+
+    def drive_work(self, impulse: np.ndarray, velocity: np.ndarray) -> float:
+        """No drive: 0 J."""
+        return 0.0

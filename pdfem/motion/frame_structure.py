@@ -18,6 +18,24 @@ integrator counts every force) minus the work of the contact impulses on the fra
 velocity (the drive absorbs it). With it the structure's balance closes to round-off.
 When the frame turns, ``shaft`` (:class:`pdfem.motion.shaft_loads.ShaftLoads`) records the contact
 impulses and the shaft's torque every step (shaft torque, thrust, blade loads).
+
+Implicit steps (``integrator = "implicit"``, :mod:`pdfem.fem.implicit`). The inertial loads
+stay explicit, evaluated on the state at the step's start, so the Newmark step remains the
+linear, factorised ``A = M + dt/2 C + dt^2/4 K`` of the structure at rest (no Coriolis or
+softening matrix in it). At the milling case's coupling step (omega dt = 4e-4) this explicit
+part is far inside its stability limit 2: the largest term, the stress stiffening
+``s^2 K_sigma``, has ``omega_sigma dt = 0.20`` (the largest eigenvalue of ``M^-1 K_sigma`` at
+full speed; K's highest mode has ``omega dt = 108``), and Coriolis, Euler and softening are of
+order ``omega dt``. The contact impulses amend the step just taken
+(:meth:`pdfem.fem.implicit.Newmark.end_impulse`) as a force at its end, in frame axes turned by
+the rotation at the step's end, ``R(t + dt)^T J``; so the surface's compliance for the contact
+is the frame-axes blocks of ``A^-1 / 2`` turned into world axes the same way,
+``R(t + dt) C R(t + dt)^T`` per node (:meth:`FrameStructure.surface_compliance`; the contact
+resolves a step's impulses against the surface at the step's end). Their work in the world is
+``J . (x_end - x_start) / dt``, the surface's true displacement over the step: the elastic part
+``R^T J . (u_e,end - u_e,start) / dt`` (the integrator's, exact), and the drive's part
+``J . (c(t + dt) + R(t + dt) r - c(t) - R(t) r) / dt`` (``r`` the node's position in the frame
+at the step's start), which the drive absorbs as with explicit steps.
 SI units throughout.
 """
 
@@ -66,6 +84,8 @@ class FrameStructure(ElasticStructure):
         if self.K_sigma is not None:   # K_sigma u with every K u (one pass over the blocks)
             self.solver.add_companion(NodeBlockOperator(self.K_sigma))
         self.inertial_work = 0.0     # J, work of the inertial loads on u_e
+        self._step_start = None      # implicit: the step's t, surface r, u_e, inertial loads, work
+        self._turned = (None, None)  # implicit: (time, the compliance turned to world axes)
         self.drive_impulse_work = 0.0  # J, work of contact impulses on the frame's velocity
         self._f_inertial = self._inertial_dofs(0.0)
         self.solver.initialize(f_ext=self.external_force_dofs(0.0) + self._f_inertial)
@@ -120,6 +140,9 @@ class FrameStructure(ElasticStructure):
             self.drive_impulse_work -= self.kinetic_energy() - before  # the drive's work
         f_in = self._inertial_dofs(t_new)
         u_old = self.solver.u
+        if self.implicit:   # what the contact impulses that amend this step need
+            self._step_start = (self.solver.time, self._surface_relative(), u_old,
+                                self._f_inertial, self.inertial_work, f_in)
         self.solver.step(dt, self.external_force_dofs(t_new) + f_in)
         self.inertial_work += trapezoid_work(self._f_inertial, f_in, self.solver.u, u_old)
         self._f_inertial = f_in
@@ -163,12 +186,27 @@ class FrameStructure(ElasticStructure):
         """Contact forces (N, (Ns, 3), world axes), turned into frame axes (R^T F)."""
         super().set_surface_forces(np.asarray(forces, dtype=np.float64) @ self.rotation())
 
+    def surface_compliance(self):
+        """Explicit: as :meth:`ElasticStructure.surface_compliance`. Implicit: its frame-axes
+        blocks with the rotation now (the step's end), which turns the response to the
+        contacts into world axes, ``R S R^T`` (module docstring)."""
+        c = super().surface_compliance()
+        if not self.implicit or isinstance(c, np.ndarray):
+            return c
+        t = self.solver.time
+        if self._turned[0] != t:
+            self._turned = (t, c.turned(self.rotation()))
+        return self._turned[1]
+
     def apply_surface_impulse(self, impulse: np.ndarray) -> float:
-        """Impulses (N s, (Ns, 3), world axes) as a jump of u_e' (R^T J); returns their work
-        (J) in the world, ``v . J + J^2 / (2 m)`` with the true velocity ``v`` (on supports,
-        which move with the frame, ``v_frame . J``); the part ``v_frame . J`` goes to the drive
-        (``support_work``)."""
+        """Explicit: impulses (N s, (Ns, 3), world axes) as a jump of u_e' (R^T J); returns
+        their work (J) in the world, ``v . J + J^2 / (2 m)`` with the true velocity ``v`` (on
+        supports, which move with the frame, ``v_frame . J``); the part ``v_frame . J`` goes to
+        the drive (``support_work``). Implicit: the impulses amend the step just taken
+        (:meth:`_amend_step`)."""
         j = np.asarray(impulse, dtype=np.float64).reshape(-1, 3)
+        if self.implicit:
+            return self._amend_step(j)
         r = self._surface_relative()
         vf = self.frame.frame_velocity(self.solver.time, r)
         drive = float(np.sum(vf * j))   # supports too: the frame carries them into the ice
@@ -176,6 +214,26 @@ class FrameStructure(ElasticStructure):
         self.drive_impulse_work += drive
         if self.shaft is not None:
             self.shaft.add_impulse(j, self.rotation(), r, work + drive)
+        return work + drive
+
+    def _amend_step(self, j: np.ndarray) -> float:
+        """Impulses ``j`` (N s, (Ns, 3), world axes) on the implicit step just taken, as a force
+        at its end in frame axes, ``R^T J`` (:meth:`pdfem.fem.implicit.Newmark.end_impulse`);
+        the inertial loads' work over the step and the shaft's torque at its end are taken
+        again with the amended state. Returns their work in the world (J): the elastic part
+        and the drive's, ``J . (frame motion of the surface points over the step) / dt``
+        (module docstring), which goes to the drive (``support_work``)."""
+        t0, r0, u_old, f_old, work_old, f_in = self._step_start
+        rot = self.rotation()
+        work = super().apply_surface_impulse(j @ rot)
+        self.inertial_work = work_old + trapezoid_work(f_old, f_in, self.solver.u, u_old)
+        f0, f1 = self.frame.state(t0), self.frame.state(self.solver.time)
+        moved = (f1["c"] - f0["c"]) + r0 @ (f1["R"] - f0["R"]).T
+        drive = float(np.sum(j * moved)) / self.solver.last_dt
+        self.drive_impulse_work += drive
+        if self.shaft is not None:
+            self.shaft.add_impulse(j, rot, self._surface_relative(), work + drive)
+            self.shaft.amend_step()
         return work + drive
 
     # ------------------------------------------------------------------ results

@@ -181,6 +181,7 @@ class ShaftLoads:
         self.ice_angular_impulse = 0.0           # N m s, about the axis, opposing positive
         q, p = self.support_torque_power()
         self.shaft_torque, self.shaft_power = q, p
+        self._last_dt = 0.0                      # s, the last step (amend_step)
         self.shaft_work = 0.0                    # J
         self.shaft_angular_impulse = 0.0         # N m s
         self.energy0 = self.kinetic_energy() + self.strain_energy()        # J, at the start
@@ -231,6 +232,16 @@ class ShaftLoads:
         q, p = self.support_torque_power()
         self.shaft_angular_impulse += 0.5 * (self.shaft_torque + q) * dt
         self.shaft_work += 0.5 * (self.shaft_power + p) * dt
+        self.shaft_torque, self.shaft_power = q, p
+        self._last_dt = dt
+
+    def amend_step(self) -> None:
+        """After the last step's end state was amended (contact impulses on an implicit step,
+        :meth:`pdfem.fem.implicit.Newmark.end_impulse`): the shaft's torque and power at its
+        end again, and their integrals over it with them."""
+        q, p = self.support_torque_power()
+        self.shaft_angular_impulse += 0.5 * (q - self.shaft_torque) * self._last_dt
+        self.shaft_work += 0.5 * (p - self.shaft_power) * self._last_dt
         self.shaft_torque, self.shaft_power = q, p
 
     # ------------------------------------------------------------------ state

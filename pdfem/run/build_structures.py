@@ -61,7 +61,7 @@ def _elastic(cfg: StructureConfig, path: Path, file: str, ship=None) -> ElasticS
     frame = MovingFrame(cfg.angular_velocity, cfg.center, cfg.velocity, cfg.ramp_time,
                         path=None if cfg.path is None else tuple(map(tuple, cfg.path)))
     kind, extra = ((ElasticStructure, {"integrator": cfg.integrator}) if frame.is_still
-                   else (FrameStructure, {"frame": frame}))
+                   else (FrameStructure, {"frame": frame, "integrator": cfg.integrator}))
     if ship is not None:
         kind, extra = AttachedStructure, {"ship": ship}
     s = kind.from_file(path, material, fixed_groups=cfg.fixed_groups,

@@ -15,9 +15,9 @@ MODULES: tuple[str, ...] = (
     "wave_speed",          # bar_wave_speed.toml: wave speed in a fixed-free bar
     "elastic_constants",   # lps_block_tension.toml: E and nu of the LPS
     "cantilever",          # cantilever_frequency*.toml: first bending frequency (explicit, implicit)
-    "coupled_impact",      # coupled_impact.toml: momentum and energy in an impact
+    "coupled_impact",      # coupled_impact*.toml: momentum and energy in an impact (explicit, implicit)
     "loop_agreement",      # sphere_ice_loops.toml: pair loop vs full-family loop
-    "rigid_wall",          # bar_rigid_wall.toml: contact duration and force
+    "rigid_wall",          # bar_rigid_wall.toml, bar_elastic_wall_implicit.toml: duration and force
     "panel_reaction",      # panel_pressure_reaction.toml: support reaction p A
     "plate",               # plate_clamped.toml, plate_simply_supported.toml: f1 and deflection
     "panel_modes",         # panel_modes.toml: demo panel f1..f5 vs the mesh refined 2x
@@ -29,7 +29,7 @@ MODULES: tuple[str, ...] = (
     "winkler",             # floating_plate_winkler.toml: P / w0 and l of a plate on water
     "ship",                # ship_rest.toml, ship_heave.toml, ship_pitch.toml: drift, periods
     "spinning",            # spinning_bar*.toml: radial stress, flapwise frequency (Southwell)
-    "shaft_energy",        # shaft_energy.toml: shaft + ice work and angular impulse balances
+    "shaft_energy",        # shaft_energy*.toml: shaft + ice work and angular impulse (explicit, implicit)
     "milling",             # propeller_milling_tiny.toml: impulse balance, torque spectrum at Z n
     "icebreaking",         # icebreaker_tiny.toml: resistance vs Lindqvist, pieces under the hull
 )

@@ -1,4 +1,5 @@
-"""Conservation of momentum and energy in a coupled impact (``coupled_impact.toml``).
+"""Conservation of momentum and energy in a coupled impact (``coupled_impact.toml``; the same
+with the block advanced by implicit Newmark steps, ``coupled_impact_implicit.toml``).
 
 A free ice block hits a free steel block and rebounds. The ice's momentum comes from its
 particle velocities, the block's from the motion of its mass centre over the last two frames
@@ -78,18 +79,29 @@ def plot_energy(fig: Figure, outcome: Outcome, value: float, ref: float) -> None
     ax.legend(fontsize="small", loc="lower left")
 
 
-_COMMON = dict(case_file="coupled_impact.toml", unit="-", reference=lambda case: 1.0,
+_COMMON = dict(unit="-", reference=lambda case: 1.0,
                quick_note="unchanged (512 particles, 64 hexahedra, 0.3 ms)")
-CASES = (
-    ValidationCase(
-        name="impact_momentum", quantity="momentum after/before",
-        measure=momentum_ratio, plot=plot_momentum, tolerance=1e-9, **_COMMON,
-        source="conservation of linear momentum (Newton's third law; the contact impulse "
-               "leaving the ice reaches the structure exactly, Zhang et al. 2023, Eqs. 5-8)"),
-    ValidationCase(
-        name="impact_energy",
-        quantity="energy balance E/E0",
-        measure=energy_ratio, plot=plot_energy, tolerance=0.02, **_COMMON,
-        source="conservation of energy (no fracture, no friction); the explicit integrators "
-               "add an O(dt^2) error"),
-)
+MOMENTUM = ("conservation of linear momentum (Newton's third law; the contact impulse "
+            "leaving the ice reaches the structure exactly, Zhang et al. 2023, Eqs. 5-8)")
+ENERGY = ("conservation of energy (no fracture, no friction); the explicit integrators "
+          "add an O(dt^2) error")
+
+
+def _entries(suffix: str, case_file: str, note: str) -> tuple[ValidationCase, ValidationCase]:
+    """The momentum and energy entries of ``case_file``, named ``impact_*<suffix>``."""
+    return (
+        ValidationCase(
+            name=f"impact_momentum{suffix}", quantity="momentum after/before",
+            measure=momentum_ratio, plot=plot_momentum, tolerance=1e-9, case_file=case_file,
+            source=MOMENTUM + note, **_COMMON),
+        ValidationCase(
+            name=f"impact_energy{suffix}", quantity="energy balance E/E0",
+            measure=energy_ratio, plot=plot_energy, tolerance=0.02, case_file=case_file,
+            source=ENERGY + note, **_COMMON),
+    )
+
+
+CASES = (_entries("", "coupled_impact.toml", "")
+         + _entries("_implicit", "coupled_impact_implicit.toml",
+                    "; the block by implicit Newmark steps, the contact impulses amending "
+                    "each step (a Newmark step conserves the momentum it is given)"))

@@ -93,17 +93,21 @@ def momentum_plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> No
 SOURCE = ("conservation of energy and of angular momentum about the fixed shaft axis for the "
           "lumped-mass blade (Newton's laws, e.g. Goldstein, Classical Mechanics, 1980, ch. 1)")
 
-CASES = (
-    ValidationCase(
-        name="shaft_energy", case_file="shaft_energy.toml",
-        quantity="(W_shaft + W_ice - dE - D) / W_shaft at the end", unit="-",
-        measure=energy_measure, reference=zero, relative=False, tolerance=0.01,
-        plot=energy_plot, source=SOURCE, quick=unchanged,
-        quick_note="unchanged (about 10 s)"),
-    ValidationCase(
-        name="shaft_angular_momentum", case_file="shaft_energy.toml",
-        quantity="(H_shaft - H_ice - dL) / H_shaft at the end", unit="-",
-        measure=momentum_measure, reference=zero, relative=False, tolerance=0.01,
-        plot=momentum_plot, source=SOURCE, quick=unchanged,
-        quick_note="unchanged (about 10 s)"),
-)
+def _entries(suffix: str, case_file: str, note: str) -> tuple[ValidationCase, ...]:
+    """The energy and angular-momentum entries of ``case_file``, named ``shaft_*<suffix>``."""
+    common = dict(case_file=case_file, unit="-", reference=zero, relative=False,
+                  tolerance=0.01, source=SOURCE + note, quick=unchanged,
+                  quick_note="unchanged (about 10 s)")
+    return (
+        ValidationCase(name=f"shaft_energy{suffix}", measure=energy_measure, plot=energy_plot,
+                       quantity="(W_shaft + W_ice - dE - D) / W_shaft at the end", **common),
+        ValidationCase(name=f"shaft_angular_momentum{suffix}", measure=momentum_measure,
+                       plot=momentum_plot,
+                       quantity="(H_shaft - H_ice - dL) / H_shaft at the end", **common),
+    )
+
+
+CASES = (_entries("", "shaft_energy.toml", "")
+         + _entries("_implicit", "shaft_energy_implicit.toml",
+                    "; the blade by implicit Newmark steps in its rotating frame, the contact "
+                    "impulses amending each step"))
