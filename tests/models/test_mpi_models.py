@@ -1,8 +1,8 @@
 """Every case file in ``models/`` runs small, and 1 and 2 MPI ranks give the same answer.
 
-Each case is shortened to two frames of at most 1 ms (the first milliseconds of each: the demo's
-ice strikes its panel, the milling propeller spins up against its block, the icebreakers' water
-and gravity act on the floating sheet and the hull before the bow arrives). The serial run
+Each case is shortened to two frames of at most 0.5 ms (the first millisecond of each: the demo's
+ice strikes its panel, the milling propeller starts to spin up, the icebreakers' water and
+gravity act on the floating sheet and the hull before the bow arrives). The serial run
 (reference) must write a readable results file with finite fields; the same shortened cases
 run under ``mpiexec -n 2`` (one launch for all of them) must then agree with it: every ice,
 structure and history array to 1e-10 of its largest value, damage identical (the contract of
@@ -45,7 +45,7 @@ SCRIPT = textwrap.dedent('''
     from pdfem.run.driver import run_case
 
     def shorten(case):
-        frame = min(case.run.output_interval, 1.0e-3)
+        frame = min(case.run.output_interval, 0.5e-3)
         return dataclasses.replace(case, run=dataclasses.replace(
             case.run, end_time=2 * frame, output_interval=frame))
 
@@ -56,8 +56,8 @@ SCRIPT = textwrap.dedent('''
 
 
 def shorten(case):
-    """``case`` ending after two frames of at most 1 ms each (as ``SCRIPT`` does)."""
-    frame = min(case.run.output_interval, 1.0e-3)
+    """``case`` ending after two frames of at most 0.5 ms each (as ``SCRIPT`` does)."""
+    frame = min(case.run.output_interval, 0.5e-3)
     return dataclasses.replace(case, run=dataclasses.replace(case.run, end_time=2 * frame,
                                                              output_interval=frame))
 
