@@ -368,11 +368,6 @@ class SurfaceContact:
         self.friction = float(friction)
         self.reduce = reduce
         points = surface.surface_points()
-        self._compliance_of = None
-        self.coupled = None
-        self.inverse_mass = np.zeros((len(points), 3, 3))
-        self._ones = np.ones(len(points))
-        self._take_compliance()
         self.topology = FacetTopology.from_triangles(surface.surface_triangles, len(points))
         self.grid = FacetGrid(self.topology.triangles, self.search_radius)
         self.candidates = Candidates(self.search_radius)
@@ -400,29 +395,10 @@ class SurfaceContact:
         self._velocities = np.ascontiguousarray(velocities, dtype=np.float64)
         self._start = (self._points if start is None
                        else np.ascontiguousarray(start, dtype=np.float64))
-        self._take_compliance()
+        self.compliance = self.surface.surface_compliance()
         if normals or self._normals is None:
             self._update_normals()
         self.grid.update(self._points)
-
-    def _take_compliance(self) -> None:
-        """The surface's compliance now (:meth:`pdfem.fem.base.Structure.surface_compliance`,
-        1/kg), when it hands over a new one: (Ns, 3) inverse masses per component become the
-        diagonal blocks of :attr:`inverse_mass`; an implicit step's coupled compliance
-        (:class:`pdfem.fem.step_compliance.StepCompliance`) is kept in :attr:`coupled` and
-        gives each step's blocks from its contacts' shares (:meth:`resolve`)."""
-        g = self.surface.surface_compliance() if hasattr(self.surface, "surface_compliance") \
-            else self.surface.surface_inverse_mass()
-        if g is self._compliance_of:
-            return
-        self._compliance_of = g
-        if not isinstance(g, np.ndarray):
-            self.coupled = g
-            return
-        self.coupled = None
-        self.inverse_mass[:] = 0.0
-        for d in range(3):
-            self.inverse_mass[:, d, d] = g[:, d]
 
     def _update_normals(self) -> None:
         """The pseudo-normals of the surface now: recomputed from the node positions, or, for
@@ -495,10 +471,7 @@ class SurfaceContact:
         counts = np.zeros(len(self._points), dtype=np.int64)
         _shares(self._facet, self._weight, t.triangles, counts)
         share = np.asarray(self.reduce(counts), dtype=np.float64) / SHARE_UNIT
-        compliance = self.inverse_mass
-        if self.coupled is not None:   # each node's response to the step's contacts
-            compliance = self.coupled.response(share)
-            share = self._ones
+        compliance, share = self.compliance.for_contacts(share)
         totals = np.zeros(4)
         per_row = np.zeros((len(rows), 3))
         _respond(rows, self._facet, self._weight, Drift(y, y_old, v, mass), float(dt),

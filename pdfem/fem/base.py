@@ -27,6 +27,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
+from pdfem.fem.step_compliance import LumpedCompliance, StepCompliance
 from pdfem.fem.surface import SurfaceBody
 from pdfem.fem.surface_motion import PredictedSurface
 
@@ -82,14 +83,16 @@ class Structure(SurfaceBody, ABC):
         treats as infinitely heavy. Default: zeros."""
         return np.zeros((self.n_surface_nodes, 3))
 
-    def surface_compliance(self) -> np.ndarray:
-        """How far (per unit impulse and step) the contact surface gives way under an impulse
-        over the coming contact (1/kg): (Ns, 3) per node and world component, or (Ns, 3, 3)
-        blocks per node in world axes (an implicit structure, whose nodes move together over
-        a step). The contact reads it at every substep, and takes a new array only when
-        handed one. Default: :meth:`surface_inverse_mass` of the first call, kept."""
-        if getattr(self, "_kept_compliance", None) is None:
-            self._kept_compliance = self.surface_inverse_mass()
+    _kept_compliance: LumpedCompliance | None = None
+
+    def surface_compliance(self) -> LumpedCompliance | StepCompliance:
+        """How far the contact surface gives way per unit impulse over the coming contact
+        (1/kg, :mod:`pdfem.fem.step_compliance`): the lumped inverse masses of the nodes, or an
+        implicit structure's coupled step compliance (its nodes move together over a step).
+        The contact reads it at every substep and takes it anew only when handed another
+        object. Default: :meth:`surface_inverse_mass` of the first call, kept."""
+        if self._kept_compliance is None:
+            self._kept_compliance = LumpedCompliance(self.surface_inverse_mass())
         return self._kept_compliance
 
     def apply_surface_impulse(self, impulse: np.ndarray) -> float:

@@ -349,6 +349,21 @@ class CentralDifference:
             self.work_supports += 0.5 * float((self._reaction + reaction) @ du[fx])
             self._reaction = reaction
 
+    steps_before_contact = False
+    """Whether a step is taken before the contacts over it and amended by their impulses
+    (:class:`pdfem.fem.implicit.Newmark`), rather than after them (here: the impulses jump
+    the velocity at the substep's start)."""
+
+    def contact_impulse(self, dofs: np.ndarray, impulse: np.ndarray) -> float:
+        """Contact impulses ``impulse`` (N s) on the DOFs ``dofs`` (distinct) now, as a velocity
+        jump (:meth:`apply_impulse`); their work (J), the kinetic-energy change
+        ``v . J + J^2 / (2 m)`` (zero on Dirichlet DOFs)."""
+        j = np.asarray(impulse, dtype=np.float64)
+        free = self.free[dofs]
+        work = float(np.sum((self.v[dofs] * j + 0.5 * j * j / self.m[dofs])[free]))
+        self.apply_impulse(dofs, j)
+        return work
+
     def apply_impulse(self, dofs: np.ndarray, impulse: np.ndarray) -> None:
         """Give the DOFs ``dofs`` the impulses ``impulse`` (N s) now: their velocity jumps by
         impulse / mass (an impulse on a Dirichlet DOF goes to its support)."""

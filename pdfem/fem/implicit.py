@@ -169,6 +169,13 @@ class Newmark(CentralDifference):
         self._advance(dt, u_new, v_new, a_new, v_new, f)   # no mid-step velocity: v_half = v
         self._ku, self._cu = ku, cu
 
+    steps_before_contact = True
+    """A step is taken first and the contacts over it amend it (:meth:`end_impulse`)."""
+
+    def contact_impulse(self, dofs: np.ndarray, impulse: np.ndarray) -> float:
+        """Contact impulses on the step just taken: :meth:`end_impulse`."""
+        return self.end_impulse(dofs, impulse)
+
     def end_impulse(self, dofs: np.ndarray, impulse: np.ndarray) -> float:
         """Amend the step just taken by contact impulses ``impulse`` (N s) on the DOFs ``dofs``
         acting over it, as a force rising to ``2 J / dt`` at its end (module docstring); those

@@ -1,5 +1,9 @@
-"""The contact compliance of an implicit structure: the 3 x 3 blocks of ``A^-1`` between nearby
-nodes of its contact surface, by probing, and the response they give to a step's contacts.
+"""The contact compliance of a structure: how far its contact surface gives way per unit impulse
+over a contact (1/kg). :class:`LumpedCompliance` is an explicit substep's, the lumped inverse
+masses of the nodes; :class:`StepCompliance` an implicit structure's, the 3 x 3 blocks of
+``A^-1`` between nearby nodes of its contact surface, by probing, and the response they give to
+a step's contacts. Both give the contact (:mod:`pdfem.coupling.contact`) the blocks it resolves
+a step's contacts with, :meth:`~StepCompliance.for_contacts`.
 
 Over one average-acceleration Newmark step of ``dt`` (:mod:`pdfem.fem.implicit`) a force ``f``
 at the step's end changes the end acceleration by ``A^-1 f``, ``A = M + dt/2 C + dt^2/4 K`` on
@@ -182,6 +186,34 @@ def _response(start, index, blocks, share, rotation, out):
                                 + tmp[a, 2] * rotation[b, 2])
 
 
+class LumpedCompliance:
+    """An explicit substep's compliance: each node's lumped inverse mass per component (1/kg,
+    zero on held components) as a diagonal block; a node's mass is split among the contacts
+    on it by their weights (the contact's share), and no node's response reaches another.
+
+    Parameters
+    ----------
+    inverse_mass
+        (Ns, 3) inverse lumped mass per node and component (1/kg).
+    """
+
+    def __init__(self, inverse_mass: np.ndarray) -> None:
+        g = np.asarray(inverse_mass, dtype=np.float64)
+        self.blocks = np.zeros((len(g), 3, 3))
+        for d in range(3):
+            self.blocks[:, d, d] = g[:, d]
+
+    def turned(self, rotation: np.ndarray | None) -> "LumpedCompliance":
+        """Itself: a lumped mass is the same in every direction (a held component stays held
+        in the structure's own axes, as the explicit contact has always taken it)."""
+        return self
+
+    def for_contacts(self, share: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(blocks, share)`` for the contact kernel: the diagonal blocks, each scaled there by
+        the contacts' summed weights ``share`` at its node."""
+        return self.blocks, share
+
+
 class StepCompliance:
     """The contact compliance of an implicit step (module docstring): coupling blocks of the
     mean displacement over the step per unit impulse (1/kg, the structure's axes) and the
@@ -199,6 +231,7 @@ class StepCompliance:
         self.coupling = coupling
         self.rotation = rotation
         self._out = np.zeros((len(coupling.start) - 1, 3, 3))
+        self._ones = np.ones(len(coupling.start) - 1)
 
     def turned(self, rotation: np.ndarray | None) -> "StepCompliance":
         """The same blocks turned by ``rotation`` (shared, not copied)."""
@@ -218,3 +251,8 @@ class StepCompliance:
         _response(c.start, c.index, c.blocks, np.ascontiguousarray(share, dtype=np.float64),
                   rot, self._out)
         return self._out
+
+    def for_contacts(self, share: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(blocks, ones)`` for the contact kernel: each node's response to the step's
+        contacts, :meth:`response`, which holds the shares already."""
+        return self.response(share), self._ones

@@ -36,7 +36,8 @@ from pdfem.fem.mesh import FEMesh, load_mesh
 from pdfem.fem.probe import Probe, make_probe, probe_values
 from pdfem.fem.stress import (centre_basis, element_stress, kinetic_energy, nodal_average,
                               von_mises)
-from pdfem.fem.step_compliance import Coupling, StepCompliance, decay_length, wave_speed
+from pdfem.fem.step_compliance import (Coupling, LumpedCompliance, StepCompliance,
+                                      decay_length, wave_speed)
 from pdfem.fem.supports import (constrained_dofs, prescribed_values, support_reaction,
                                 support_table)
 from pdfem.fem.surface_motion import PredictedSurface, SteppedSurface
@@ -137,7 +138,7 @@ class ElasticStructure(AppliedLoads, Structure):
         self._surface_dofs = self.dofmap.nodal_dofs[:, self.surface_nodes].T.ravel()
         self._surface_points0 = self.node_points[self.surface_nodes]
         self._nodal_forces = np.zeros((self.n_nodes, 3))
-        self.implicit = isinstance(self.solver, Newmark)
+        self.implicit = self.solver.steps_before_contact   # implicit steps (Newmark)
         self._compliance: tuple[float, np.ndarray] | None = None   # (dt, (Ns, 3, 3) 1/kg)
         self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
         self._load_dofs = np.zeros(self.dofmap.n_dofs)   # nodal forces + surface loads, as DOFs
@@ -380,8 +381,9 @@ class ElasticStructure(AppliedLoads, Structure):
         the step)."""
         return SteppedSurface(self) if self.implicit else PredictedSurface(self)
 
-    def surface_compliance(self) -> np.ndarray | StepCompliance:
-        """Explicit: :meth:`surface_inverse_mass` (Ns, 3), kept. Implicit: the
+    def surface_compliance(self) -> LumpedCompliance | StepCompliance:
+        """Explicit: :meth:`surface_inverse_mass` as a
+        :class:`~pdfem.fem.step_compliance.LumpedCompliance`, kept. Implicit: the
         :class:`~pdfem.fem.step_compliance.StepCompliance` of the last step size, the blocks
         between nearby surface nodes of the mean displacement over a step per unit impulse,
         ``A^-1 / 2`` (1/kg, :meth:`pdfem.fem.implicit.Newmark.end_impulse`), by probing, once
@@ -390,7 +392,7 @@ class ElasticStructure(AppliedLoads, Structure):
         if self._compliance is not None and (self._compliance[0] == dt or not self.implicit):
             return self._compliance[1]
         if not self.implicit or dt == 0.0:
-            self._compliance = (dt, self.surface_inverse_mass())
+            self._compliance = (dt, LumpedCompliance(self.surface_inverse_mass()))
             return self._compliance[1]
         mat = self.material
         points = self._surface_points0
@@ -408,14 +410,8 @@ class ElasticStructure(AppliedLoads, Structure):
         supports. Explicit: now, as a velocity jump, work ``v . J + J^2 / (2 m)``. Implicit: on
         the step just taken, as a force ramp to ``2 J / dt`` at its end
         (:meth:`pdfem.fem.implicit.Newmark.end_impulse`), work ``J . (u_new - u) / dt``."""
-        j = np.asarray(impulse, dtype=np.float64).ravel()
-        dofs = self._surface_dofs
-        if self.implicit:
-            return self.solver.end_impulse(dofs, j)
-        free = self.solver.free[dofs]
-        work = float(np.sum((self.solver.v[dofs] * j + 0.5 * j * j / self.solver.m[dofs])[free]))
-        self.solver.apply_impulse(dofs, j)
-        return work
+        return self.solver.contact_impulse(self._surface_dofs,
+                                           np.asarray(impulse, dtype=np.float64).ravel())
 
     def applied_load(self) -> np.ndarray:
         """(3,) resultant (N) of the applied loads at the current time (contact excluded)."""

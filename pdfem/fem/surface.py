@@ -39,6 +39,11 @@ class ContactSurface(Protocol):
         """(T, 3) unit normals pointing out of the body, current configuration."""
         ...
 
+    def surface_compliance(self):
+        """How far the surface gives way per unit impulse over a contact (1/kg): a
+        :mod:`pdfem.fem.step_compliance` object with ``for_contacts(share)``."""
+        ...
+
     def surface_rotation(self) -> np.ndarray | None:
         """(3, 3) rotation from the reference configuration if the surface moves rigidly, else
         ``None``."""

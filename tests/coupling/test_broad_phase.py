@@ -13,6 +13,7 @@ import numpy as np
 from pdfem.coupling.broad_phase import moved_beyond
 from pdfem.geometry.cell_hash import in_box
 from pdfem.coupling.contact import SurfaceContact
+from pdfem.fem.step_compliance import LumpedCompliance
 
 
 def test_in_box_and_moved_beyond():
@@ -35,8 +36,8 @@ class _Plate:
     def surface_velocities(self):
         return np.zeros((4, 3))
 
-    def surface_inverse_mass(self):
-        return np.zeros((4, 3))
+    def surface_compliance(self):
+        return LumpedCompliance(np.zeros((4, 3)))
 
     def surface_rotation(self):
         return None
