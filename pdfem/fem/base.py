@@ -66,6 +66,13 @@ class Structure(SurfaceBody, ABC):
         """Stable-step limit (s) of the explicit integration, no safety factor; ``inf`` if none."""
         return math.inf
 
+    def distribute(self, comm) -> None:
+        """Share the structure's own work over the ranks of ``comm``
+        (:mod:`pdfem.parallel.comm`). Every rank holds the structure's whole state and steps it;
+        what a structure can split without changing a bit of that state it splits here (the
+        implicit steps' solves, :meth:`pdfem.fem.implicit.Newmark.distribute`). Default:
+        nothing to share, every rank does all of it."""
+
     def stable_time_step(self) -> float:
         """Largest stable step (s) with the structure's own safety factor; ``inf`` if none."""
         return math.inf

@@ -183,6 +183,10 @@ class CentralDifference:
         self._reaction = np.zeros(self.fixed.size)
         self._held = np.zeros(self.fixed.size)   # the displacement of supports held still
 
+    def distribute(self, comm) -> None:
+        """Nothing to share over the ranks of ``comm``: an explicit step is a few products per
+        DOF, done on every rank (:meth:`pdfem.fem.base.Structure.distribute`)."""
+
     # ----------------------------------------------------------------- constraints
     def prescribe(self, values: np.ndarray | Prescribed | None) -> None:
         """Prescribe the displacement (m) of the fixed DOFs.

@@ -272,6 +272,11 @@ class ElasticStructure(AppliedLoads, Structure):
         """Critical step (s) 2 / omega_max (damping-reduced), without the safety factor."""
         return self.solver.critical_time_step()
 
+    def distribute(self, comm) -> None:
+        """Share the integrator's solves over the ranks of ``comm`` (implicit steps: each rank
+        solves its own independent parts, :meth:`pdfem.fem.implicit.Newmark.distribute`)."""
+        self.solver.distribute(comm)
+
     def step(self, dt: float) -> None:
         """Advance by ``dt`` (s) under the current loads and accumulated contact forces.
 

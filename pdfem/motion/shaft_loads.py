@@ -173,6 +173,9 @@ class ShaftLoads:
         self._root_rows = [np.flatnonzero(np.isin(self._held_nodes, root)) for root in self._roots]
         self._r0 = r0                                             # m, X - c0
         n = len(structure.surface_nodes)
+        # (B, Ns) 1 where a surface node is on blade b: the blades' sums in one product
+        self._on_blade = np.array([mask for _, mask, _, _ in self.blades], dtype=np.float64
+                                  ).reshape(len(self.blades), n)
         self.impulse_world = np.zeros((n, 3))    # N s, since the last row
         self.impulse_frame = np.zeros((n, 3))    # N s, frame axes
         self.moment_frame = np.zeros((n, 3))     # N m s, r x J, frame axes
@@ -245,20 +248,26 @@ class ShaftLoads:
         self.shaft_torque, self.shaft_power = q, p
 
     # ------------------------------------------------------------------ state
-    def angular_momentum(self) -> float:
-        """The structure's angular momentum about the shaft axis (kg m^2/s), true motion."""
+    def _world_motion(self) -> tuple[np.ndarray, np.ndarray]:
+        """(Nn, 3) node positions relative to the frame's centre (m) and velocities (m/s),
+        world axes, true motion."""
         s = self.structure
         r, v = s.relative_motion()
         x, w = s.frame.to_world(s.solver.time, r, v)
-        return float((cross(x - s.frame.state(s.solver.time)["c"], w)
-                      * s.node_mass[:, None]).sum(axis=0) @ self.axis)
+        return x - s.frame.state(s.solver.time)["c"], w
 
-    def kinetic_energy(self) -> float:
-        """The structure's kinetic energy in the world (J), true velocity, lumped mass."""
-        s = self.structure
-        r, v = s.relative_motion()
-        _, w = s.frame.to_world(s.solver.time, r, v)
-        return 0.5 * float(np.sum(s.node_mass[:, None] * w * w))
+    def angular_momentum(self, motion: tuple | None = None) -> float:
+        """The structure's angular momentum about the shaft axis (kg m^2/s), true motion
+        (``motion``: :meth:`_world_motion`, if known)."""
+        x, w = self._world_motion() if motion is None else motion
+        return float((cross(x, w) * self.structure.node_mass[:, None]).sum(axis=0)
+                     @ self.axis)
+
+    def kinetic_energy(self, motion: tuple | None = None) -> float:
+        """The structure's kinetic energy in the world (J), true velocity, lumped mass
+        (``motion``: :meth:`_world_motion`, if known)."""
+        _, w = self._world_motion() if motion is None else motion
+        return 0.5 * float(np.sum(self.structure.node_mass[:, None] * w * w))
 
     def von_mises(self) -> np.ndarray:
         """(Ne,) von Mises stress (Pa) at the element centres, as
@@ -289,6 +298,7 @@ class ShaftLoads:
         force = self.impulse_world.sum(axis=0) * scale
         moment = self.moment_frame.sum(axis=0) * scale
         vm = self.von_mises()
+        motion = self._world_motion()
         peak, where = self._stress_peak(vm, None)
         out = {"": {"frame_angle": s.frame.angle(s.solver.time),
                     "ice_torque": -float(moment @ self.axis), "thrust": float(force @ self.axis),
@@ -296,22 +306,26 @@ class ShaftLoads:
                     "shaft_power": self.shaft_power, "shaft_work": self.shaft_work,
                     "shaft_angular_impulse": self.shaft_angular_impulse,
                     "ice_work": self.ice_work, "ice_angular_impulse": self.ice_angular_impulse,
-                    "angular_momentum_change": self.angular_momentum() - self.angular_momentum0,
-                    "energy_change": self.kinetic_energy() + self.strain_energy() - self.energy0,
+                    "angular_momentum_change": self.angular_momentum(motion)
+                    - self.angular_momentum0,
+                    "energy_change": self.kinetic_energy(motion) + self.strain_energy()
+                    - self.energy0,
                     "damping_dissipated": s.solver.damping_dissipated,
                     "max_von_mises": peak, "max_von_mises_location": where}}
         held = self.held_reactions()
         r_held = self._r0[self._held_nodes] + s.dofmap.to_nodal(s.solver.u)[self._held_nodes]
-        for (label, mask, p, axes), rows in zip(self.blades, self._root_rows):
+        on_blade = self._on_blade
+        j_world, j_frame = on_blade @ self.impulse_world, on_blade @ self.impulse_frame
+        m_frame = on_blade @ self.moment_frame
+        for b, ((label, mask, p, axes), rows) in enumerate(zip(self.blades, self._root_rows)):
             root_moment = -cross(r_held[rows] - p, held[rows]).sum(axis=0)
-            jf = self.impulse_frame[mask].sum(axis=0) * scale
-            m = (self.moment_frame[mask].sum(axis=0) - cross(p, self.impulse_frame[mask].sum(
-                axis=0))) * scale
+            jf = j_frame[b] * scale
+            m = (m_frame[b] - cross(p, j_frame[b])) * scale
             bpeak, bwhere = self._stress_peak(vm, s.mesh.element_sets.get(label))
-            out[label] = {"force": self.impulse_world[mask].sum(axis=0) * scale,
+            out[label] = {"force": j_world[b] * scale,
                           "force_blade": axes @ jf,
-                          "ice_torque": -float(self.moment_frame[mask].sum(axis=0) @ self.axis)
-                          * scale, "thrust": float(jf @ self.axis),
+                          "ice_torque": -float(m_frame[b] @ self.axis) * scale,
+                          "thrust": float(jf @ self.axis),
                           "spindle_torque": float(axes[0] @ m),
                           "bending_out_of_plane": float(axes[1] @ m),
                           "bending_in_plane": float(axes[2] @ m),

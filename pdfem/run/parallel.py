@@ -35,15 +35,18 @@ MAX_RANKS_LISTED = 16
 
 
 def build_structures(configs, out: Path, file: str, comm) -> list:
-    """The case's structures on every rank, meshed once (by rank 0)."""
+    """The case's structures on every rank, meshed once (by rank 0), each sharing its own work
+    over the ranks (:meth:`pdfem.fem.base.Structure.distribute`)."""
     if comm.size == 1:
-        return build_all(configs, out, file)
-    # rank 0 meshes; if it fails, run_guarded aborts the job while the others wait in bcast
-    first = build_all(configs, out, file) if comm.rank == 0 else None
-    comm.bcast(True)
-    if comm.rank == 0:
-        return first
-    return build_all(configs, out, file, remesh=False)
+        built = build_all(configs, out, file)
+    else:
+        # rank 0 meshes; if it fails, run_guarded aborts the job while the others wait in bcast
+        first = build_all(configs, out, file) if comm.rank == 0 else None
+        comm.bcast(True)
+        built = first if comm.rank == 0 else build_all(configs, out, file, remesh=False)
+    for s in built:
+        s.distribute(comm)
+    return built
 
 
 def report_partitions(bodies: list, comm, say=lambda s: None) -> None:

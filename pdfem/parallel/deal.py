@@ -1,0 +1,57 @@
+"""Independent pieces of work dealt out over the ranks: who does which, and everyone's results.
+
+Some of a run's work falls into independent pieces that every rank would otherwise repeat: the
+blocks of an implicit structure's matrix (:mod:`pdfem.fem.block_factor`), one per part that
+meets the others only at held DOFs. :class:`Dealt` gives each piece to one rank (the largest
+first, each to the rank with the least work so far: Graham's longest-processing-time rule) and
+hands every rank all the pieces' results afterwards, in piece order, so the ranks go on with the
+same bits. On one rank, or with a single piece, every rank does all of it and nothing is sent.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from pdfem.parallel.comm import SerialComm
+
+
+def deal(work: np.ndarray, ranks: int) -> np.ndarray:
+    """The rank of each piece: the largest ``work`` first, each to the rank with the least work
+    so far (ties: the earlier piece first, the lower rank)."""
+    owner = np.zeros(len(work), dtype=np.int64)
+    load = np.zeros(ranks)
+    for b in sorted(range(len(work)), key=lambda k: (-work[k], k)):
+        r = int(np.argmin(load))
+        owner[b] = r
+        load[r] += work[b]
+    return owner
+
+
+class Dealt:
+    """Pieces of work (their sizes ``work``, any unit) dealt over the ranks of ``comm``.
+
+    Attributes
+    ----------
+    owner
+        (P,) the rank that does each piece (this rank for every piece when nothing is dealt).
+    mine
+        The pieces this rank does, ascending.
+    """
+
+    def __init__(self, work: Sequence[float], comm=SerialComm()) -> None:
+        work = np.asarray(work, dtype=np.float64)
+        self.comm = comm
+        self._shared = comm.size > 1 and len(work) > 1
+        self.owner = (deal(work, comm.size) if self._shared
+                      else np.full(len(work), comm.rank, dtype=np.int64))
+        self.mine = [int(k) for k in np.flatnonzero(self.owner == comm.rank)]
+
+    def everyone(self, parts: list) -> list[tuple[int, object]]:
+        """``(piece, result)`` of every piece, from each rank's ``parts`` (the results of its
+        :attr:`mine`, in that order). Collective when pieces are dealt out."""
+        if not self._shared:
+            return list(zip(self.mine, parts))
+        return [(int(k), part) for rank, rank_parts in enumerate(self.comm.allgather(parts))
+                for k, part in zip(np.flatnonzero(self.owner == rank), rank_parts)]

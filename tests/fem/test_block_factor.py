@@ -1,0 +1,110 @@
+"""A matrix factorised by its independent blocks solves as the whole matrix does, on 1 and 2 ranks.
+
+References: ``scipy.sparse.linalg.spsolve`` of the whole matrix (to round-off); the serial
+solve of the same blocks (bit for bit, on 2 ranks, where each rank solves its own blocks and
+the parts are shared); a zero right-hand side of a block gives exactly zero there; the
+longest-first dealing of blocks to ranks (Graham's LPT rule) by hand.
+"""
+
+from __future__ import annotations
+
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from pdfem.fem.block_factor import BlockFactor, independent_blocks
+from pdfem.parallel.deal import deal
+
+from support.mpi import run_ranks
+
+
+def blocky_spd(sizes=(7, 5, 9), seed=0) -> tuple[sp.csr_matrix, list[np.ndarray]]:
+    """A symmetric positive-definite matrix of independent blocks of ``sizes``, its DOFs
+    shuffled so that no block is contiguous; and the DOFs of each block."""
+    rng = np.random.default_rng(seed)
+    parts = []
+    for n in sizes:
+        b = sp.random(n, n, density=0.4, random_state=rng)
+        parts.append((b + b.T + n * sp.identity(n)).toarray())
+    a = sp.block_diag(parts).tocsr()
+    perm = rng.permutation(a.shape[0])
+    inv = np.argsort(perm)
+    dofs = np.split(np.arange(a.shape[0]), np.cumsum(sizes)[:-1])
+    return a[perm][:, perm].tocsr(), [np.sort(inv[d]) for d in dofs]
+
+
+def test_blocks_are_the_connected_parts_in_order_of_their_first_dof():
+    a, dofs = blocky_spd()
+    found = independent_blocks(a)
+    expected = sorted(dofs, key=lambda d: d[0])
+    assert len(found) == 3
+    for f, e in zip(found, expected):
+        assert np.array_equal(f, e)
+
+
+def test_solve_matches_the_whole_matrix():
+    a, _ = blocky_spd()
+    rng = np.random.default_rng(1)
+    f = BlockFactor(a)
+    b = rng.standard_normal(a.shape[0])
+    assert np.allclose(f.solve(b), spla.spsolve(a.tocsc(), b), rtol=1e-12, atol=1e-14)
+    bb = rng.standard_normal((a.shape[0], 4))
+    assert np.allclose(f.solve(bb), spla.spsolve(a.tocsc(), bb), rtol=1e-12, atol=1e-14)
+
+
+def test_a_zero_right_hand_side_block_is_exactly_zero():
+    a, dofs = blocky_spd()
+    b = np.zeros(a.shape[0])
+    b[dofs[1]] = 1.0
+    x = BlockFactor(a).solve(b)
+    assert not np.any(x[dofs[0]]) and not np.any(x[dofs[2]])
+    assert np.allclose(x, spla.spsolve(a.tocsc(), b), rtol=1e-12, atol=1e-14)
+
+
+def test_largest_block_first_to_the_least_loaded_rank():
+    # 5 -> rank 0; 4 -> rank 1; 3 -> rank 1 (4 < 5); 3 -> rank 0 (5 < 7): loads 8 and 7
+    assert deal(np.array([5.0, 4.0, 3.0, 3.0]), 2).tolist() == [0, 1, 1, 0]
+    assert deal(np.array([1.0, 1.0]), 3).tolist() == [0, 1]
+    assert deal(np.array([2.0]), 1).tolist() == [0]
+
+
+SCRIPT = textwrap.dedent('''
+    import sys
+    import numpy as np
+    sys.path[:0] = [sys.argv[1], sys.argv[2]]
+    from test_block_factor import blocky_spd
+    from pdfem.fem.block_factor import BlockFactor
+    from pdfem.parallel.comm import SerialComm, world
+    comm = world()
+    a, dofs = blocky_spd(sizes=(7, 5, 9, 6))
+    rng = np.random.default_rng(2)
+    b = rng.standard_normal(a.shape[0])
+    bb = rng.standard_normal((a.shape[0], 3))
+    split, serial = BlockFactor(a, comm), BlockFactor(a, SerialComm())
+    assert len(split._lu) < len(serial._lu), "each rank factorises only its own blocks"
+    for rhs in (b, bb):
+        assert np.array_equal(split.solve(rhs), serial.solve(rhs)), "not the serial bits"
+    one = BlockFactor(a[dofs[0]][:, dofs[0]], comm)   # one block: solved on every rank
+    assert one.dealt.owner.tolist() == [comm.rank] and np.array_equal(one.solve(b[dofs[0]]),
+                                            BlockFactor(a[dofs[0]][:, dofs[0]]).solve(b[dofs[0]]))
+    owned = comm.gather(sorted(split._lu))
+    if comm.rank == 0:
+        print("ok", owned)
+''')
+
+
+def test_two_ranks_solve_their_own_blocks_and_agree_with_one_bit_for_bit(tmp_path):
+    script = tmp_path / "blocks.py"
+    script.write_text(SCRIPT)
+    here = Path(__file__).parent
+    r = run_ranks(2, sys.executable, script, here, here.parent, timeout=300)
+    # each rank factorised the blocks dealt to it by their non-zeros, and only those
+    a, _ = blocky_spd(sizes=(7, 5, 9, 6))
+    owner = deal(np.array([a[d].nnz for d in independent_blocks(a)], dtype=float), 2)
+    expected = [np.flatnonzero(owner == rank).tolist() for rank in (0, 1)]
+    assert r.stdout.split("ok", 1)[1].strip() == str(expected)
+    assert sorted(expected) == [[0, 3], [1, 2]]   # two blocks each
