@@ -102,6 +102,7 @@ class BodyRecord:
     def __init__(self, body, pairs: list[ContactPair]) -> None:
         self.body = body
         self.pairs = pairs
+        self._work: ImpulseWork | None = None
         self.particles_moved()
 
     def particles_moved(self) -> None:
@@ -110,6 +111,17 @@ class BodyRecord:
         self.mass = b.material.density * b.vol
         self.ids = np.full(len(b.v), -1, dtype=np.int64)
         self.ids[b.owned] = b.owned_reference()[0]
+
+    def impulse_work(self) -> ImpulseWork | None:
+        """The ledger of the contact impulses' work for a step starting now (None for a body
+        without contact pairs): one ledger, reused step after step."""
+        if not self.pairs:
+            return None
+        if self._work is None:
+            self._work = ImpulseWork(self.body, self.mass)
+        else:
+            self._work.start(self.body, self.mass)
+        return self._work
 
 
 def substep_counts(ice_step: float, structure_step: float, substeps: int = 0):
@@ -321,8 +333,7 @@ class Coupler:
         D, n = self.dt, self.structure_substeps
         h = D / n
         # the impulse ledgers of the bodies in contact pairs (a body without pairs takes none)
-        works = [ImpulseWork(r.body, r.mass) if r.pairs else None
-                 for r in self.body_records]
+        works = [r.impulse_work() for r in self.body_records]
         v0 = [None if n == 1 else w.v0 if w is not None else b.v.copy()
               for w, b in zip(works, self.bodies)]
         for b in self.bodies:
@@ -377,8 +388,7 @@ class Coupler:
                 start, end, velocity = r.motion.sample(h, frac)
                 starts[id(r)], r.end = start, (end, velocity)
             self._set_surfaces(starts)
-            works = [ImpulseWork(r.body, r.mass) if r.pairs else None
-                 for r in self.body_records]
+            works = [r.impulse_work() for r in self.body_records]
             olds = [r.body.begin_step(h, keep_old=bool(r.pairs)) for r in self.body_records]
             for rec, y_old, work in zip(self.body_records, olds, works):
                 if work is not None:

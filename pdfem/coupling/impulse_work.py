@@ -59,18 +59,37 @@ class ImpulseWork:
         ``material.density``, ``gravity``, ``owned``), at the start of the step.
     mass
         Its particles' masses rho V (kg, (N,)), as the caller keeps them.
+
+    A ledger is kept from step to step: :meth:`start` begins the next step's (its arrays are
+    reused, and only the rows that took impulses are cleared), so a step costs two copies of
+    the body's velocities and forces, not four new arrays.
     """
 
     def __init__(self, body, mass: np.ndarray) -> None:
+        self.v0 = self.f0 = self.impulse = self.moment = np.zeros((0, 3))
+        self._touched: list[np.ndarray] = []
+        self.start(body, mass)
+
+    def start(self, body, mass: np.ndarray) -> "ImpulseWork":
+        """Begin the ledger of a new step of ``body`` (at its start; ``mass`` as above)."""
         self.mass = mass
-        self.v0 = body.v.copy()
-        self.f0 = body.f.copy()
-        self.impulse = np.zeros_like(self.v0)   # P, N s
-        self.moment = np.zeros_like(self.v0)    # sum_j P_j (tau_j - t), N s^2
+        if self.v0.shape != body.v.shape:     # the first step, or the particles moved
+            self.v0, self.f0 = np.empty_like(body.v), np.empty_like(body.f)
+            self.impulse = np.zeros_like(self.v0)   # P, N s
+            self.moment = np.zeros_like(self.v0)    # sum_j P_j (tau_j - t), N s^2
+        else:
+            for rows in self._touched:
+                self.impulse[rows] = 0.0
+                self.moment[rows] = 0.0
+        self._touched = []
+        np.copyto(self.v0, body.v)
+        np.copyto(self.f0, body.f)
+        return self
 
     def add(self, rows: np.ndarray, impulse: np.ndarray, since: float) -> None:
         """Impulses (K, 3) (N s) given to the particles ``rows`` (K,) (distinct) ``since``
         seconds after the step's start."""
+        self._touched.append(rows)
         self.impulse[rows] += impulse
         if since:
             self.moment[rows] += since * impulse

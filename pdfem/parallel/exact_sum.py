@@ -17,6 +17,9 @@ import math
 
 import numba
 import numpy as np
+from numba import prange
+
+from pdfem.parallel.kernels import twin
 
 MAX_PARTIALS = 64
 """Room for the partials of one column: an expansion of finite doubles never needs more than
@@ -44,45 +47,64 @@ def grow(x, partials, m):
     return i + 1
 
 
-@numba.njit(cache=True)
-def expansions(values, rows, every, out):
+@twin(fastmath=False)
+def expansions(values, rows, every, out, count):
     """Exact expansions of the column sums of ``values`` (n, k) over ``rows`` (indices; all
-    rows if ``every``) into ``out`` (k, MAX_PARTIALS); returns the (k,) partial counts, or -1
-    for a column with a non-finite value."""
+    rows if ``every``), one per column and chunk of the rows (C chunks of about equal length,
+    C = ``out.shape[1]``, threaded over the chunks), into ``out`` (k, C, MAX_PARTIALS); their
+    lengths into ``count`` (k, C), -1 where a value of the chunk is not finite."""
     k = values.shape[1]
-    count = np.zeros(k, dtype=np.int64)
     n = values.shape[0] if every else rows.shape[0]
-    for col in range(k):
-        m = 0
-        for t in range(n):
-            x = values[t, col] if every else values[rows[t], col]
-            if not np.isfinite(x):
-                m = -1
-                break
-            m = grow(x, out[col], m)
-        count[col] = m
-    return count
-
-
-@numba.njit(cache=True)
-def weighted_segment_expansions(w, values, idx, ptr, out, count):
-    """Per segment s (rows ``idx[ptr[s]:ptr[s+1]]``), the exact expansions of ``sum w_i`` and
-    of ``sum w_i values[i, c]`` (each product rounded once, as numpy's ``w[:, None] * values``)
-    into ``out[s, 0]`` and ``out[s, 1 + c]`` ((S, 1 + k, MAX_PARTIALS)), their lengths into
-    ``count`` ((S, 1 + k); -1 where a term is not finite)."""
-    k = values.shape[1]
-    for s in range(ptr.shape[0] - 1):
-        for col in range(k + 1):
-            partials = out[s, col]
+    chunks = out.shape[1]
+    for c in prange(chunks):
+        for col in range(k):
             m = 0
-            for t in range(ptr[s], ptr[s + 1]):
+            for t in range(n * c // chunks, n * (c + 1) // chunks):
+                x = values[t, col] if every else values[rows[t], col]
+                if not np.isfinite(x):
+                    m = -1
+                    break
+                m = grow(x, out[col, c], m)
+            count[col, c] = m
+
+
+@twin(fastmath=False)
+def weighted_segment_expansions(w, values, idx, ptr, out, count):
+    """Per segment s (rows ``idx[ptr[s]:ptr[s+1]]``) and chunk c of its rows (C chunks of about
+    equal length, C = ``out.shape[1]``, threaded over segments and chunks), the exact
+    expansions of ``sum w_i`` and of ``sum w_i values[i, col]`` (each product rounded once, as
+    numpy's ``w[:, None] * values``) into ``out[s, c, 0]`` and ``out[s, c, 1 + col]``
+    ((S, C, 1 + k, MAX_PARTIALS)), their lengths into ``count`` ((S, C, 1 + k); -1 where a
+    term is not finite)."""
+    k = values.shape[1]
+    chunks = out.shape[1]
+    for sc in prange((ptr.shape[0] - 1) * chunks):
+        s, c = sc // chunks, sc % chunks
+        n = ptr[s + 1] - ptr[s]
+        for col in range(k + 1):
+            partials = out[s, c, col]
+            m = 0
+            for t in range(ptr[s] + n * c // chunks, ptr[s] + n * (c + 1) // chunks):
                 i = idx[t]
                 x = w[i] if col == 0 else w[i] * values[i, col - 1]
                 if not np.isfinite(x):
                     m = -1
                     break
                 m = grow(x, partials, m)
-            count[s, col] = m
+            count[s, c, col] = m
+
+
+THREADED_FROM_TERMS = 8_192
+"""Terms (rows x columns) from which the expansions are built on the threads: a term costs
+5-20 ns (more as the expansion grows), a parallel region about 10 us."""
+
+
+def _chunks(rows: int, columns: int) -> tuple[bool, int]:
+    """Whether a sum of ``columns`` columns over ``rows`` rows is threaded, and into how many
+    chunks (each chunk's expansion is exact, so the rounded total does not depend on the
+    count)."""
+    parallel = rows * columns >= THREADED_FROM_TERMS and numba.get_num_threads() > 1
+    return parallel, numba.get_num_threads() if parallel else 1
 
 
 def local_expansion(values: np.ndarray, rows: np.ndarray | None = None) -> list:
@@ -91,9 +113,12 @@ def local_expansion(values: np.ndarray, rows: np.ndarray | None = None) -> list:
     a = np.asarray(values, dtype=np.float64)
     a2 = a[:, None] if a.ndim == 1 else a.reshape(a.shape[0], int(np.prod(a.shape[1:])))
     idx = np.zeros(0, dtype=np.int64) if rows is None else np.asarray(rows, dtype=np.int64)
-    out = np.empty((a2.shape[1], MAX_PARTIALS))
-    count = expansions(np.ascontiguousarray(a2), idx, rows is None, out)
-    return [None if c < 0 else out[col, :c].tolist() for col, c in enumerate(count)]
+    parallel, chunks = _chunks(a2.shape[0] if rows is None else len(idx), a2.shape[1])
+    out = np.empty((a2.shape[1], chunks, MAX_PARTIALS))
+    count = np.empty((a2.shape[1], chunks), dtype=np.int64)
+    expansions(parallel, np.ascontiguousarray(a2), idx, rows is None, out, count)
+    return [None if (c < 0).any() else [x for q in range(chunks) for x in out[col, q, :c[q]].tolist()]
+            for col, c in enumerate(count)]
 
 
 def round_expansions(parts: list[list], plain: np.ndarray | float) -> np.ndarray:
@@ -151,12 +176,14 @@ def exact_weighted_sums(w: np.ndarray, values: np.ndarray, segments: list, comm)
     idx = (np.concatenate(segments).astype(np.int64, copy=False) if segments
            else np.zeros(0, dtype=np.int64))
     k = 1 + values.shape[1]
-    out = np.empty((len(segments), k, MAX_PARTIALS))
-    count = np.empty((len(segments), k), dtype=np.int64)
-    weighted_segment_expansions(w, values, idx, ptr, out, count)
-    used = out[:, :, :max(int(count.max(initial=0)), 0)].tolist()
-    mine = [[row[:c] if c >= 0 else None for row, c in zip(rows, counts)]
-            for rows, counts in zip(used, count.tolist())]
+    parallel, chunks = _chunks(len(idx), k)
+    out = np.empty((len(segments), chunks, k, MAX_PARTIALS))
+    count = np.empty((len(segments), chunks, k), dtype=np.int64)
+    weighted_segment_expansions(parallel, w, values, idx, ptr, out, count)
+    used = out[:, :, :, :max(int(count.max(initial=0)), 0)].tolist()
+    mine = [[None if any(counts[q][col] < 0 for q in range(chunks))
+             else [x for q in range(chunks) for x in rows[q][col][:counts[q][col]]]
+             for col in range(k)] for rows, counts in zip(used, count.tolist())]
     parts = comm.allgather(mine)
     total = np.empty((len(segments), k))
     for s in range(len(segments)):

@@ -81,3 +81,25 @@ def test_weighted_segment_sums_with_a_non_finite_value_fall_back_to_a_plain_sum(
     got = exact_weighted_sums(w, f, [np.array([0, 1, 2]), np.array([2, 3])], SerialComm())
     assert math.isnan(got[0, 1]) and got[0, 2] == 1.0 and got[0, 0] == 3.0
     assert got[1].tolist() == [2.0, 5.0, 1.0, 0.0]
+
+
+def test_threaded_chunks_give_the_same_correctly_rounded_sums():
+    """From THREADED_FROM_TERMS terms the expansions are built per chunk on the threads; each
+    chunk's is exact, so the totals are still math.fsum's (and a non-finite value in one
+    chunk still falls back to a plain sum)."""
+    from pdfem.parallel.exact_sum import THREADED_FROM_TERMS
+    rng = np.random.default_rng(21)
+    n = 2 * THREADED_FROM_TERMS + 7
+    big = rng.normal(size=(n // 2, 3)) * 1e15
+    values = np.concatenate([big, -big[::-1], rng.normal(size=(n - 2 * (n // 2), 3))])
+    values[::5] += rng.normal(size=(len(values[::5]), 3))
+    assert exact_sum(values, SerialComm()).tolist() == [math.fsum(values[:, c]) for c in range(3)]
+    w = rng.uniform(1e-7, 2e-6, n)
+    segments = [np.arange(n), rng.permutation(n)[:THREADED_FROM_TERMS // 4 + 3]]
+    got = exact_weighted_sums(w, values, segments, SerialComm())
+    for s, rows in enumerate(segments):
+        prod = w[rows, None] * values[rows]
+        assert got[s, 0] == math.fsum(w[rows])
+        assert got[s, 1:].tolist() == [math.fsum(prod[:, c]) for c in range(3)]
+    values[n - 3, 2] = np.inf
+    assert math.isinf(exact_sum(values, SerialComm())[2])
