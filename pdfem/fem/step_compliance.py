@@ -108,6 +108,13 @@ def _pairs(points: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
     return start, index
 
 
+def _by_colour(colour: np.ndarray, n_colours: int) -> list[np.ndarray]:
+    """For each colour, the indices (ascending) of the entries of ``colour`` that have it."""
+    order = np.argsort(colour, kind="stable")
+    bounds = np.searchsorted(colour[order], np.arange(n_colours + 1))
+    return [order[bounds[c]:bounds[c + 1]] for c in range(n_colours)]
+
+
 def probe(solve: Callable[[np.ndarray], np.ndarray], free_index: np.ndarray,
           node_dofs: np.ndarray, points: np.ndarray, length: float) -> Coupling:
     """The blocks of ``A^-1`` (1/kg) between the nodes ``node_dofs`` within ``REACH`` decay
@@ -134,20 +141,22 @@ def probe(solve: Callable[[np.ndarray], np.ndarray], free_index: np.ndarray,
     free = free_index[node_dofs]                            # (Ns, 3)
     n_free = int(free_index.max()) + 1 if free_index.size else 0
     blocks = np.zeros((len(index), 3, 3))
-    pair_colour = colour[index]                              # the colour of each pair's k
-    columns = [(c, d) for c in range(int(colour.max()) + 1 if ns else 0) for d in range(3)]
+    n_colours = int(colour.max()) + 1 if ns else 0
+    nodes_of, pairs_of = _by_colour(colour, n_colours), _by_colour(colour[index], n_colours)
+    free_k, free_i = free[index], free[row]                  # (P, 3): k's and i's free DOFs
+    columns = [(c, d) for c in range(n_colours) for d in range(3)]
     for first in range(0, len(columns), BATCH):
         batch = columns[first:first + BATCH]
         rhs = np.zeros((n_free, len(batch)))
         for j, (c, d) in enumerate(batch):
-            nodes = np.flatnonzero((colour == c) & (free[:, d] >= 0))
+            nodes = nodes_of[c][free[nodes_of[c], d] >= 0]
             rhs[free[nodes, d], j] = 1.0
         with threadpool_limits(limits=1, user_api="blas"):   # (SuperLU's many-column solves
             x = solve(rhs)                                    # thrash on threaded BLAS: 14x)
         for j, (c, d) in enumerate(batch):
             # pairs (i, k), k of colour c: column d of C_ik, the response at i to k's load
-            sel = np.flatnonzero((pair_colour == c) & (free[index, d] >= 0))
-            rows = free[row[sel]]                            # (m, 3)
+            sel = pairs_of[c][free_k[pairs_of[c], d] >= 0]
+            rows = free_i[sel]                               # (m, 3)
             blocks[sel, :, d] = np.where(rows >= 0, x[np.maximum(rows, 0), j], 0.0)
     # C_ik = C_ki^T: the mean of the two probes
     twin = np.lexsort((row, index))                          # pair (k, i) of each (i, k)
