@@ -113,7 +113,9 @@ class MotionSection(Section):
     ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
         0.0, description="Elastic structures only: time over which velocity and "
                          "angular_velocity rise linearly from rest, from t = 0 (s). "
-                         "Default: 0 (full speed at once).")
+                         "Default: 0 (full speed at once: a turning structure starts in its "
+                         "steady state, the static equilibrium of the rotating frame; "
+                         "docs/rotating_structures.md).")
 
     @model_validator(mode="after")
     def _velocity_or_path(self) -> "MotionSection":

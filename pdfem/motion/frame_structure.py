@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.linalg import spsolve
 
 from pdfem.fem.central_difference_kernels import trapezoid_work
 from pdfem.fem.node_blocks import NodeBlockOperator
@@ -89,6 +90,10 @@ class FrameStructure(ElasticStructure):
         self.drive_impulse_work = 0.0  # J, work of contact impulses on the frame's velocity
         self._f_inertial = self._inertial_dofs(0.0)
         self.solver.initialize(f_ext=self.external_force_dofs(0.0) + self._f_inertial)
+        self.shaft = None
+        if np.any(frame.angular_velocity) and frame.speed_factor(0.0)[0] > 0.0:
+            # turning at full speed from t = 0 (no ramp): start in the steady state
+            self.set_state(displacement=self.dofmap.to_nodal(self.steady_displacement()))
         self.shaft = ShaftLoads(self) if np.any(frame.angular_velocity) else None
 
     # ------------------------------------------------------------------ frame kinematics
@@ -104,6 +109,37 @@ class FrameStructure(ElasticStructure):
         inertial_loads(self._r0, self.solver.u, self.solver.v, self._dofs, self.node_mass,
                        *self.frame.inertial_rates(t), self.frame.speed_factor(t)[0] ** 2, ksu, f)
         return f
+
+    def steady_displacement(self) -> np.ndarray:
+        """(n,) the elastic displacement (m, DOF vector, frame axes) in which the structure
+        turns steadily with the frame at t = 0: the static equilibrium of the stiffness with
+        the loads at t = 0 and the inertial loads of the steady rotation, the centrifugal load
+        and the prestress's geometric stiffness taken on the displaced nodes,
+        ``(K + s^2 K_sigma - spin softening) u = f_ext + f_inertial`` on the free DOFs
+        (:meth:`rotating_stiffness`), the held DOFs at their values now. In it the relative
+        velocity and acceleration are zero: a structure that starts turning at full speed
+        (``ramp_time`` 0) starts there, without the ringing of a sudden spin-up.
+
+        Raises
+        ------
+        ValueError
+            If the supports leave the spinning structure free to move (a singular stiffness).
+        """
+        sol = self.solver
+        u0 = sol.u.copy()
+        k_rot = self.rotating_stiffness(0.0)
+        rhs = (self.external_force_dofs(0.0) + self._inertial_dofs(0.0)
+               + (k_rot - sp.csr_matrix(self.K)) @ u0)
+        free, held = sol.free, ~sol.free
+        k_free = sp.csc_matrix(k_rot[free][:, free])
+        with np.errstate(all="ignore"):
+            u_free = spsolve(k_free, rhs[free] - k_rot[free][:, held] @ u0[held])
+        if not np.all(np.isfinite(u_free)):
+            raise ValueError(f"structure '{self.name}': its supports do not hold it while it "
+                             "turns (the rotating stiffness on the free DOFs is singular); add "
+                             "fixed groups or supports")
+        u0[free] = u_free
+        return u0
 
     def rotating_stiffness(self, t: float | None = None) -> sp.csr_matrix:
         """K + s^2 K_sigma - spin softening (N/m, DOF order) at time ``t`` (s; default now):

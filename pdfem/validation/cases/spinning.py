@@ -48,15 +48,17 @@ SOUTHWELL = 1.193      # first flapwise Southwell coefficient, uniform cantileve
 SWEEP = (0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # speeds / the case's speed, for the plot
 
 
-def stress_profile(outcome: Outcome) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def stress_profile(outcome: Outcome, frame: int = -1
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Radii r (m) of the centres of the slabs of elements along the bar, the mean sigma_xx
-    (Pa) over each slab in the last frame (Gauss quadrature: the slab's mean axial force over
-    its area), and the mean of rho omega^2 (R^2 - r^2) / 2 over the same slab (Pa)."""
+    (Pa) over each slab in frame ``frame`` (default the last; Gauss quadrature: the slab's mean
+    axial force over its area), and the mean of rho omega^2 (R^2 - r^2) / 2 over the same slab
+    (Pa)."""
     s = outcome.case.structures[0]
     material = ElasticMaterial(s.density, s.youngs_modulus, s.poisson_ratio)
     bar = ElasticStructure.from_file(outcome.directory / f"{s.name}.msh", material,
                                      element_order=s.element_order)
-    u = bar.dofmap.to_dofs(outcome.data["structure"][s.name]["u_elastic"][-1])
+    u = bar.dofmap.to_dofs(outcome.data["structure"][s.name]["u_elastic"][frame])
     grad = bar.basis.interpolate(u).grad                # (3, 3, Ne, Nq): du_i / dx_j
     lam, mu = material.lame
     sxx = (lam + 2.0 * mu) * grad[0, 0] + lam * (grad[1, 1] + grad[2, 2])
@@ -73,13 +75,38 @@ def stress_profile(outcome: Outcome) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return r, mean, 0.5 * s.density * omega**2 * (tip**2 - (a * a + a * b + b * b) / 3.0)
 
 
-def measure(outcome: Outcome) -> float:
-    """The ratio sigma / sigma_rr, among the stations 0.2 R..0.8 R, furthest from 1 (-)."""
-    r, sigma, ref = stress_profile(outcome)
+def measure(outcome: Outcome, frame: int = -1) -> float:
+    """The ratio sigma / sigma_rr, among the stations 0.2 R..0.8 R, furthest from 1 (-), in
+    frame ``frame`` (default the last)."""
+    r, sigma, ref = stress_profile(outcome, frame)
     tip = float(outcome.case.structures[0].params["length_x"])
     keep = (r >= STATIONS[0] * tip) & (r <= STATIONS[1] * tip)
     ratio = sigma[keep] / ref[keep]
     return float(ratio[np.argmax(np.abs(ratio - 1.0))])
+
+
+def frame_ratios(outcome: Outcome) -> np.ndarray:
+    """:func:`measure` of every frame of the run, in order (-)."""
+    frames = len(outcome.data["time"])
+    return np.array([measure(outcome, k) for k in range(frames)])
+
+
+def measure_every_frame(outcome: Outcome) -> float:
+    """The ratio sigma / sigma_rr furthest from 1 over the stations 0.2 R..0.8 R and every
+    frame of the run, the first (t = 0) included (-)."""
+    ratios = frame_ratios(outcome)
+    return float(ratios[np.argmax(np.abs(ratios - 1.0))])
+
+
+def steady_plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
+    """The worst station's sigma / sigma_rr in every frame against time."""
+    ax = fig.add_subplot()
+    ax.plot(outcome.data["time"] * 1e3, frame_ratios(outcome), "o-", ms=3,
+            label="pdfem: worst station, 0.2 R..0.8 R")
+    ax.axhline(1.0, color="k", ls="--", label="rho omega^2 (R^2 - r^2) / 2")
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("sigma / sigma_rr [-]")
+    ax.legend()
 
 
 def reference(case: Case) -> float:
@@ -169,6 +196,16 @@ CASES = (
         source="equilibrium of a slender bar spinning about its root, d sigma/dr = -rho omega^2 r, "
                "sigma(R) = 0 (e.g. Timoshenko & Goodier, Theory of Elasticity, 1970, rotating "
                "bodies)",
+        quick_note="10 x 1 x 1 hexahedra instead of 10 x 2 x 2"),
+    ValidationCase(
+        name="spinning_bar_steady_start", case_file="spinning_bar_steady.toml",
+        quantity="radial stress / rho omega^2 (R^2 - r^2)/2, worst station and frame, started "
+                 "at full speed", unit="-",
+        measure=measure_every_frame, reference=reference, plot=steady_plot, quick=quick,
+        tolerance=0.03,
+        source="equilibrium of a slender bar spinning about its root, d sigma/dr = -rho omega^2 "
+               "r, sigma(R) = 0 (e.g. Timoshenko & Goodier, Theory of Elasticity, 1970, "
+               "rotating bodies), held in every frame: the steady state needs no ramp",
         quick_note="10 x 1 x 1 hexahedra instead of 10 x 2 x 2"),
     ValidationCase(
         name="spinning_bar_southwell", case_file="spinning_bar_southwell.toml",
