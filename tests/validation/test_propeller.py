@@ -195,3 +195,30 @@ def test_ten_node_blades_converge_where_four_node_blades_lock(tmp_path):
 
     assert deflection(0.2, 2) == pytest.approx(6.70e-3, rel=0.01)
     assert deflection(0.2, 1) < 6.70e-3 / 3.0
+
+
+@pytest.mark.slow
+def test_propeller_started_in_steady_rotation_holds_its_centrifugal_stress(tmp_path):
+    """The tiny milling propeller at 300 rpm from t = 0 (its ramp removed) starts in the static
+    centrifugal state of the rotating frame (FrameStructure.steady_displacement) and keeps it
+    until the ice arrives (blade 1 meets the block at 3.6 ms): the largest von Mises stress of
+    every coupling step to 3.4 ms within 3 % (issue's tolerance; in fact to round-off) of the
+    t = 0 frame's, which is the static centrifugal stress (10.0 MPa at the blade roots);
+    with the 1 ms ramp of the case the same history rings by far more than 3 %."""
+    from dataclasses import replace
+    from pdfem.validation.case import run_and_read
+    with case_path("propeller_milling_tiny.toml") as path:
+        case = load_case(path)
+    prop = case.structures[0]
+    run = replace(case.run, end_time=3.4e-3, output_interval=1.7e-3)
+    steady = replace(case, run=run, structures=[replace(prop, ramp_time=0.0)])
+    data = run_and_read(steady, tmp_path / "steady")
+    static = float(data["structure"]["propeller"]["von_mises"][0].max())   # Pa, t = 0 frame
+    rows = data["histories"]["shaft/propeller"]["max_von_mises"]
+    assert static > 5e6
+    np.testing.assert_allclose(rows, static, rtol=0.03)
+    assert np.abs(rows / static - 1.0).max() < 1e-6                  # nothing rings
+    ramped = run_and_read(replace(case, run=run), tmp_path / "ramped")
+    late = ramped["histories"]["shaft/propeller"]["max_von_mises"][ramped["histories"][
+        "shaft/propeller"]["time"] > 1.0e-3]
+    assert np.abs(late / static - 1.0).max() > 0.03
