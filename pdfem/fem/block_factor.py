@@ -27,6 +27,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
 
+from pdfem.geometry.cell_hash import members
 from pdfem.parallel.comm import SerialComm
 from pdfem.parallel.deal import Dealt
 
@@ -35,10 +36,7 @@ def independent_blocks(a: sp.spmatrix) -> list[np.ndarray]:
     """The DOFs (ascending) of each connected component of the graph of ``a`` (square), in the
     order of their smallest DOF."""
     n_blocks, label = connected_components(sp.csr_matrix(a), directed=False)
-    order = np.argsort(label, kind="stable")
-    bounds = np.searchsorted(label[order], np.arange(n_blocks + 1))
-    blocks = [order[bounds[b]:bounds[b + 1]] for b in range(n_blocks)]
-    return sorted(blocks, key=lambda idx: int(idx[0]))
+    return sorted(members(label, n_blocks), key=lambda idx: int(idx[0]))
 
 
 class BlockFactor:

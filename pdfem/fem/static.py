@@ -19,7 +19,8 @@ if TYPE_CHECKING:
 
 
 def static_displacement(structure: ElasticStructure,
-                        force: np.ndarray | None = None) -> np.ndarray:
+                        force: np.ndarray | None = None,
+                        stiffness: sp.spmatrix | None = None) -> np.ndarray:
     """(Nn, 3) static displacement (m) of ``structure`` under its loads.
 
     Parameters
@@ -28,6 +29,9 @@ def static_displacement(structure: ElasticStructure,
         The elastic structure (``K``, ``solver.free``, ``dofmap``).
     force
         (3 Nn,) DOF force vector (N) to use instead of ``structure.external_force_dofs(0.0)``.
+    stiffness
+        (3 Nn, 3 Nn) stiffness (N/m) to use instead of ``structure.K`` (e.g. a spinning
+        structure's, :meth:`pdfem.motion.frame_structure.FrameStructure.rotating_stiffness`).
 
     Returns
     -------
@@ -41,7 +45,8 @@ def static_displacement(structure: ElasticStructure,
     """
     f = structure.external_force_dofs(0.0) if force is None else np.asarray(force, np.float64)
     free = structure.solver.free
-    k = sp.csc_matrix(sp.csr_matrix(structure.K)[free][:, free])
+    k = sp.csc_matrix(sp.csr_matrix(structure.K if stiffness is None else stiffness)
+                      [free][:, free])
     with np.errstate(all="ignore"):
         u_free = spsolve(k, f[free])
     if not np.all(np.isfinite(u_free)):

@@ -51,6 +51,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 from threadpoolctl import threadpool_limits
 
+from pdfem.geometry.cell_hash import members
+
 REACH = 5.0
 """Range of the kept couplings, in decay lengths ``c dt / 2`` (module docstring)."""
 
@@ -108,13 +110,6 @@ def _pairs(points: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
     return start, index
 
 
-def _by_colour(colour: np.ndarray, n_colours: int) -> list[np.ndarray]:
-    """For each colour, the indices (ascending) of the entries of ``colour`` that have it."""
-    order = np.argsort(colour, kind="stable")
-    bounds = np.searchsorted(colour[order], np.arange(n_colours + 1))
-    return [order[bounds[c]:bounds[c + 1]] for c in range(n_colours)]
-
-
 def probe(solve: Callable[[np.ndarray], np.ndarray], free_index: np.ndarray,
           node_dofs: np.ndarray, points: np.ndarray, length: float) -> Coupling:
     """The blocks of ``A^-1`` (1/kg) between the nodes ``node_dofs`` within ``REACH`` decay
@@ -142,7 +137,7 @@ def probe(solve: Callable[[np.ndarray], np.ndarray], free_index: np.ndarray,
     n_free = int(free_index.max()) + 1 if free_index.size else 0
     blocks = np.zeros((len(index), 3, 3))
     n_colours = int(colour.max()) + 1 if ns else 0
-    nodes_of, pairs_of = _by_colour(colour, n_colours), _by_colour(colour[index], n_colours)
+    nodes_of, pairs_of = members(colour, n_colours), members(colour[index], n_colours)
     free_k, free_i = free[index], free[row]                  # (P, 3): k's and i's free DOFs
     columns = [(c, d) for c in range(n_colours) for d in range(3)]
     for first in range(0, len(columns), BATCH):

@@ -139,7 +139,8 @@ class ElasticStructure(AppliedLoads, Structure):
         self._surface_points0 = self.node_points[self.surface_nodes]
         self._nodal_forces = np.zeros((self.n_nodes, 3))
         self.implicit = self.solver.steps_before_contact   # implicit steps (Newmark)
-        self._compliance: tuple[float, np.ndarray] | None = None   # (dt, (Ns, 3, 3) 1/kg)
+        # (dt, the surface's compliance for that step): surface_compliance's, kept
+        self._compliance: tuple[float, LumpedCompliance | StepCompliance] | None = None
         self._pressure_dofs = np.zeros(self.dofmap.n_dofs)
         self._load_dofs = np.zeros(self.dofmap.n_dofs)   # nodal forces + surface loads, as DOFs
         self._timed_loads: list = []                      # (DOF vector, t -> factor)

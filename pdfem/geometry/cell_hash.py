@@ -128,6 +128,15 @@ def counting_sort(ids, ncells, start, perm):
     start[0] = 0
 
 
+def members(ids: np.ndarray, n: int) -> list[np.ndarray]:
+    """For each id in [0, n), the indices (ascending) of the entries of ``ids`` equal to it
+    (:func:`counting_sort`)."""
+    ids = np.ascontiguousarray(ids, dtype=np.int64)
+    start, perm = np.empty(n + 1, dtype=np.int64), np.empty(len(ids), dtype=np.int64)
+    counting_sort(ids, n, start, perm)
+    return [perm[start[c]:start[c + 1]] for c in range(n)]
+
+
 @numba.njit(cache=True)
 def run_starts(sorted_ids):
     """Start of every run of equal ids in ``sorted_ids`` (the occupied cells), plus the end:

@@ -43,10 +43,10 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import spsolve
 
 from pdfem.fem.central_difference_kernels import trapezoid_work
 from pdfem.fem.node_blocks import NodeBlockOperator
+from pdfem.fem.static import static_displacement
 from pdfem.fem.structure import ElasticStructure
 from pdfem.motion.frame_kernels import inertial_loads, surface_world
 from pdfem.motion.moving_frame import MovingFrame
@@ -93,7 +93,7 @@ class FrameStructure(ElasticStructure):
         self.shaft = None
         if np.any(frame.angular_velocity) and frame.speed_factor(0.0)[0] > 0.0:
             # turning at full speed from t = 0 (no ramp): start in the steady state
-            self.set_state(displacement=self.dofmap.to_nodal(self.steady_displacement()))
+            self.set_state(displacement=self.steady_displacement())
         self.shaft = ShaftLoads(self) if np.any(frame.angular_velocity) else None
 
     # ------------------------------------------------------------------ frame kinematics
@@ -111,35 +111,30 @@ class FrameStructure(ElasticStructure):
         return f
 
     def steady_displacement(self) -> np.ndarray:
-        """(n,) the elastic displacement (m, DOF vector, frame axes) in which the structure
-        turns steadily with the frame at t = 0: the static equilibrium of the stiffness with
-        the loads at t = 0 and the inertial loads of the steady rotation, the centrifugal load
-        and the prestress's geometric stiffness taken on the displaced nodes,
+        """(Nn, 3) the elastic displacement (m, frame axes) in which the structure turns
+        steadily with the frame at t = 0: the static equilibrium of the stiffness with the
+        loads at t = 0 and the inertial loads of the steady rotation, the centrifugal load and
+        the prestress's geometric stiffness taken on the displaced nodes,
         ``(K + s^2 K_sigma - spin softening) u = f_ext + f_inertial`` on the free DOFs
-        (:meth:`rotating_stiffness`), the held DOFs at their values now. In it the relative
-        velocity and acceleration are zero: a structure that starts turning at full speed
-        (``ramp_time`` 0) starts there, without the ringing of a sudden spin-up.
+        (:meth:`rotating_stiffness`, :func:`pdfem.fem.static.static_displacement`), the held
+        DOFs at their values now. In it the relative velocity and acceleration are zero: a
+        structure that starts turning at full speed (``ramp_time`` 0) starts there, without the
+        ringing of a sudden spin-up.
 
         Raises
         ------
         ValueError
             If the supports leave the spinning structure free to move (a singular stiffness).
         """
-        sol = self.solver
-        u0 = sol.u.copy()
+        u0 = self.solver.u
+        held = ~self.solver.free
         k_rot = self.rotating_stiffness(0.0)
-        rhs = (self.external_force_dofs(0.0) + self._inertial_dofs(0.0)
-               + (k_rot - sp.csr_matrix(self.K)) @ u0)
-        free, held = sol.free, ~sol.free
-        k_free = sp.csc_matrix(k_rot[free][:, free])
-        with np.errstate(all="ignore"):
-            u_free = spsolve(k_free, rhs[free] - k_rot[free][:, held] @ u0[held])
-        if not np.all(np.isfinite(u_free)):
-            raise ValueError(f"structure '{self.name}': its supports do not hold it while it "
-                             "turns (the rotating stiffness on the free DOFs is singular); add "
-                             "fixed groups or supports")
-        u0[free] = u_free
-        return u0
+        # f_inertial(u) = f_inertial(u0) - (k_rot - K)(u - u0); the held DOFs' part moved over
+        force = (self.external_force_dofs(0.0) + self._inertial_dofs(0.0)
+                 + (k_rot - sp.csr_matrix(self.K)) @ u0 - k_rot[:, held] @ u0[held])
+        u = self.dofmap.to_dofs(static_displacement(self, force, k_rot))
+        u[held] = u0[held]
+        return self.dofmap.to_nodal(u)
 
     def rotating_stiffness(self, t: float | None = None) -> sp.csr_matrix:
         """K + s^2 K_sigma - spin softening (N/m, DOF order) at time ``t`` (s; default now):
