@@ -20,6 +20,7 @@ from pdfem.post.motions import plot_motions
 from pdfem.post.resistance import plot_resistance
 from pdfem.post.shaft import plot_shaft
 from pdfem.post.spectrum import amplitude_spectrum
+from pdfem.post.windowed import windowed_force
 
 
 def _figure(rows: int, height: float = 3.0):
@@ -47,9 +48,13 @@ def _plot_loads(loads: dict[str, dict], path: Path, written: list[Path],
                 title: str = "Ice force on '{}'", cutoff: float | None = None) -> None:
     fig, axes = _figure(len(loads))
     for ax, (name, h) in zip(axes, loads.items()):
+        ax.plot(h["time"], np.linalg.norm(h["force"], axis=1), color="0.75", lw=0.6,
+                label="$|F|$ per step (step-dependent)")
+        t, f, w = windowed_force(h["time"], h["force"])
         for a, c in enumerate(AXES):
-            ax.plot(h["time"], h["force"][:, a], lw=0.9, label=f"$F_{c}$")
-        ax.plot(h["time"], np.linalg.norm(h["force"], axis=1), "k", lw=1.2, label="$|F|$")
+            ax.plot(t, f[:, a], lw=0.9, label=f"$F_{c}$")
+        ax.plot(t, np.linalg.norm(f, axis=1), "k", lw=1.2,
+                label=f"$|F|$ (solid lines: {w * 1e3:.3g} ms mean)")
         if cutoff is not None:
             f = lowpassed(h["time"], h["force"], cutoff)
             ax.plot(h["time"], np.linalg.norm(f, axis=1), "r", lw=1.5,
@@ -172,7 +177,8 @@ def write_plots(results: dict, out_dir: str | os.PathLike,
     -------
     list of pathlib.Path
         The files written, among (each only when the file has the data):
-        ``load_history.png`` (force components and magnitude vs time, one panel per loaded
+        ``load_history.png`` (force components and magnitude averaged over 0.1 ms vs time,
+        the per-step magnitude faint, one panel per loaded
         structure; needs a load history), ``load_spectrum.png`` (one-sided amplitude spectrum
         of the force magnitude on log-log axes, Hz, the mean left out; needs 4 or more load
         samples), ``region_reactions.png`` (the same for the reactions of the ice's fixed and

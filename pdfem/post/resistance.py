@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from pdfem.post.windowed import windowed_force
+
 
 STEADY_FRACTION = 0.6
 """Fraction of the loaded span (from the first contact to the end) before the steady phase."""
@@ -72,7 +74,11 @@ def steady_figures(time: np.ndarray, resistance: np.ndarray,
     dict
         ``start``, ``end`` (s), ``samples``, ``mean``, ``std`` and ``peak`` (N) over
         ``time >= start`` (time-weighted by the trapezoid rule; a single sample is its own
-        mean, std 0); NaN figures when no sample is in the phase.
+        mean, std 0); ``std`` and ``peak`` of the resistance averaged over ``window`` (s,
+        :func:`pdfem.post.windowed.windowed_force`: step independent; the mean is the raw
+        history's);
+        ``per_step_peak`` (N) the step-dependent peak of the raw per-step resistance; NaN
+        figures when no sample is in the phase.
     """
     t = np.asarray(time, dtype=np.float64)
     r = np.asarray(resistance, dtype=np.float64)
@@ -81,15 +87,26 @@ def steady_figures(time: np.ndarray, resistance: np.ndarray,
     out: dict[str, Any] = {"start": t_start, "end": float(t[-1]) if t.size else float("nan"),
                            "samples": int(m.sum())}
     if not m.any():
-        return out | {"mean": float("nan"), "std": float("nan"), "peak": float("nan")}
-    ts, rs = t[m], r[m]
-    if ts.size == 1 or ts[-1] <= ts[0]:
-        mean, var = float(rs.mean()), float(rs.var())
-    else:
-        span = ts[-1] - ts[0]
-        mean = float(np.trapezoid(rs, ts) / span)
-        var = float(np.trapezoid((rs - mean) ** 2, ts) / span)
-    return out | {"mean": mean, "std": var ** 0.5, "peak": float(rs.max())}
+        return out | {"mean": float("nan"), "std": float("nan"), "peak": float("nan"),
+                      "per_step_peak": float("nan"), "window": float("nan")}
+    tw, rw, window = windowed_force(t, r)
+    keep = tw >= t_start
+    mean, _ = _weighted(t[m], r[m], None)
+    _, var = _weighted(tw[keep], rw[keep], mean) if keep.any() else _weighted(t[m], r[m], mean)
+    peak = float(rw[keep].max()) if keep.any() else float(r[m].max())
+    return out | {"mean": mean, "std": var ** 0.5, "peak": peak,
+                  "per_step_peak": float(r[m].max()), "window": window}
+
+
+def _weighted(t: np.ndarray, y: np.ndarray, mean: float | None) -> tuple[float, float]:
+    """Time-weighted (trapezoid) mean of ``y`` and its variance about ``mean`` (default: that
+    mean); a single sample or no span: the plain mean and variance."""
+    if t.size == 1 or t[-1] <= t[0]:
+        m = float(y.mean()) if mean is None else mean
+        return m, float(np.mean((y - m) ** 2))
+    span = t[-1] - t[0]
+    m = float(np.trapezoid(y, t) / span) if mean is None else mean
+    return m, float(np.trapezoid((y - m) ** 2, t) / span)
 
 
 def resistance_summary(results: dict) -> dict[str, dict]:

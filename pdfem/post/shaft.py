@@ -17,9 +17,14 @@ from pathlib import Path
 import numpy as np
 
 from pdfem.post.spectrum import amplitude_spectrum
+from pdfem.post.windowed import peak_pair, signed_peak, windowed_force
 
 PREFIX = "shaft/"
 """History groups of rotating structures: ``shaft/<name>``, ``shaft/<name>.<blade>``."""
+
+ICE_LOADS = ("ice_torque", "thrust")
+"""Shaft histories that are the ice's per-step loads (impulse / step): plotted and reported
+averaged over 0.1 ms (:mod:`pdfem.post.windowed`)."""
 
 HARMONICS = 4
 """Multiples of the blade passing frequency marked on the spectrum plot."""
@@ -58,42 +63,49 @@ def shaft_figures(h: dict, blades: dict[str, dict]) -> dict:
     Returns
     -------
     dict
-        ``rpm`` (1/min), ``blades`` Z, ``blade_passing_frequency`` (Hz), ``peak_ice_torque``
-        {value N m, time s}, ``mean_ice_torque`` and ``mean_shaft_torque`` (N m),
-        ``mean_thrust`` and ``peak_thrust`` (N, |largest|, signed), ``spectral_peak_frequency``
+        ``rpm`` (1/min), ``blades`` Z, ``blade_passing_frequency`` (Hz), ``window`` (s),
+        ``peak_ice_torque`` {value N m, time s}, ``mean_ice_torque`` and ``mean_shaft_torque``
+        (N m), ``mean_thrust`` and ``peak_thrust`` (N, |largest|, signed); the peaks of the
+        ice's loads are those of the loads averaged over ``window``
+        (:func:`pdfem.post.windowed.peak_pair`, step independent), ``per_step`` holds the
+        step-dependent per-step ``peak_ice_torque`` and ``peak_thrust``;
+        ``spectral_peak_frequency``
         (Hz, largest amplitude of the ice torque's spectrum above 0 Hz; None for < 4 samples),
         ``max_von_mises`` {value Pa, time s, location m (frame axes)}, and per blade
         ``peak_spindle_torque``, ``peak_bending_out_of_plane``, ``peak_bending_in_plane``
-        (N m, signed, largest |value|; the ice load's moments), ``peak_root_moment`` (N m, the
-        same per component of the supports' root moment) and ``max_von_mises`` (Pa).
+        (N m, signed, largest |value| averaged over ``window``; the ice load's moments),
+        ``peak_root_moment`` (N m, per component of the supports' root moment, the structure's
+        response: per step) and ``max_von_mises`` (Pa).
     """
     t = np.asarray(h["time"])
     q, thrust = np.asarray(h["ice_torque"]), np.asarray(h["thrust"])
     rpm = shaft_speed(h) * 60.0 / (2.0 * math.pi)
     z = max(len(blades), 1)
-    i = int(np.argmax(q))
-    j = int(np.argmax(np.abs(thrust)))
     k = int(np.argmax(h["max_von_mises"]))
     peak_f = None
     if t.size >= 4:
         f, amp = amplitude_spectrum(t, q)
         peak_f = float(f[1 + int(np.argmax(amp[1:]))])
+    torque, push = peak_pair(t, q), peak_pair(t, thrust)
 
-    def signed_peak(y) -> float:
-        y = np.asarray(y)
-        return float(y[int(np.argmax(np.abs(y)))])
+    def windowed_peak(y) -> float:
+        return peak_pair(t, np.asarray(y))["peak"]
 
     return {"rpm": rpm, "blades": z, "blade_passing_frequency": z * rpm / 60.0,
-            "peak_ice_torque": {"value": float(q[i]), "time": float(t[i])},
+            "window": torque["window"],
+            "peak_ice_torque": {"value": torque["peak"], "time": torque["time"]},
             "mean_ice_torque": _mean(t, q), "mean_shaft_torque": _mean(t, h["shaft_torque"]),
-            "mean_thrust": _mean(t, thrust), "peak_thrust": float(thrust[j]),
+            "mean_thrust": _mean(t, thrust), "peak_thrust": push["peak"],
+            "per_step": {"peak_ice_torque": {"value": torque["per_step_peak"],
+                                             "time": torque["per_step_time"]},
+                         "peak_thrust": push["per_step_peak"]},
             "spectral_peak_frequency": peak_f,
             "max_von_mises": {"value": float(h["max_von_mises"][k]), "time": float(t[k]),
                               "location": np.asarray(h["max_von_mises_location"][k]).tolist()},
-            "blade": {b: {"peak_spindle_torque": signed_peak(g["spindle_torque"]),
-                          "peak_bending_out_of_plane": signed_peak(g["bending_out_of_plane"]),
-                          "peak_bending_in_plane": signed_peak(g["bending_in_plane"]),
-                          "peak_root_moment": [signed_peak(c) for c in
+            "blade": {b: {"peak_spindle_torque": windowed_peak(g["spindle_torque"]),
+                          "peak_bending_out_of_plane": windowed_peak(g["bending_out_of_plane"]),
+                          "peak_bending_in_plane": windowed_peak(g["bending_in_plane"]),
+                          "peak_root_moment": [signed_peak(t, c)[0] for c in
                                                np.asarray(g["root_moment"]).T],
                           "max_von_mises": float(np.max(g["max_von_mises"]))}
                       for b, g in blades.items()}}
@@ -112,11 +124,15 @@ def shaft_lines(summary: dict) -> list[str]:
         vm = f["max_von_mises"]
         lines += ["", f"Shaft loads of '{name}' ({f['blades']} blade{'s' * (f['blades'] != 1)}, {f['rpm']:.4g} rpm, "
                       f"blade passing frequency {f['blade_passing_frequency']:.4g} Hz)",
-                  f"  peak ice torque {f['peak_ice_torque']['value']:.4g} N m at t = "
-                  f"{f['peak_ice_torque']['time']:.4g} s; mean ice torque "
+                  f"  peak ice torque ({f['window'] * 1e3:.3g} ms mean) "
+                  f"{f['peak_ice_torque']['value']:.4g} N m at t = "
+                  f"{f['peak_ice_torque']['time']:.4g} s (per-step peak "
+                  f"{f['per_step']['peak_ice_torque']['value']:.4g} N m: step-dependent); "
+                  "mean ice torque "
                   f"{f['mean_ice_torque']:.4g} N m, mean shaft torque "
                   f"{f['mean_shaft_torque']:.4g} N m",
-                  f"  mean thrust {f['mean_thrust']:.4g} N, peak {f['peak_thrust']:.4g} N; "
+                  f"  mean thrust {f['mean_thrust']:.4g} N, peak ({f['window'] * 1e3:.3g} ms "
+                  f"mean) {f['peak_thrust']:.4g} N; "
                   f"ice torque spectrum peaks at "
                   + ("-" if sp is None else f"{sp:.4g} Hz"),
                   f"  max von Mises {vm['value']:.4g} Pa at t = {vm['time']:.4g} s, element at "
@@ -154,11 +170,18 @@ def plot_shaft(results: dict, out: Path, written: list[Path]) -> None:
             ax_t, ax_a = axes[2 * n + row]
             for key in keys:
                 y = np.asarray(h[key])
-                ax_t.plot(t, y, lw=0.8, label=key.replace("_", " "))
-                revs = np.unique(rev)
+                k = 0
+                if key in ICE_LOADS:    # the ice's loads: averaged over 0.1 ms, per step faint
+                    ax_t.plot(t, y, color="0.8", lw=0.5, label=f"{key.replace('_', ' ')} per "
+                                                                "step (step-dependent)")
+                    tw, y, w = windowed_force(t, y)
+                    k = t.size - tw.size
+                ax_t.plot(t[k:], y, lw=0.8, label=key.replace("_", " ")
+                          + (f" ({w * 1e3:.3g} ms mean)" if key in ICE_LOADS else ""))
+                revs = np.unique(rev[k:])
                 for r in revs:
-                    on = rev == r
-                    line = ax_a.plot(deg[on] - 360.0 * r, y[on], lw=0.8,
+                    on = rev[k:] == r
+                    line = ax_a.plot(deg[k:][on] - 360.0 * r, y[on], lw=0.8,
                                      color=ax_t.lines[-1].get_color(), alpha=0.9 if
                                      r == revs[-1] else 0.4)
                     if r == revs[0]:

@@ -52,12 +52,29 @@ def windowed_force(time: np.ndarray, force: np.ndarray,
     return t[n - 1:], (c[n:] - c[:-n]) / n, n * step
 
 
-def peak_windowed_force(time: np.ndarray, force: np.ndarray,
-                        window: float = WINDOW) -> tuple[float, float, float]:
-    """Largest magnitude of the windowed (3,) force: ``(peak N, time s, window s)``."""
-    t, f, w = windowed_force(time, force, window)
-    if t.size == 0:
-        return float("nan"), float("nan"), w
-    mag = np.linalg.norm(f.reshape(len(t), -1), axis=1)
-    i = int(np.argmax(mag))
-    return float(mag[i]), float(t[i]), w
+def signed_peak(time: np.ndarray, values: np.ndarray) -> tuple[float, float]:
+    """The sample of ``values`` (K,) with the largest magnitude, signed, and its time (s):
+    ``(value, time)``; NaNs when there is no sample."""
+    y = np.asarray(values, dtype=np.float64)
+    if y.size == 0:
+        return float("nan"), float("nan")
+    i = int(np.argmax(np.abs(y)))
+    return float(y[i]), float(np.asarray(time)[i])
+
+
+def peak_pair(time: np.ndarray, values: np.ndarray, window: float = WINDOW) -> dict:
+    """The signed peak of a per-step scalar history (N or N m) as engineers report it.
+
+    Returns
+    -------
+    dict
+        ``peak``, ``time``: the signed peak of the history averaged over ``window``
+        (:func:`windowed_force`, step independent: the headline); ``per_step_peak``,
+        ``per_step_time``: the signed peak of the raw per-step history (grows as the step
+        shrinks); ``window`` (s) the window used.
+    """
+    tw, yw, w = windowed_force(time, values, window)
+    peak, when = signed_peak(tw, yw)
+    raw, raw_when = signed_peak(time, values)
+    return {"peak": peak, "time": when, "per_step_peak": raw, "per_step_time": raw_when,
+            "window": w}

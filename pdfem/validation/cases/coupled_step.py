@@ -18,7 +18,8 @@ import numpy as np
 
 from pdfem.case import Case
 from pdfem.output import read_results
-from pdfem.post.windowed import peak_windowed_force, windowed_force
+from pdfem.post.summary import summarize
+from pdfem.post.windowed import windowed_force
 from pdfem.run.driver import run_case
 from pdfem.validation.case import (Outcome, ValidationCase, replace_ice, replace_run,
                                    replace_structure)
@@ -45,8 +46,10 @@ def sweep(case: Case, directory: Path) -> dict[str, Any]:
         label = f"safety {safety:g}, substeps {substeps or 'auto'}"
         out = directory / f"safety{safety:g}_substeps{substeps}"
         run = replace_run(case, safety_factor=safety, substeps=substeps)
-        h = read_results(run_case(run, out, quiet=True).results)["histories"]
-        runs[label] = {"energy": h["energy"], "load": h["loads/panel"]}
+        results = read_results(run_case(run, out, quiet=True).results)
+        h = results["histories"]
+        runs[label] = {"energy": h["energy"], "load": h["loads/panel"],
+                       "reported": summarize(results)["loads"]["panel"]["magnitude"]}
     return {"runs": runs}
 
 
@@ -65,12 +68,13 @@ def negative_dissipation(outcome: Outcome) -> float:
 
 
 def _peaks(outcome: Outcome) -> dict[str, float]:
-    return {label: peak_windowed_force(r["load"]["time"], r["load"]["force"])[0]
-            for label, r in outcome.data["runs"].items()}
+    """The peak ice load each run reports (``pdfem post``'s headline: averaged over 0.1 ms)."""
+    return {label: r["reported"]["peak"] for label, r in outcome.data["runs"].items()}
 
 
 def load_spread(outcome: Outcome) -> float:
-    """Largest relative deviation of the runs' windowed peak ice load from the first run's."""
+    """Largest relative deviation of the runs' reported peak ice load (the summary's headline,
+    averaged over 0.1 ms) from the first run's."""
     peaks = list(_peaks(outcome).values())
     return max(abs(p - peaks[0]) / peaks[0] for p in peaks)
 
@@ -149,8 +153,11 @@ CASES = (
                "ice met the structure's substeps with its mid-step velocity (off by O(D a)); "
                "the tolerance is round-off of the sum of the impulses' works"),
     ValidationCase(
-        name="step_load_convergence", quantity="spread of the 0.1 ms peak ice load", unit="-",
+        name="step_load_convergence", quantity="spread of the reported peak ice load (0.1 ms "
+                                               "mean)", unit="-",
         measure=load_spread, plot=plot_loads, tolerance=0.05, **_COMMON,
-        source="time-step convergence: the peak ice load averaged over 0.1 ms at safety "
-               "factors 0.15-0.9 and 1, 2 or automatic substeps, against the run at 0.9"),
+        source="time-step convergence: the peak ice load the summary reports (averaged over "
+               "0.1 ms, pdfem.post.windowed) at safety factors 0.15-0.9 and 1, 2 or automatic "
+               "substeps, against the run at 0.9 (the per-step peak: 231 kN at 0.8, 1,219 kN "
+               "at 0.15)"),
 )
