@@ -90,7 +90,7 @@ def run_local(folder: SweepFolder, names: Sequence[str], jobs: int = 1, threads:
                 folder.clear_status(name)
                 cmd = run_command(folder, name)
                 with open(folder.run_dir(name) / "log.txt", "a") as log:
-                    log.write(f"$ {' '.join(cmd[3:])}\n")
+                    log.write(f"$ pdfem {' '.join(cmd[3:])}\n")
                     log.flush()
                     process = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT,
                                                stdin=subprocess.DEVNULL, env=env)

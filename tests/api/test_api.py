@@ -113,3 +113,17 @@ def test_import_pdfem_is_cheap_and_pdfem_run_is_the_package_and_the_function():
     assert out.stdout.split() == ["['pdfem',", "'pdfem.run']"]
     import pdfem.run.driver
     assert callable(pdfem.run) and pdfem.run.driver.run_case.__module__ == "pdfem.run.driver"
+
+
+def test_a_sweep_from_python_validates_writes_its_job_array_and_collects(block, tmp_path):
+    out = tmp_path / "study"
+    script = pdfem.sweep(block, {"ice.0.material.youngs_modulus": np.array([3e9, 4e9])}, out,
+                         slurm=True, quiet=True)
+    assert script == out / "sweep.sbatch" and "#SBATCH --array=0-1\n" in script.read_text()
+    assert (out / "runs" / "youngs_modulus=4e+09" / "case.toml").is_file()
+    table = pdfem.collect(out)  # nothing has run: the runs without outputs, no plot
+    assert [r["exit_status"] for r in table.rows] == [None, None] and table.plot is None
+    assert table.columns == ["run", "ice.0.material.youngs_modulus", "exit_status"]
+    with pytest.raises(pdfem.InputError) as e:
+        pdfem.sweep(block, {"ice.0.dx": [0.01, -0.01]}, tmp_path / "bad", quiet=True)
+    assert e.value.field == "--set ice.0.dx" and not (tmp_path / "bad").exists()

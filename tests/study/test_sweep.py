@@ -27,6 +27,7 @@ from pdfem.study.grid import grid_runs, parse_set
 from pdfem.study.local import run_command
 from pdfem.study.plan import plan_sweep
 from pdfem.study.plot import choose
+from pdfem.study.runner import sweep_status
 from pdfem.study.table import collect
 
 from support.cases import BLOCK
@@ -185,6 +186,12 @@ def test_a_study_folder_refuses_another_base_case_or_other_keys(block, tmp_path)
     assert e.value.field == "--out"
 
 
+@pytest.mark.parametrize("statuses, exit_status", [
+    ([0, 0], 0), ([0, 3], 3), ([3, 3], 3), ([0, 1], 1), ([3, 2], 1), ([0, None], 1), ([-9], 1)])
+def test_a_studys_exit_status_is_the_worst_of_its_runs(statuses, exit_status):
+    assert sweep_status(statuses) == exit_status
+
+
 def test_collect_refuses_a_folder_without_a_study(tmp_path, capsys):
     assert main(["sweep", "--collect", str(tmp_path)]) == 2
     assert "no sweep here" in capsys.readouterr().err
@@ -251,7 +258,7 @@ def test_pdfem_sweep_runs_its_cases_as_processes_two_at_once_then_skips_them(blo
     assert [x["run"] for x in rows] == names and [x["exit_status"] for x in rows] == ["0", "0"]
     assert list(rows[0]) == [c for c in COLUMNS if c != V]  # V does not vary
     log = (out / "runs" / NAMES[0] / "log.txt").read_text()
-    assert log.count("$ run ") == 1 and "energy budget" in log
+    assert log.count("$ pdfem run ") == 1 and "energy budget" in log
     r = run_pdfem("sweep", block, *sets, "--out", out, "--jobs", "2", cwd=tmp_path)
     assert r.returncode == 0 and "2 of 2 runs finished before: skipped" in r.stdout
     assert (out / "runs" / NAMES[0] / "log.txt").read_text() == log
