@@ -2,6 +2,8 @@
 
     pdfem run [CASE.toml] [--out DIR] [--restart CHECKPOINT] [--quiet] [--json]
     pdfem post RESULTS.h5 [--plots DIR] [--csv FILE] [--json]
+    pdfem sweep CASE.toml --set KEY=V1,V2,... [--out DIR] [--jobs N] [--slurm]
+    pdfem sweep --collect DIR [--plot OUTPUT:INPUT]
     pdfem mesh MODEL [--set key=value ...] [-o FILE.msh] [--json]
     pdfem modes CASE.toml [--structure NAME] [--n K] [--out DIR] [--json]
     pdfem validate [--quick] [--report DIR] [--json] [--case NAME ...]
@@ -27,9 +29,9 @@ import warnings
 from pdfem import __version__
 from pdfem.errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, EXIT_OK, InputError, InstabilityError
 
-from pdfem.cli import bench, info, mesh, modes, post, run, schema, validate
+from pdfem.cli import bench, info, mesh, modes, post, run, schema, sweep, validate
 
-COMMANDS = (run, post, mesh, modes, validate, schema, bench, info)
+COMMANDS = (run, post, sweep, mesh, modes, validate, schema, bench, info)
 """The commands, each a module with ``NAME``, ``HELP``, ``add_arguments(parser)`` and
 ``run(args) -> exit status``; a new command is one new module plus its entry here."""
 

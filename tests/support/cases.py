@@ -5,6 +5,9 @@
 coupled case (tests/run/test_mpi_run.py, tests/forces/test_mpi_short_range.py). SI units.
 ``CYLINDER_BODIES`` is its plate and cylinder without the ``[run]`` section, for tests that
 run them otherwise (tests/run/test_mpi_checkpoint_ranks.py: floating, with checkpoints).
+``BLOCK``: a 6 cm ice cube (216 particles, dx 1 cm) on a fixed base, its top layer pushed down
+at 0.5 m/s for 20 us (three frames): elastic, no structure, no meshing; the loads are the
+reactions ``block.base`` and ``block.top`` (tests/api, tests/study: runs of a second or less).
 """
 
 CYLINDER_RUN = """
@@ -29,3 +32,17 @@ motion = { velocity = [0.0, -4.0, 0.0] }
 """
 
 CYLINDER = CYLINDER_RUN + CYLINDER_BODIES
+
+BLOCK = """
+[run]
+end_time = 2.0e-5
+output_interval = 1.0e-5
+
+[[ice]]
+name = "block"
+dx = 0.01
+shape = { box = { min = [0.0, 0.0, 0.0], max = [0.06, 0.06, 0.06] } }
+material = { density = 900.0, youngs_modulus = 4.0e9, poisson_ratio = 0.3, fracture_energy = 10.0 }
+fixed = [ { name = "base", box = { min = [-0.01, -0.01, -0.01], max = [0.07, 0.07, 0.01] } } ]
+prescribed_velocity = [ { name = "top", region = { box = { min = [-0.01, -0.01, 0.05], max = [0.07, 0.07, 0.07] } }, velocity = [0.0, 0.0, -0.5] } ]
+"""
