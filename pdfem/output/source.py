@@ -33,7 +33,8 @@ Rows = dict[str, dict[str, Any]]
 UNITS: dict[str, str] = {
     "u": "m", "v": "m/s", "damage": "1", "von_mises": "Pa",
     "force": "N", "moment": "N m", "contacts": "1", "applied": "N",
-    "kinetic": "J", "strain": "J", "gravity_potential": "J", "external_work": "J",
+    "kinetic": "J", "kinetic_correction": "J", "strain": "J", "gravity_potential": "J",
+    "external_work": "J",
     "structure_kinetic": "J", "structure_strain": "J", "short_range_potential": "J",
     "rigid_body_work": "J", "dissipated": "J", "contact_dissipated": "J",
     "fracture_dissipated": "J", "damping_dissipated": "J", "structure_kinetic_correction": "J",

@@ -485,6 +485,11 @@ class IceBody:
         """Kinetic energy of the whole body, J."""
         return diagnostics.kinetic_energy(self)
 
+    def kinetic_correction(self, step: float) -> float:
+        """Velocity Verlet's share of the kinetic energy at the ice step ``step`` (s), the
+        whole body, J (:func:`pdfem.pd.diagnostics.kinetic_correction`)."""
+        return diagnostics.kinetic_correction(self, step)
+
     def strain_energy(self, forces_current: bool = False) -> float:
         """Elastic energy of the unbroken bonds (and of the crushed bonds that still push) at
         the current positions, the whole body, J; ``forces_current``: the forces were last

@@ -27,6 +27,30 @@ def kinetic_energy(body) -> float:
     return 0.5 * body.material.density * float(body.layout.owned_sum(body.vol * vv))
 
 
+def kinetic_correction(body, step: float) -> float:
+    """Velocity Verlet's own share of the kinetic energy of the whole body (J) at the step
+    ``step`` (s): ``-(h^2 / 8) sum_i rho V_i |a_i|^2`` over the particles the scheme integrates
+    (not the fixed or prescribed ones), ``a = f / rho + g`` the acceleration of the current
+    forces.
+
+    Added to ``1/2 m |v|^2`` it gives ``1/2 m v(n - 1/2) . v(n + 1/2)``, the kinetic energy
+    that velocity Verlet conserves exactly with the strain energy for linear forces (the
+    half-step velocities are ``v(n) -/+ (h/2) a(n)``; the same identity as the central
+    difference scheme's, :meth:`pdfem.fem.explicit.CentralDifference.kinetic_correction`;
+    Hairer, Lubich & Wanner, *Geometric Numerical Integration*, 2nd ed. 2006, ch. I.1.4 and
+    IX.8: the scheme conserves a modified energy, not the sampled one). Without it an impact
+    that sets the particles ringing in their highest modes shows up to a few percent of the
+    energy in play as "created" while the ringing lasts. It is bounded and vanishes as h -> 0."""
+    rho = body.material.density
+    a = body.f / rho + body.gravity
+    w = body.vol * (~body.fixed)
+    if body.constraints:
+        w = w.copy()
+        for c in body.constraints:
+            w[c.index] = 0.0
+    return -0.125 * step * step * rho * float(body.layout.owned_sum(w * np.einsum("ij,ij->i", a, a)))
+
+
 def strain_energy(body, forces_current: bool = False) -> float:
     """Elastic energy (J) of the whole body at the current positions: the unbroken bonds, with
     the dilatation of the current bond set (bonds broken this step excluded), and the crushed

@@ -170,7 +170,8 @@ def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart
             "pd_loop": case.run.pd_loop}
     writer, ice_writer = open_outputs(case, out, comm, meta, ckpt is not None, setup.particles)
     per_rank = ice_writer is not writer
-    energy = EnergyBalance(setup.bodies, setup.structures, setup.forces, setup.coupler)
+    energy = EnergyBalance(setup.bodies, setup.structures, setup.forces, setup.coupler,
+                           setup.dt / setup.n_ice)
     outputs = Outputs(writer, ice_writer, sources(setup, per_rank), energy)
     try:
         outputs.register(setup)
