@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from pdfem.errors import EXIT_OK
+from pdfem.errors import EXIT_OK, InputError
 
 NAME = "mesh"
 HELP = "mesh a model of models/ (or a .py file) with gmsh"
@@ -24,7 +24,18 @@ def add_arguments(m: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Mesh the model; exit status."""
     from pdfem.meshing.runner import mesh_model, parse_set
-    report = mesh_model(args.model, parse_set(args.set), Path(args.output) if args.output else None)
+    from pdfem.run.outdir import check_out_dir
+    params = parse_set(args.set)
+    output = Path(args.output) if args.output else None
+    if output is not None:
+        if output.is_dir():
+            raise InputError(None, "--output", "is a directory; give the .msh file to write",
+                             args.output)
+        try:  # its directory, checked like a run's --out
+            check_out_dir(output.parent)
+        except InputError as exc:
+            raise InputError(None, "--output", exc.message, args.output) from None
+    report = mesh_model(args.model, params, output)
     print(json.dumps(report.as_dict()) if args.json else report.text())
     return EXIT_OK
 

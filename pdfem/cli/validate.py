@@ -35,6 +35,15 @@ def add_arguments(v: argparse.ArgumentParser) -> None:
                    help="run only this case (repeatable; default: all)")
 
 
+def _report_dir(report: Path) -> Path:
+    """``--report`` checked like a run's ``--out`` (created; not a file; writable)."""
+    from pdfem.run.outdir import check_out_dir
+    try:
+        return check_out_dir(report)
+    except InputError as exc:
+        raise InputError(None, "--report", exc.message, exc.value) from None
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the validation; exit status 0 when all cases pass, 1 otherwise."""
     from pdfem.validation import all_cases, run_validation
@@ -54,8 +63,7 @@ def run(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     if args.report is not None:
-        report = Path(args.report)
-        report.mkdir(parents=True, exist_ok=True)
+        report = _report_dir(args.report)
         results = run_validation(cases, report / "runs", quick=args.quick, plot_dir=report, log=say)
     else:
         with tempfile.TemporaryDirectory(prefix="pdfem_validate_") as work:
