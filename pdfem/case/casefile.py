@@ -66,6 +66,14 @@ class CaseFile(Section):
             seen.append((name, c.ice, c.structure))
         self._water_used()
         kinds = {s.name: s.kind for s in self.structure}
+        ships = [s.name for s in self.structure if s.kind == "ship"]
+        for k, s in enumerate(self.structure):
+            if s.kind == "ship" and self.water is None:
+                raise fail("a ship floats: the case needs a [water] section (density, level) for "
+                           "its hydrostatics", s.kind, key=f"structure[{k}].kind")
+            if s.attached_to is not None and s.attached_to not in ships:
+                raise fail(_names("ship (kind = \"ship\")", ships), s.attached_to,
+                           key=f"structure[{k}].attached_to")
         for k, m in enumerate(self.monitor):
             at = f"monitor[{k}]"
             if any(o.name == m.name for o in self.monitor[:k]):
