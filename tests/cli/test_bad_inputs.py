@@ -17,10 +17,10 @@ import os
 import subprocess
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from support.cli import pdfem_command, run_main, run_pdfem
+from support.results import write_swinging_monitor
 
 RUN = "[run]\nend_time = 1e-4\noutput_interval = 5e-5\n"
 ICE = ("[[ice]]\nname = 'cube'\ndx = 0.01\n"
@@ -238,19 +238,9 @@ COMMANDS = [
 @pytest.fixture(scope="module")
 def results_file(tmp_path_factory) -> Path:
     """A hand-made results file: one elastic tetrahedron and a monitor 'root' whose xx stress
-    swings 40 +- 50 MPa over 10 cycles (as tests/post/test_fatigue.py)."""
-    from pdfem.output.writer import ResultsWriter
-    path = tmp_path_factory.mktemp("results") / "results.h5"
-    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
-    with ResultsWriter(path, "", {"title": "bad options"}) as w:
-        w.add_structure("panel", points, np.array([[0, 1, 2, 3]]), "tetra")
-        w.write_frame(0.0, {}, {"panel": {"u": np.zeros((4, 3)), "von_mises": np.zeros(1)}})
-        for k in range(21):
-            sxx = 40e6 + 50e6 * (-1.0) ** k
-            w.append_history("monitors/root", k * 1e-3, {
-                "u": [0.0, 0.0, 0.0], "von_mises": abs(sxx),
-                "stress": [sxx, 0.0, 0.0, 0.0, 0.0, 0.0]})
-    return path
+    swings 40 +- 50 MPa over 10 cycles."""
+    return write_swinging_monitor(tmp_path_factory.mktemp("results") / "results.h5",
+                                  "bad options")
 
 
 @pytest.mark.parametrize("name,argv,fragments", COMMANDS, ids=[c[0] for c in COMMANDS])
