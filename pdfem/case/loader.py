@@ -92,7 +92,7 @@ def load_case(path: str | Path) -> Case:
     if not p.is_file():
         raise InputError(str(path), None, "no such case file")
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")  # a byte-order mark (some editors) is dropped
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(str(path), None, f"cannot read the case file: {exc}") from None
     return parse_case(text, str(path), p.resolve().parent)

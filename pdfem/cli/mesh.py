@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from pdfem.cli.options import path_text
 from pdfem.errors import EXIT_OK, InputError
 
 NAME = "mesh"
@@ -17,7 +18,8 @@ def add_arguments(m: argparse.ArgumentParser) -> None:
     m.add_argument("model", help="model name (hull_panel, propeller_blade, indenters) or a .py file with build()")
     m.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="model parameter (SI units), repeatable")
-    m.add_argument("-o", "--output", default=None, help="output .msh file (default: <model>.msh)")
+    m.add_argument("-o", "--output", default=None, type=path_text,
+                   help="output .msh file (default: <model>.msh)")
     m.add_argument("--json", action="store_true", help="print the mesh report as one JSON object")
 
 

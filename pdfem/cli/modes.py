@@ -20,6 +20,7 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+from pdfem.cli.options import path_text
 from pdfem.errors import EXIT_OK, InputError
 
 NAME = "modes"
@@ -36,7 +37,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="only this structure (default: every elastic structure)")
     p.add_argument("--n", type=int, default=DEFAULT_MODES, metavar="K",
                    help=f"number of modes per structure (default {DEFAULT_MODES})")
-    p.add_argument("--out", default=None,
+    p.add_argument("--out", default=None, type=path_text,
                    help="output directory for modes.h5 / modes.xdmf (default: results/<case name>)")
     p.add_argument("--json", action="store_true", help="print the frequencies as one JSON object")
 

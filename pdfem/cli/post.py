@@ -10,6 +10,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from pdfem.cli.options import path_text
 from pdfem.errors import EXIT_OK, InputError
 
 if TYPE_CHECKING:
@@ -22,8 +23,9 @@ HELP = "summarise a results file: table, plots, CSV"
 def add_arguments(q: argparse.ArgumentParser) -> None:
     """The options of ``pdfem post``."""
     q.add_argument("results", help="results file (results.h5 written by 'pdfem run')")
-    q.add_argument("--plots", default=None, metavar="DIR", help="write PNG plots into DIR")
-    q.add_argument("--csv", default=None, metavar="FILE",
+    q.add_argument("--plots", default=None, type=path_text, metavar="DIR",
+                   help="write PNG plots into DIR")
+    q.add_argument("--csv", default=None, type=path_text, metavar="FILE",
                    help="write the per-step load and monitor histories to FILE (CSV)")
     q.add_argument("--lowpass", type=float, default=None, metavar="HZ",
                    help="also report the load peaks after a zero-phase 4th-order Butterworth "

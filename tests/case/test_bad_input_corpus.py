@@ -613,3 +613,12 @@ def test_stale_lock_is_taken_over_and_released(tmp_path):
             assert (tmp_path / LOCK_NAME).read_text().startswith(str(os.getpid()))
             raise RuntimeError("a failing run")
     assert not (tmp_path / LOCK_NAME).exists()
+
+
+def test_byte_order_mark_is_not_bad_input(tmp_path):
+    """A case file saved with a UTF-8 byte-order mark (some Windows editors) reads as without."""
+    from pdfem.case.schema import load_case
+    case = tmp_path / "bom.toml"
+    case.write_text(BASE, encoding="utf-8-sig")
+    assert case.read_bytes()[:3] == b"\xef\xbb\xbf"
+    assert load_case(case).run.end_time == 1e-5
