@@ -7,12 +7,29 @@ state blew up. Every other exception is a bug or an environment failure (exit 1)
 
 from __future__ import annotations
 
+import reprlib
 from typing import Any
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
 EXIT_INSTABILITY = 3
+
+
+SHOWN_CHARS = 200
+"""Longest shown value in a message; a longer one (a mistyped table or a nested array pasted
+into a field) is cut in the middle."""
+
+
+def shown(value: Any) -> str:
+    """``repr(value)`` for a message, at most about :data:`SHOWN_CHARS` characters."""
+    try:
+        text = repr(value)
+    except RecursionError:  # nested deeper than repr goes
+        text = reprlib.repr(value)
+    if len(text) <= SHOWN_CHARS:
+        return text
+    return text[:SHOWN_CHARS - 40] + " ... " + text[-30:]
 
 
 class InputError(Exception):
@@ -45,7 +62,7 @@ class InputError(Exception):
         if self.field:
             where.append(f"field '{self.field}'")
         head = ("Error " + ", ".join(where) + ": ") if where else "Error: "
-        val = "" if self.value is ... else f" (got {self.value!r})"
+        val = "" if self.value is ... else f" (got {shown(self.value)})"
         return head + self.message.rstrip(".") + val + "."
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Annotated, Any, Iterator, Literal
+from typing import Annotated, Any, ClassVar, Iterator, Literal
 
 from annotated_types import GroupedMetadata, Interval
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
@@ -89,10 +89,12 @@ def Positive(unit: str = "") -> Number:
     return Number(unit, gt=0.0)
 
 
-def _vector_check(unit: str):
+def _vector_check(unit: str, positive: bool):
     def check(v: Any) -> tuple[float, float, float]:
-        if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(_is_number(c) for c in v)):
-            raise fail(f"expected three finite numbers [x, y, z]{_in(unit)}", v)
+        if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(_is_number(c) for c in v)
+                and (not positive or all(c > 0 for c in v))):
+            what = "three finite numbers > 0" if positive else "three finite numbers"
+            raise fail(f"expected {what} [x, y, z]{_in(unit)}", v)
         return (float(v[0]), float(v[1]), float(v[2]))
     return check
 
@@ -100,15 +102,21 @@ def _vector_check(unit: str):
 #: Three floats.
 Vec3 = tuple[float, float, float]
 
+_Above0 = Annotated[float, Interval(gt=0.0)]
+
+#: Three floats > 0 (the JSON Schema shows the bound on each).
+PositiveVec3 = tuple[_Above0, _Above0, _Above0]
+
 
 class Vector(GroupedMetadata):
-    """Metadata of three finite numbers ``[x, y, z]`` in ``unit``: ``Annotated[Vec3, Vector("m")]``."""
+    """Metadata of three finite numbers ``[x, y, z]`` in ``unit``: ``Annotated[Vec3, Vector("m")]``;
+    ``positive``: each > 0 (``Annotated[PositiveVec3, Vector("m", positive=True)]``)."""
 
-    def __init__(self, unit: str = ""):
-        self.unit = unit
+    def __init__(self, unit: str = "", positive: bool = False):
+        self.unit, self.positive = unit, positive
 
     def __iter__(self) -> Iterator[Any]:
-        yield BeforeValidator(_vector_check(self.unit))
+        yield BeforeValidator(_vector_check(self.unit, self.positive))
 
 
 def _name_check(v: Any) -> str:
@@ -234,6 +242,10 @@ class Section(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid", json_schema_extra=tidy_schema)
 
+    #: ``(key, other, message)``: ``key`` has an effect only with ``other`` (a field whose
+    #: ``None`` means "not given"); given without it, it is refused with ``message``.
+    needs: ClassVar[tuple[tuple[str, str, str], ...]] = ()
+
     @classmethod
     def keys(cls) -> list[str]:
         """The TOML keys of this table, in declaration order."""
@@ -249,3 +261,10 @@ class Section(BaseModel):
             raise fail("unknown key; the keys allowed here are: " + ", ".join(sorted(cls.keys())),
                        key=str(unknown[0]))
         return data
+
+    @model_validator(mode="after")
+    def _needed(self) -> "Section":
+        for key, other, message in self.needs:
+            if key in self.model_fields_set and getattr(self, other) is None:
+                raise fail(message, getattr(self, key), key=key)
+        return self

@@ -88,6 +88,10 @@ class IceMaterialSection(Section):
         1.0 / 3.0, description="Exponent of the ductile strength's rise with the strain rate (-), "
         "with transition_rate. Default: 1/3 (Glen's flow law, n = 3).")
 
+    needs = (("rate_exponent", "transition_rate", 'rate_exponent shapes the "ice" law\'s '
+              "ductile strength below transition_rate; give transition_rate (1/s) or remove "
+              "rate_exponent"),)
+
     @model_validator(mode="after")
     def _one_criterion(self) -> "IceMaterialSection":
         given = self.model_fields_set

@@ -10,7 +10,6 @@ is evaluated, but a ``.py`` model script named by a structure's ``mesh`` is exec
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -19,12 +18,8 @@ from pydantic import ValidationError
 from pdfem.case.casefile import CaseFile
 from pdfem.case.config import Case, resolve
 from pdfem.case.fields import ERROR_TYPE
+from pdfem.case.toml_read import read_toml
 from pdfem.errors import InputError
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 
 def field_path(loc: tuple[Any, ...]) -> str:
@@ -88,11 +83,7 @@ def parse_case(text: str, file: str = "<string>", directory: Path | None = None)
         For malformed TOML, unknown keys, wrong types or out-of-range values.
     """
     directory = Path(directory) if directory is not None else Path.cwd()
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(file, None, f"not valid TOML: {exc}") from None
-    return resolve(validate(data, file, directory), file, text, directory)
+    return resolve(validate(read_toml(text, file), file, directory), file, text, directory)
 
 
 def load_case(path: str | Path) -> Case:
@@ -101,7 +92,7 @@ def load_case(path: str | Path) -> Case:
     if not p.is_file():
         raise InputError(str(path), None, "no such case file")
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")  # a byte-order mark (some editors) is dropped
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(str(path), None, f"cannot read the case file: {exc}") from None
     return parse_case(text, str(path), p.resolve().parent)

@@ -14,8 +14,8 @@ from typing import Annotated, Any
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from pdfem.case.fields import (Choice, Identifier, Name, Names, Number, Positive, Section, Tables,
-                               Vec3, Vector, Whole, fail)
+from pdfem.case.fields import (Choice, Identifier, Name, Names, Number, Positive, PositiveVec3,
+                               Section, Tables, Vec3, Vector, Whole, fail)
 from pdfem.case.shapes import MotionPath, directory
 
 #: Structural steel (SI): density and elastic constants of carbon steel as used for ship hulls
@@ -59,7 +59,10 @@ class PulseSection(Section):
     hold: Annotated[float, Number("s", ge=0.0)] | None = Field(
         None, description="Time at full load (s). Default: forever (the load stays on).")
     fall: Annotated[float, Number("s", ge=0.0)] = Field(
-        0.0, description="Fall time from full load to 0 (s). Default: 0.")
+        0.0, description="Fall time from full load to 0 (s), after hold; with hold only. "
+                         "Default: 0.")
+    needs = (("fall", "hold", "the load falls after its hold; without hold it stays on, so "
+                              "give hold (s) or remove fall"),)
 
 
 class LoadSection(Section):
@@ -134,9 +137,9 @@ class ShipSection(Section):
     center_of_gravity: Annotated[Vec3, Vector("m")] | None = Field(
         None, description="Centre of gravity in the mesh's coordinates (m). Default: above "
                           "the hull's centre of buoyancy, at the water surface.")
-    radii_of_gyration: Annotated[Vec3, Vector("m")] | None = Field(
+    radii_of_gyration: Annotated[PositiveVec3, Vector("m", positive=True)] | None = Field(
         None, description="Radii of gyration about the body x (roll), y (pitch), z (yaw) axes "
-                          "through the centre of gravity (m). Default: 0.4 x breadth, "
+                          "through the centre of gravity (m), each > 0. Default: 0.4 x breadth, "
                           "0.25 x length, 0.25 x length of the hull's waterline (typical ship "
                           "values).")
     initial_displacement: Annotated[Vec3, Vector("m")] = Field(
@@ -157,7 +160,10 @@ class ShipSection(Section):
         None, description="Hold the x velocity of the centre of gravity at this speed (m/s), "
                           "reached linearly over ramp_time. Default: free surge.")
     ramp_time: Annotated[float, Number("s", ge=0.0)] = Field(
-        0.0, description="Time to reach surge_speed from 0 (s). Default: 0 (at once).")
+        0.0, description="Time to reach surge_speed from 0 (s); with surge_speed only. "
+                         "Default: 0 (at once).")
+    needs = (("ramp_time", "surge_speed", "ramp_time is the time to reach surge_speed; give "
+              "surge_speed (m/s) or remove ramp_time (a free ship's surge has no ramp)"),)
 
 
 @dataclass(frozen=True)
@@ -177,6 +183,26 @@ def ship_config(s: "StructureSection", water, gravity) -> ShipConfig | None:
         return None
     return ShipConfig(s.ship or ShipSection(), None if water is None else water.density,
                       0.0 if water is None else water.level, tuple(gravity))
+
+
+#: The ``[[structure]]`` keys that only some kinds take (every kind takes the others: name,
+#: kind, mesh, params, contact_group); a key given to another kind is refused, not ignored.
+KIND_KEYS = {"material": ("elastic",), "element_order": ("elastic",), "integrator": ("elastic",),
+             "damping": ("elastic",), "fixed_groups": ("elastic",), "supports": ("elastic",),
+             "loads": ("elastic",), "attached_to": ("elastic",),
+             "motion": ("elastic", "rigid"), "ship": ("ship",)}
+
+#: What a structure of each kind is, for the message refusing a key it does not take.
+KIND_WHY = {
+    "elastic": "only a ship has a ship table; an elastic structure's mass and stiffness come "
+               "from its mesh and material",
+    "rigid": "a rigid structure moves as prescribed by its motion (velocity or path, "
+             "angular_velocity, center) and has no material, elements, damping, supports or "
+             "loads",
+    "ship": "a ship is a rigid hull floating free under gravity, water and ice, with its mass "
+            "and inertia in its ship table, driven by ship.thrust or ship.surge_speed, and has "
+            "no material, elements, damping, supports, loads or prescribed motion",
+}
 
 
 def _is_gmsh(path: Path) -> bool:
@@ -290,32 +316,21 @@ class StructureSection(Section):
         if self.element_order > 2:
             raise fail("element_order must be 1 (linear) or 2 (quadratic)", self.element_order,
                        key="element_order")
-        if self.kind == "rigid" and (self.fixed_groups or self.loads or self.supports):
-            key = "fixed_groups" if self.fixed_groups else "supports" if self.supports else "loads"
-            raise fail("a rigid structure moves as prescribed by 'motion'; it takes no supports "
-                       "or loads", key=key)
-        if self.kind == "ship" and "motion" in self.model_fields_set:
-            raise fail("a ship moves under its own dynamics; it takes no motion (use the ship "
-                       "table)", key="motion")
-        if self.kind == "rigid" and self.motion.ramp_time > 0.0:
+        for key in KIND_KEYS:
+            if key in self.model_fields_set and self.kind not in KIND_KEYS[key]:
+                raise fail(f'{key} has no effect on a structure of kind = "{self.kind}": '
+                           f"{KIND_WHY[self.kind]}; remove it ({key} is a key of "
+                           + " and ".join(KIND_KEYS[key]) + " structures)", key=key)
+        if self.kind == "rigid" and "ramp_time" in self.motion.model_fields_set:
             raise fail("ramp_time is for elastic structures only; a rigid body moves at its "
                        "velocity from t = 0 (or follows its path)", self.motion.ramp_time,
                        key="motion.ramp_time")
-        if self.attached_to is not None and (self.kind != "elastic"
-                                             or "motion" in self.model_fields_set):
+        if self.attached_to is not None and "motion" in self.model_fields_set:
             raise fail("only an elastic structure without a motion rides on a ship (its frame is "
                        "the ship's)", self.attached_to, key="attached_to")
-        if self.integrator == "implicit" and (self.kind != "elastic"
-                                              or self.attached_to is not None):
+        if self.integrator == "implicit" and self.attached_to is not None:
             raise fail("the implicit integrator is for elastic structures standing still or in "
-                       "a prescribed moving frame (motion), not for rigid bodies or ships nor "
-                       "for a structure attached to a ship (its frame follows the ship's "
-                       "dynamics step by step); use integrator = \"explicit\" for this one",
-                       self.integrator, key="integrator")
-        if self.kind != "ship" and self.ship is not None:
-            raise fail("only a ship (kind = \"ship\") takes a ship table", key="ship")
-        if self.kind == "ship" and (self.fixed_groups or self.loads or self.supports):
-            key = "fixed_groups" if self.fixed_groups else "supports" if self.supports else "loads"
-            raise fail("a ship floats free under gravity, water and ice; it takes no supports "
-                       "or loads (use ship.thrust or ship.surge_speed)", key=key)
+                       "a prescribed moving frame (motion), not for a structure attached to a "
+                       "ship (its frame follows the ship's dynamics step by step); use "
+                       'integrator = "explicit" for this one', self.integrator, key="integrator")
         return self

@@ -16,12 +16,16 @@ Each command is a module of :mod:`pdfem.cli` (its docstring says what it does).
 
 Exit status: 0 success, 2 bad input (the message names file and field), 3 a run stopped by a
 detected instability, 1 anything else. With ``--json`` standard output holds exactly one JSON
-object and nothing else.
+object and nothing else. A reader that closes standard output early (``pdfem post --json |
+head``) ends the command quietly with exit 1 (its output was not all delivered; no traceback):
+the ``BrokenPipeError`` is caught and standard output pointed at /dev/null, as the Python
+documentation's "Note on SIGPIPE" does (the run itself, if any, has written its results).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import traceback
 import warnings
@@ -58,7 +62,12 @@ def main(argv: list[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("default")
             warnings.showwarning = lambda msg, *a, **k: print(f"warning: {msg}", file=sys.stderr)
-            return {c.NAME: c.run for c in COMMANDS}[args.command](args)
+            status = {c.NAME: c.run for c in COMMANDS}[args.command](args)
+            sys.stdout.flush()  # a closed pipe shows here, not at the interpreter's exit
+            return status
+    except BrokenPipeError:
+        _stdout_to_devnull()
+        return EXIT_FAILURE
     except InputError as exc:
         print(exc.text(), file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -75,6 +84,20 @@ def main(argv: list[str] | None = None) -> int:
         print("pdfem: an internal error stopped the run (exit 1); results written so far are kept.",
               file=sys.stderr)
         return EXIT_FAILURE
+
+
+def _stdout_to_devnull() -> None:
+    """Point standard output at /dev/null after its reader went away (``pdfem post --json |
+    head``), so that the interpreter's last flush at exit finds no closed pipe (Python
+    documentation, signal module, "Note on SIGPIPE"). In-process callers whose stdout has no
+    file descriptor (a test's capture) keep theirs."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
 
 
 def _entry() -> None:  # pragma: no cover

@@ -5,7 +5,9 @@ the output directory, default ``results/<case name>/``), computes the first K na
 frequencies (Hz) of each with its supports (:func:`pdfem.fem.modes.natural_modes`), prints one
 table per structure and writes the mode shapes to ``DIR/modes.h5`` and ``DIR/modes.xdmf``
 (:mod:`pdfem.output.modes`; open the .xdmf in ParaView and warp by ``mode_shape``). Rigid
-structures have no modes and are skipped. ``--json`` prints only
+structures and ships have no modes and are skipped; a case without an elastic structure, or
+``--structure`` naming a rigid one, is refused (exit 2, nothing written). A structure attached
+to a ship is taken on its supports with the hull held still. ``--json`` prints only
 ``{"structures": {NAME: {"frequencies_hz": [...], "n_nodes": ..., "n_elements": ...}}}``.
 """
 
@@ -15,8 +17,10 @@ import argparse
 import contextlib
 import io
 import json
+from dataclasses import replace
 from pathlib import Path
 
+from pdfem.cli.options import path_text
 from pdfem.errors import EXIT_OK, InputError
 
 NAME = "modes"
@@ -33,20 +37,29 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="only this structure (default: every elastic structure)")
     p.add_argument("--n", type=int, default=DEFAULT_MODES, metavar="K",
                    help=f"number of modes per structure (default {DEFAULT_MODES})")
-    p.add_argument("--out", default=None,
+    p.add_argument("--out", default=None, type=path_text,
                    help="output directory for modes.h5 / modes.xdmf (default: results/<case name>)")
     p.add_argument("--json", action="store_true", help="print the frequencies as one JSON object")
 
 
 def _chosen(case, name: str | None) -> list:
-    """The structure entries asked for (all, or the one named)."""
-    if name is None:
-        return list(case.structures)
+    """The structure entries asked for (all, or the one named); refuses a choice without an
+    elastic structure."""
     names = [s.name for s in case.structures]
-    if name not in names:
+    if name is not None and name not in names:
         raise InputError(None, "--structure", f"case {case.file} has no structure of that name; "
                          f"its structures are {', '.join(names) or 'none'}", name)
-    return [s for s in case.structures if s.name == name]
+    chosen = [s for s in case.structures if name is None or s.name == name]
+    if name is not None and chosen[0].kind != "elastic":
+        raise InputError(case.file, f"{chosen[0].field}.kind", f"structure '{name}' is "
+                         f"{chosen[0].kind}; only elastic structures have natural modes (pdfem "
+                         "modes --structure NAME of an elastic structure)", chosen[0].kind)
+    if not any(cfg.kind == "elastic" for cfg in chosen):
+        kinds = ", ".join(f"'{c.name}' ({c.kind})" for c in chosen) or "none"
+        raise InputError(case.file, None, "no elastic structure in this case: pdfem modes "
+                         "needs a [[structure]] of kind = \"elastic\" (rigid bodies and ships "
+                         f"have no natural modes; the case's structures: {kinds})")
+    return chosen
 
 
 def compute(case, out: Path, name: str | None, n: int, say) -> list:
@@ -56,13 +69,16 @@ def compute(case, out: Path, name: str | None, n: int, say) -> list:
     from pdfem.output.modes import StructureModes
     from pdfem.run.build import check_mesh
     from pdfem.run.build_structures import build_structure
+    from pdfem.run.outdir import check_out_dir
     chosen = _chosen(case, name)
+    check_out_dir(out)  # the models are meshed into it
     result = []
     for cfg in chosen:
         if cfg.kind != "elastic":
             say(f"structure '{cfg.name}' is {cfg.kind}: it has no elastic modes, skipped")
             continue
-        st = build_structure(cfg, out, case.file)
+        # a structure riding on a ship: its modes on its supports, the hull held still
+        st = build_structure(replace(cfg, attached_to=None), out, case.file)
         check_mesh(st, cfg, case.file)
         n_free = int(st.solver.free.sum())
         if n >= n_free:
@@ -72,9 +88,6 @@ def compute(case, out: Path, name: str | None, n: int, say) -> list:
         points, cells, cell_type = st.output_mesh()
         result.append(StructureModes(cfg.name, freqs, shapes[:, :len(points)], points, cells,
                                      cell_type))
-    if name is not None and not result:
-        raise InputError(case.file, f"{chosen[0].field}.kind", f"structure '{name}' is "
-                         f"{chosen[0].kind}; only elastic structures have natural modes", name)
     return result
 
 

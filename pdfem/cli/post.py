@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from pdfem.cli.options import path_text
 from pdfem.errors import EXIT_OK, InputError
 
 if TYPE_CHECKING:
@@ -21,8 +23,9 @@ HELP = "summarise a results file: table, plots, CSV"
 def add_arguments(q: argparse.ArgumentParser) -> None:
     """The options of ``pdfem post``."""
     q.add_argument("results", help="results file (results.h5 written by 'pdfem run')")
-    q.add_argument("--plots", default=None, metavar="DIR", help="write PNG plots into DIR")
-    q.add_argument("--csv", default=None, metavar="FILE",
+    q.add_argument("--plots", default=None, type=path_text, metavar="DIR",
+                   help="write PNG plots into DIR")
+    q.add_argument("--csv", default=None, type=path_text, metavar="FILE",
                    help="write the per-step load and monitor histories to FILE (CSV)")
     q.add_argument("--lowpass", type=float, default=None, metavar="HZ",
                    help="also report the load peaks after a zero-phase 4th-order Butterworth "
@@ -56,9 +59,9 @@ def _fatigue(args: argparse.Namespace, results: dict) -> tuple[dict, dict, SNCur
             raise InputError(f, extra[0], "needs an S-N curve, --sn m=SLOPE,stress=RANGE_PA,"
                              "cycles=N (e.g. --sn m=3,stress=90e6,cycles=2e6)")
         return None
-    if not args.events > 0:
+    if not (math.isfinite(args.events) and args.events > 0):
         raise InputError(f, "--events", "the repetitions of the simulated history must be a "
-                         "number > 0", args.events)
+                         "finite number > 0", args.events)
     if args.sn_bins < 1:
         raise InputError(f, "--sn-bins", "the histogram needs at least 1 bin", args.sn_bins)
     curve = parse_sn(args.sn, f)
@@ -71,8 +74,8 @@ def run(args: argparse.Namespace) -> int:
     from pdfem.post import format_summary, load_results, summarize, write_csv, write_plots
     results = load_results(args.results)
     fatigue = _fatigue(args, results)
-    if args.lowpass is not None and not args.lowpass > 0:
-        raise InputError(args.results, "--lowpass", "the cut-off must be a frequency > 0 Hz",
+    if args.lowpass is not None and not (math.isfinite(args.lowpass) and args.lowpass > 0):
+        raise InputError(args.results, "--lowpass", "the cut-off must be a finite frequency > 0 Hz",
                          args.lowpass)
     try:
         summary = summarize(results, lowpass=args.lowpass)

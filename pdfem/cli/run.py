@@ -22,6 +22,7 @@ import io
 import json
 from pathlib import Path
 
+from pdfem.cli.options import path_text
 from pdfem.errors import EXIT_BAD_INPUT, EXIT_OK, InputError
 
 NAME = "run"
@@ -35,8 +36,9 @@ def add_arguments(r: argparse.ArgumentParser) -> None:
     """The options of ``pdfem run``."""
     r.add_argument("case", nargs="?", default=None,
                    help=f"case file (TOML, SI units); default: the demo {DEMO_CASE}")
-    r.add_argument("--out", default=None, help="output directory (default: results/<case name>)")
-    r.add_argument("--restart", default=None, metavar="CHECKPOINT",
+    r.add_argument("--out", default=None, type=path_text,
+                   help="output directory (default: results/<case name>)")
+    r.add_argument("--restart", default=None, type=path_text, metavar="CHECKPOINT",
                    help="continue the run of CASE from this checkpoint (checkpoint.h5 in the "
                         "run's output directory), appending to its results")
     r.add_argument("--quiet", action="store_true", help="no progress or messages")

@@ -10,6 +10,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from pdfem.cli.options import path_text
 from pdfem.errors import EXIT_FAILURE, EXIT_OK, InputError
 
 NAME = "validate"
@@ -27,12 +28,21 @@ def add_arguments(v: argparse.ArgumentParser) -> None:
     v.description = DESCRIPTION
     v.add_argument("--quick", action="store_true",
                    help="the smaller, shorter variant of every case (about a minute)")
-    v.add_argument("--report", metavar="DIR", type=Path,
+    v.add_argument("--report", metavar="DIR", type=path_text,
                    help="write DIR/validation.md with a PNG plot per case (runs go to DIR/runs)")
     v.add_argument("--json", action="store_true",
                    help="print one JSON object with the same figures, nothing else on stdout")
     v.add_argument("--case", metavar="NAME", action="append", default=None,
                    help="run only this case (repeatable; default: all)")
+
+
+def _report_dir(report: str) -> Path:
+    """``--report`` checked like a run's ``--out`` (created; not a file; writable)."""
+    from pdfem.run.outdir import check_out_dir
+    try:
+        return check_out_dir(report)
+    except InputError as exc:
+        raise InputError(None, "--report", exc.message, exc.value) from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -54,15 +64,14 @@ def run(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     if args.report is not None:
-        report = Path(args.report)
-        report.mkdir(parents=True, exist_ok=True)
+        report = _report_dir(args.report)
         results = run_validation(cases, report / "runs", quick=args.quick, plot_dir=report, log=say)
     else:
         with tempfile.TemporaryDirectory(prefix="pdfem_validate_") as work:
             results = run_validation(cases, work, quick=args.quick, log=say)
     seconds = time.perf_counter() - t0
     if args.report is not None:
-        say(f"validate: wrote {write_markdown(results, args.report, args.quick, seconds)}")
+        say(f"validate: wrote {write_markdown(results, report, args.quick, seconds)}")
     if args.json:
         print(json.dumps(as_json(results, args.quick, seconds)))
     else:

@@ -11,9 +11,9 @@ strings; :func:`mesh_model` converts them to the parameters' types
 (:func:`pdfem.meshing.parameters.coerce_parameters`) and runs the model's ``build``.
 
 A model script is Python code and is executed (imported, then its ``build`` called) with the
-user's permissions. An exception it raises is reported as bad input
-(:class:`~pdfem.meshing.parameters.ModelParameterError`, exit 2) naming the script and the line
-(:func:`script_error`).
+user's permissions. An exception it raises, or a ``sys.exit`` it calls, is reported as bad
+input (:class:`~pdfem.meshing.parameters.ModelParameterError`, exit 2) naming the script and the
+line (:func:`script_error`).
 """
 
 from __future__ import annotations
@@ -90,7 +90,7 @@ def resolve_model(name_or_path: str | Path) -> ModuleType:
         except InputError:
             sys.modules.pop(modname, None)
             raise
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:  # an exit would end pdfem mid-set-up
             sys.modules.pop(modname, None)
             raise script_error(text, path, exc) from None
     else:
@@ -142,7 +142,7 @@ def mesh_model(model: str | Path, params: dict[str, Any] | None = None, out: Pat
         return module.build(path, **typed)
     except InputError:
         raise
-    except Exception as exc:
+    except (Exception, SystemExit) as exc:
         raise script_error(str(model), Path(module.__file__ or str(model)), exc) from None
 
 
@@ -156,6 +156,12 @@ def script_error(model: str, script: Path, exc: BaseException) -> ModelParameter
     line = f" ({frames[-1].line.strip()})" if frames and frames[-1].line else ""
     if isinstance(exc, SyntaxError) and exc.lineno:  # raised by the parser, not from a frame
         where, line = f", line {exc.lineno}", f" ({(exc.text or '').strip()})"
+    if isinstance(exc, SystemExit):
+        code = "" if exc.code is None else repr(exc.code)
+        return ModelParameterError("model", model, f"the model script {script}{where} "
+                                   f"called sys.exit({code}): pdfem imports a model script and "
+                                   "calls its build(path, **params), which must return (or "
+                                   "raise an exception saying what is wrong), not exit")
     return ModelParameterError("model", model, f"the model script {script}{where}{line} "
                                f"raised {type(exc).__name__}: {exc}; fix the script or its "
                                "parameters")

@@ -1,6 +1,9 @@
 """Bad inputs of issue 18 (names, paths, overlaps, output directories, model scripts, group
-fields, numeric ranges): each makes ``pdfem run`` exit 2 with a message naming the field, no
-traceback, and nothing written outside ``--out``.
+fields, numeric ranges) and issue 31 (:data:`CORPUS_31`: water, ships, moving frames, supports,
+element order, the ice law and crushing, paths, NaN and inf in physical fields, keys that would
+have no effect, model scripts that exit, keys given twice and deeply nested TOML): each makes
+``pdfem run`` exit 2 with a one-paragraph message naming the field, no traceback, and nothing
+written outside ``--out``.
 
 Reference: the contract of the command line (DESIGN.md, "Command line": exit 2 for bad input,
 the message names file and field) and issue 18's list of inputs that escaped it. The cases run
@@ -189,6 +192,331 @@ CORPUS = [
 ]
 
 
+# -- keys and sections added since (issue 31): water, ships, moving frames, supports, element
+#    order, the ice law and crushing, paths, NaN and inf (valid TOML floats) in physical fields,
+#    keys that would have no effect, and the TOML text itself
+
+SHIP = f"""
+[[structure]]
+name = "hull"
+kind = "ship"
+mesh = "{BOX.as_posix()}"
+params = {{ surface_only = true, origin_x = 1.0, origin_y = 1.0, origin_z = -0.05, length_x = 0.3, length_y = 0.2, length_z = 0.1, element_size = 0.05 }}
+"""
+"""A ship (a closed box hull of 0.3 x 0.2 x 0.1 m, half under water) beside the wall."""
+
+RIGID = f"""
+[[structure]]
+name = "ram"
+kind = "rigid"
+mesh = "{BOX.as_posix()}"
+params = {{ surface_only = true, origin_x = 1.0, origin_y = 1.0, origin_z = 0.0, length_x = 0.1, length_y = 0.1, length_z = 0.1, element_size = 0.05 }}
+"""
+"""A rigid box beside the wall."""
+
+
+def _run(extra: str):
+    return _sub("end_time = 1e-5", "end_time = 1e-5\n" + extra)
+
+
+def _floe(extra: str):
+    return _sub("dx = 0.05\n", "dx = 0.05\n" + extra + "\n")
+
+
+def _wall(extra: str):
+    return _sub("element_order = 1", "element_order = 1\n" + extra)
+
+
+def _water(extra: str = ""):
+    return _add("\n[water]\n" + extra + "\n")
+
+
+def _ship(keys: str = "", water: str = "\n[water]\n"):
+    return _add(SHIP + keys + "\n" + water)
+
+
+def _rigid(keys: str):
+    return _add(RIGID + keys + "\n")
+
+
+def _then(*edits):
+    def edit(text: str) -> str:
+        for e in edits:
+            text = e(text)
+        return text
+    return edit
+
+
+def _no_ice(text: str) -> str:
+    """The case without its ice body (the wall and its monitor stay)."""
+    head, _, rest = text.partition("[[ice]]")
+    return head + "[[structure]]" + rest.partition("[[structure]]")[2]
+
+
+DEEP = 2000
+"""Nesting depth of the deep TOML entries (the TOML reader recurses once per level)."""
+
+CORPUS_31 = [
+    # the TOML text: a key given twice is named by its path; deep nesting is bad input
+    ("toml_key_twice", _run("end_time = 2e-5"), {}, ["run.end_time", "given twice", "line 3"]),
+    ("toml_key_twice_in_body", _floe("dx = 0.1"), {}, ["ice[0].dx", "given twice"]),
+    ("toml_table_twice", _add("\n[run]\n"), {}, ["field 'run'", "declared twice"]),
+    ("toml_deep_arrays", _wall("foo = " + "[" * DEEP + "]" * DEEP), {}, ["nested too deeply"]),
+    ("toml_deep_tables", _wall("foo = " + "{ a = " * DEEP + "1" + " }" * DEEP), {},
+     ["nested too deeply"]),
+    ("nested_value_shown_short", _run("title = " + "[" * 300 + "]" * 300), {},
+     ["run.title", " ... "]),
+    # model scripts that exit
+    ("script_exits_on_import", _script("ex.py"), {"ex.py": "import sys\nsys.exit(0)\n"},
+     ["structure[0].mesh", "ex.py, line 2", "called sys.exit(0)"]),
+    ("script_build_exits", _script("ex.py"),
+     {"ex.py": "import sys\n\n\ndef build(path):\n    sys.exit('no mesh')\n"},
+     ["structure[0].mesh", "ex.py, line 5", "called sys.exit('no mesh')"]),
+    ("script_raises_system_exit", _script("ex.py"), {"ex.py": "raise SystemExit\n"},
+     ["structure[0].mesh", "ex.py, line 1", "called sys.exit()"]),
+    # NaN and inf in physical fields
+    ("run_time_step_inf", _run("time_step = inf"), {}, ["run.time_step", "finite"]),
+    ("run_safety_factor_nan", _run("safety_factor = nan"), {}, ["run.safety_factor", "finite"]),
+    ("run_gravity_nan", _run("gravity = [0, 0, nan]"), {}, ["run.gravity", "finite"]),
+    ("run_output_interval_inf", _run("output_interval = inf"), {}, ["run.output_interval"]),
+    ("run_rebalance_imbalance_half", _run("rebalance_imbalance = 0.5"), {},
+     ["run.rebalance_imbalance", "> 1"]),
+    ("run_output_per_rank_rebalancing", _run("output_per_rank = true\nrebalance_every = 10"), {},
+     ["run.output_per_rank", "rebalance_every"]),
+    ("ice_dx_nan", _sub("dx = 0.05", "dx = nan"), {}, ["ice[0].dx", "finite"]),
+    ("ice_horizon_inf", _floe("horizon = inf"), {}, ["ice[0].horizon", "finite"]),
+    ("ice_horizon_factor_one", _floe("horizon_factor = 1.0"), {}, ["ice[0].horizon_factor", "> 1"]),
+    ("ice_youngs_modulus_nan", _floe("material = { youngs_modulus = nan }"), {},
+     ["ice[0].material.youngs_modulus", "finite"]),
+    ("ice_fracture_energy_negative_inf", _floe("material = { fracture_energy = -inf }"), {},
+     ["ice[0].material.fracture_energy", "finite"]),
+    ("ice_initial_velocity_inf", _floe("initial_velocity = [inf, 0, 0]"), {},
+     ["ice[0].initial_velocity", "finite"]),
+    ("ice_box_min_nan", _sub("min = [0.0, 0.0, 0.01]", "min = [nan, 0.0, 0.01]"), {},
+     ["ice[0].shape", "finite"]),
+    ("ice_sphere_radius_inf",
+     _sub("box = { min = [0.0, 0.0, 0.01], max = [0.2, 0.2, 0.21] }",
+          "sphere = { center = [0.1, 0.1, 0.11], radius = inf }"), {},
+     ["ice[0].shape.sphere.radius", "finite"]),
+    ("ice_cylinder_radius_zero",
+     _sub("box = { min = [0.0, 0.0, 0.01], max = [0.2, 0.2, 0.21] }",
+          "cylinder = { base = [0.1, 0.1, 0.01], axis = [0, 0, 1], radius = 0, length = 0.2 }"),
+     {}, ["ice[0].shape.cylinder.radius", "> 0"]),
+    ("ice_cylinder_axis_zero",
+     _sub("box = { min = [0.0, 0.0, 0.01], max = [0.2, 0.2, 0.21] }",
+          "cylinder = { base = [0.1, 0.1, 0.01], axis = [0, 0, 0], radius = 0.1, length = 0.2 }"),
+     {}, ["ice[0].shape.cylinder"]),
+    ("steel_density_inf", _wall("material = { density = inf }"), {},
+     ["structure[0].material.density", "finite"]),
+    ("steel_youngs_modulus_zero", _wall("material = { youngs_modulus = 0 }"), {},
+     ["structure[0].material.youngs_modulus", "> 0"]),
+    ("steel_youngs_modulus_nan", _wall("material = { youngs_modulus = nan }"), {},
+     ["structure[0].material.youngs_modulus", "finite"]),
+    ("damping_beta_nan", _wall("damping = { beta = nan }"), {},
+     ["structure[0].damping.beta", "finite"]),
+    ("load_pressure_nan", _wall('loads = [{ group = "contact", pressure = nan }]'), {},
+     ["structure[0].loads[0].pressure", "finite"]),
+    ("load_traction_inf", _wall('loads = [{ group = "contact", traction = [0, 0, -inf] }]'), {},
+     ["structure[0].loads[0].traction", "finite"]),
+    ("pulse_rise_negative",
+     _wall('loads = [{ group = "contact", pressure = 1e5, pulse = { rise = -1e-3 } }]'), {},
+     ["structure[0].loads[0].pulse.rise", ">= 0"]),
+    ("pulse_hold_inf",
+     _wall('loads = [{ group = "contact", pressure = 1e5, pulse = { hold = inf } }]'), {},
+     ["structure[0].loads[0].pulse.hold", "finite"]),
+    ("contact_friction_nan", _add('\n[[contact]]\nice = "floe"\nstructure = "wall"\n'
+                                  'friction = nan\n'), {}, ["contact[0].friction", "finite"]),
+    ("contact_search_radius_inf", _add('\n[[contact]]\nice = "floe"\nstructure = "wall"\n'
+                                       'search_radius = inf\n'), {},
+     ["contact[0].search_radius", "finite"]),
+    ("monitor_point_nan", _sub("point = [0.1, 0.1, 0.0]", "point = [0.1, nan, 0.0]"), {},
+     ["monitor[0].point", "finite"]),
+    ("short_range_contact_text", _run('short_range_contact = "yes"'), {},
+     ["run.short_range_contact", "true or false"]),
+    ("region_missing", _floe("prescribed_velocity = [{ velocity = [0, 0, -1] }]"), {},
+     ["ice[0].prescribed_velocity[0].region", "required"]),
+    ("no_fail_two_shapes",
+     _floe("no_fail = [{ box = { min = [0, 0, 0], max = [1, 1, 1] }, sphere = { center = [0, 0, "
+           "0], radius = 1 } }]"), {}, ["ice[0].no_fail[0]", "exactly one"]),
+    ("crack_box_inverted",
+     _floe("cracks = [{ point = [0.1, 0.1, 0.1], normal = [1, 0, 0], box = { min = [0.2, 0, 0], "
+           "max = [0.0, 0.2, 0.2] } }]"), {}, ["ice[0].cracks[0].box"]),
+    ("pulse_fall_without_hold",
+     _wall('loads = [{ group = "contact", pressure = 1e5, pulse = { rise = 1e-3, fall = 1e-3 } }]'),
+     {}, ["structure[0].loads[0].pulse.fall", "hold"]),
+    # the ice law and crushing
+    ("failure_unknown", _floe('material = { failure = "plastic" }'), {},
+     ["ice[0].material.failure", "critical_stretch"]),
+    ("ice_law_without_strength", _floe('material = { failure = "ice" }'), {},
+     ["ice[0].material.compressive_strength", "needs"]),
+    ("compressive_strength_without_ice_law", _floe("material = { compressive_strength = 3e6 }"),
+     {}, ["ice[0].material.compressive_strength", 'failure = "ice"']),
+    ("compressive_strength_inf",
+     _floe('material = { failure = "ice", compressive_strength = inf }'), {},
+     ["ice[0].material.compressive_strength", "finite"]),
+    ("friction_angle_sixty",
+     _floe('material = { failure = "ice", compressive_strength = 3e6, friction_angle = 60 }'), {},
+     ["ice[0].material.friction_angle", "< 60"]),
+    ("friction_angle_nan",
+     _floe('material = { failure = "ice", compressive_strength = 3e6, friction_angle = nan }'),
+     {}, ["ice[0].material.friction_angle", "finite"]),
+    ("crushed_friction_above_two",
+     _floe('material = { failure = "ice", compressive_strength = 3e6, crushed_friction = 2.5 }'),
+     {}, ["ice[0].material.crushed_friction", "<= 2"]),
+    ("transition_rate_zero",
+     _floe('material = { failure = "ice", compressive_strength = 3e6, transition_rate = 0 }'),
+     {}, ["ice[0].material.transition_rate", "> 0"]),
+    ("rate_exponent_above_one",
+     _floe('material = { failure = "ice", compressive_strength = 3e6, transition_rate = 1e-3, '
+           'rate_exponent = 1.5 }'), {}, ["ice[0].material.rate_exponent", "<= 1"]),
+    ("rate_exponent_without_transition_rate",
+     _floe('material = { failure = "ice", compressive_strength = 3e6, rate_exponent = 0.5 }'),
+     {}, ["ice[0].material.rate_exponent", "transition_rate"]),
+    ("tensile_and_flexural_strength",
+     _floe("material = { tensile_strength = 5e5, flexural_strength = 7e5 }"), {},
+     ["ice[0].material.flexural_strength", "not both"]),
+    ("tensile_strength_nan", _floe("material = { tensile_strength = nan }"), {},
+     ["ice[0].material.tensile_strength", "finite"]),
+    ("strength_and_fracture_energy",
+     _floe("material = { tensile_strength = 5e5, fracture_energy = 10 }"), {},
+     ["ice[0].material.fracture_energy", "not both"]),
+    # paths
+    ("region_path_times_decrease",
+     _floe('prescribed_velocity = [{ region = { box = { min = [0, 0, 0.15], max = [0.2, 0.2, '
+           '0.21] } }, path = [[0, 0, 0, 0], [1e-3, 0, 0, 1e-4], [5e-4, 0, 0, 2e-4]] }]'), {},
+     ["ice[0].prescribed_velocity[0].path", "increase strictly"]),
+    ("region_path_and_velocity",
+     _floe('prescribed_velocity = [{ region = { box = { min = [0, 0, 0.15], max = [0.2, 0.2, '
+           '0.21] } }, velocity = [0, 0, -1], path = [[0, 0, 0, 0], [1, 0, 0, 1]] }]'), {},
+     ["ice[0].prescribed_velocity[0].path", "not both"]),
+    ("region_path_row_of_three",
+     _floe('prescribed_velocity = [{ region = { box = { min = [0, 0, 0.15], max = [0.2, 0.2, '
+           '0.21] } }, path = [[0, 0, 0], [1, 0, 0, 1]] }]'), {},
+     ["ice[0].prescribed_velocity[0].path", "row 0"]),
+    ("region_path_nan",
+     _floe('prescribed_velocity = [{ region = { box = { min = [0, 0, 0.15], max = [0.2, 0.2, '
+           '0.21] } }, path = [[0, 0, 0, 0], [1, 0, nan, 1]] }]'), {},
+     ["ice[0].prescribed_velocity[0].path", "finite"]),
+    ("region_path_with_ramp",
+     _floe('prescribed_velocity = [{ region = { box = { min = [0, 0, 0.15], max = [0.2, 0.2, '
+           '0.21] } }, path = [[0, 0, 0, 0], [1, 0, 0, 1]], ramp_time = 1e-3 }]'), {},
+     ["ice[0].prescribed_velocity[0].ramp_time", "path"]),
+    ("region_velocity_ramp_nan",
+     _floe('prescribed_velocity = [{ region = { box = { min = [0, 0, 0.15], max = [0.2, 0.2, '
+           '0.21] } }, velocity = [0, 0, -1], ramp_time = nan }]'), {},
+     ["ice[0].prescribed_velocity[0].ramp_time", "finite"]),
+    ("rigid_path_starts_before_zero",
+     _rigid("motion = { path = [[-1, 0, 0, 0], [1, 0, 0, 1]] }"), {},
+     ["structure[1].motion.path", ">= 0"]),
+    ("rigid_path_and_velocity",
+     _rigid("motion = { velocity = [1, 0, 0], path = [[0, 0, 0, 0], [1, 1, 0, 0]] }"), {},
+     ["structure[1].motion.path", "not both"]),
+    # moving frames (an elastic structure's motion)
+    ("frame_angular_velocity_nan", _wall("motion = { angular_velocity = [0, 0, nan] }"), {},
+     ["structure[0].motion.angular_velocity", "finite"]),
+    ("frame_center_inf", _wall("motion = { center = [inf, 0, 0] }"), {},
+     ["structure[0].motion.center", "finite"]),
+    ("frame_ramp_negative", _wall("motion = { velocity = [1, 0, 0], ramp_time = -1 }"), {},
+     ["structure[0].motion.ramp_time", ">= 0"]),
+    ("rigid_ramp_time", _rigid("motion = { velocity = [1, 0, 0], ramp_time = 1e-3 }"), {},
+     ["structure[1].motion.ramp_time", "elastic structures only"]),
+    # supports and element order
+    ("support_component_w", _wall('supports = [{ group = "contact", components = ["w"] }]'), {},
+     ["structure[0].supports[0].components", '"x", "y", "z"']),
+    ("support_components_empty", _wall('supports = [{ group = "contact", components = [] }]'),
+     {}, ["structure[0].supports[0].components"]),
+    ("support_without_components", _wall('supports = [{ group = "contact" }]'), {},
+     ["structure[0].supports[0].components", "required"]),
+    ("element_order_zero", _sub("element_order = 1", "element_order = 0"), {},
+     ["structure[0].element_order", ">= 1"]),
+    ("element_order_not_whole", _sub("element_order = 1", "element_order = 1.5"), {},
+     ["structure[0].element_order", "whole number"]),
+    ("integrator_unknown", _wall('integrator = "leapfrog"'), {},
+     ["structure[0].integrator", "explicit"]),
+    # keys that would have no effect on the structure's kind
+    ("rigid_element_order", _rigid("element_order = 1"), {},
+     ["structure[1].element_order", "no effect", "rigid"]),
+    ("rigid_material", _rigid("material = { density = 7850 }"), {},
+     ["structure[1].material", "no effect"]),
+    ("rigid_damping", _rigid("damping = { alpha = 1.0 }"), {},
+     ["structure[1].damping", "no effect"]),
+    ("rigid_integrator", _rigid('integrator = "explicit"'), {},
+     ["structure[1].integrator", "no effect"]),
+    ("rigid_supports", _rigid('supports = [{ group = "contact", components = ["z"] }]'), {},
+     ["structure[1].supports", "no effect"]),
+    ("rigid_loads", _rigid('loads = [{ group = "contact", pressure = 1e5 }]'), {},
+     ["structure[1].loads", "no effect"]),
+    ("rigid_ship_table", _rigid("ship = { mass = 10.0 }"), {},
+     ["structure[1].ship", "no effect"]),
+    ("elastic_ship_table", _wall("ship = { mass = 10.0 }"), {},
+     ["structure[0].ship", "only a ship"]),
+    ("ship_element_order", _ship("element_order = 2"), {},
+     ["structure[1].element_order", "no effect", "ship"]),
+    ("ship_motion", _ship("motion = { velocity = [1, 0, 0] }"), {},
+     ["structure[1].motion", "no effect"]),
+    ("ship_fixed_groups", _ship('fixed_groups = ["contact"]'), {},
+     ["structure[1].fixed_groups", "no effect"]),
+    ("ship_attached_to_ship", _ship('attached_to = "wall"'), {},
+     ["structure[1].attached_to", "no effect"]),
+    # ships
+    ("ship_radius_of_gyration_zero", _ship("ship = { radii_of_gyration = [0.0, 0.1, 0.1] }"), {},
+     ["structure[1].ship.radii_of_gyration", "> 0"]),
+    ("ship_radius_of_gyration_negative",
+     _ship("ship = { radii_of_gyration = [0.1, -0.1, 0.1] }"), {},
+     ["structure[1].ship.radii_of_gyration", "> 0"]),
+    ("ship_radius_of_gyration_nan", _ship("ship = { radii_of_gyration = [0.1, 0.1, nan] }"), {},
+     ["structure[1].ship.radii_of_gyration", "finite"]),
+    ("ship_mass_zero", _ship("ship = { mass = 0.0 }"), {}, ["structure[1].ship.mass", "> 0"]),
+    ("ship_mass_nan", _ship("ship = { mass = nan }"), {}, ["structure[1].ship.mass", "finite"]),
+    ("ship_thrust_inf", _ship("ship = { thrust = inf }"), {},
+     ["structure[1].ship.thrust", "finite"]),
+    ("ship_surge_speed_nan", _ship("ship = { surge_speed = nan }"), {},
+     ["structure[1].ship.surge_speed", "finite"]),
+    ("ship_initial_displacement_nan", _ship("ship = { initial_displacement = [0, 0, nan] }"), {},
+     ["structure[1].ship.initial_displacement", "finite"]),
+    ("ship_initial_rotation_inf", _ship("ship = { initial_rotation = [inf, 0, 0] }"), {},
+     ["structure[1].ship.initial_rotation", "finite"]),
+    ("ship_initial_velocity_two", _ship("ship = { initial_velocity = [1, 0] }"), {},
+     ["structure[1].ship.initial_velocity", "three"]),
+    ("ship_initial_angular_velocity_nan",
+     _ship("ship = { initial_angular_velocity = [0, nan, 0] }"), {},
+     ["structure[1].ship.initial_angular_velocity", "finite"]),
+    ("ship_cog_inf", _ship("ship = { center_of_gravity = [1.15, 1.1, inf] }"), {},
+     ["structure[1].ship.center_of_gravity", "finite"]),
+    ("ship_ramp_without_surge_speed", _ship("ship = { ramp_time = 1.0 }"), {},
+     ["structure[1].ship.ramp_time", "surge_speed"]),
+    ("ship_unknown_key", _ship("ship = { draught = 0.05 }"), {},
+     ["structure[1].ship.draught", "unknown key"]),
+    ("ship_without_water", _ship(water=""), {}, ["structure[1].kind", "[water]"]),
+    ("attached_to_not_a_ship", _wall('attached_to = "floe"'), {},
+     ["structure[0].attached_to", "no ship (kind = \"ship\") of that name"]),
+    ("attached_with_motion", _then(_ship(), _wall('attached_to = "hull"\n'
+                                                  'motion = { velocity = [1, 0, 0] }')), {},
+     ["structure[0].attached_to", "without a motion"]),
+    ("attached_implicit", _then(_ship(), _wall('attached_to = "hull"\nintegrator = "implicit"')),
+     {}, ["structure[0].integrator", "explicit"]),
+    # water
+    ("water_density_zero", _water("density = 0"), {}, ["water.density", "> 0"]),
+    ("water_density_nan", _water("density = nan"), {}, ["water.density", "finite"]),
+    ("water_level_inf", _water("level = inf"), {}, ["water.level", "finite"]),
+    ("water_current_nan", _water("current = [nan, 0, 0]"), {}, ["water.current", "finite"]),
+    ("water_linear_drag_negative", _water("linear_drag = -1"), {},
+     ["water.linear_drag", ">= 0"]),
+    ("water_drag_coefficient_inf", _water("drag_coefficient = inf"), {},
+     ["water.drag_coefficient", "finite"]),
+    ("water_added_mass_negative", _water("added_mass = -0.5"), {}, ["water.added_mass", ">= 0"]),
+    ("water_unknown_key", _water("salinity = 35"), {}, ["water.salinity", "unknown key"]),
+    ("water_gravity_sideways", _then(_water(), _run("gravity = [9.81, 0, 0]")), {},
+     ["run.gravity", "down z"]),
+    ("water_without_ice_or_ship", _then(_no_ice, _water()), {}, ["field 'water'", "neither"]),
+    ("water_current_without_ice", _then(_no_ice, _ship(water="\n[water]\ncurrent = [1, 0, 0]\n")),
+     {}, ["water.current", "ice bodies only"]),
+]
+"""Issue 31's entries: each is bad input (exit 2) naming the field."""
+
+CORPUS += CORPUS_31
+
+
 def _files(root: Path, out: Path) -> set[Path]:
     """Every file under ``root`` except those in ``out`` (the run may write there)."""
     return {p for p in root.rglob("*") if p.is_file() and out not in p.parents}
@@ -218,6 +546,7 @@ def test_bad_case_exits_2(tmp_path, capsys, monkeypatch, edit, files, fragments)
     out = tmp_path / "out"
     err = _run_bad(tmp_path, capsys, ["run", str(case), "--out", str(out), "--quiet"], out)
     assert "case.toml" in err
+    assert len(err.strip().splitlines()) == 1, err  # one paragraph
     for fragment in fragments:
         assert fragment in err, (fragment, err)
 
@@ -284,3 +613,12 @@ def test_stale_lock_is_taken_over_and_released(tmp_path):
             assert (tmp_path / LOCK_NAME).read_text().startswith(str(os.getpid()))
             raise RuntimeError("a failing run")
     assert not (tmp_path / LOCK_NAME).exists()
+
+
+def test_byte_order_mark_is_not_bad_input(tmp_path):
+    """A case file saved with a UTF-8 byte-order mark (some Windows editors) reads as without."""
+    from pdfem.case.schema import load_case
+    case = tmp_path / "bom.toml"
+    case.write_text(BASE, encoding="utf-8-sig")
+    assert case.read_bytes()[:3] == b"\xef\xbb\xbf"
+    assert load_case(case).run.end_time == 1e-5

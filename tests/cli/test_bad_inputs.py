@@ -1,5 +1,7 @@
 """A corpus of bad inputs: each makes ``pdfem run`` exit 2 with one message naming the file, the
-field and what is valid, and no traceback.
+field and what is valid, and no traceback; and (:data:`COMMANDS`, issue 31) bad options of
+``pdfem post``, ``modes``, ``validate`` and ``mesh``, which exit 2 writing nothing, and a
+closed standard output, which ends ``pdfem post --json`` quietly.
 
 Reference: the contract of the command line (DESIGN.md, "Command line": exit 2 for bad input,
 the message names file and field). Each case is a small valid case with one thing wrong. The
@@ -11,10 +13,14 @@ about a second each).
 
 from __future__ import annotations
 
+import os
+import subprocess
+from pathlib import Path
 
 import pytest
 
-from support.cli import run_main, run_pdfem
+from support.cli import pdfem_command, run_main, run_pdfem
+from support.results import write_swinging_monitor
 
 RUN = "[run]\nend_time = 1e-4\noutput_interval = 5e-5\n"
 ICE = ("[[ice]]\nname = 'cube'\ndx = 0.01\n"
@@ -165,3 +171,115 @@ def test_corpus_is_large_and_distinct():
     assert len(CORPUS) >= 25 and len({c[0] for c in CORPUS}) == len(CORPUS)
     assert len({c[1] + str(c[2]) for c in CORPUS}) == len(CORPUS)
     assert CONSOLE <= {c[0] for c in CORPUS}
+
+
+# -- the other commands' options (issue 31): post, modes, validate, mesh ----------------------
+
+BOX = Path(__file__).resolve().parents[2] / "models" / "validation" / "box.py"
+D_CURVE = "m=3,stress=90e6,cycles=2e6"
+WALL = (f"[[structure]]\nname = 'wall'\nmesh = '{BOX.as_posix()}'\nfixed_groups = ['fixed']\n"
+        "params = { divisions_x = 2, divisions_y = 2, divisions_z = 1, length_x = 0.3, "
+        "length_y = 0.3, length_z = 0.05, fixed_faces = 'z0', contact_faces = 'z1' }\n")
+RAM = (f"[[structure]]\nname = 'ram'\nkind = 'rigid'\nmesh = '{BOX.as_posix()}'\n"
+       "params = { surface_only = true, origin_x = 1.0, length_x = 0.1, length_y = 0.1, "
+       "length_z = 0.1, element_size = 0.05 }\n")
+CASES = {"rigid.toml": RUN + RAM, "ice.toml": RUN + ICE, "both.toml": RUN + WALL + RAM}
+"""Case files of the ``modes`` entries: a rigid structure only, ice only, an elastic wall and a
+rigid ram."""
+
+# (id, argv with {results} {tmp} {file} placeholders, fragments of the last line of stderr)
+COMMANDS = [
+    ("post_lowpass_zero", ["post", "{results}", "--lowpass", "0"], ["'--lowpass'", "> 0"]),
+    ("post_lowpass_nan", ["post", "{results}", "--lowpass", "nan"], ["'--lowpass'", "finite"]),
+    ("post_lowpass_inf", ["post", "{results}", "--lowpass", "inf"], ["'--lowpass'", "finite"]),
+    ("post_lowpass_text", ["post", "{results}", "--lowpass", "fast"], ["--lowpass", "float"]),
+    ("post_events_inf", ["post", "{results}", "--sn", D_CURVE, "--events", "inf"],
+     ["'--events'", "finite"]),
+    ("post_sn_bins_zero", ["post", "{results}", "--sn", D_CURVE, "--sn-bins", "0"],
+     ["'--sn-bins'", "at least 1"]),
+    ("post_sn_slope_nan", ["post", "{results}", "--sn", "m=nan,stress=90e6,cycles=2e6"],
+     ["'--sn'", "m must be a positive number"]),
+    ("post_sn_stress_inf", ["post", "{results}", "--sn", "m=3,stress=inf,cycles=2e6"],
+     ["'--sn'", "stress must be a positive number"]),
+    ("post_sn_stress_without_curve", ["post", "{results}", "--sn-stress", "xx"],
+     ["'--sn-stress'", "needs an S-N curve"]),
+    ("post_csv_in_missing_dir", ["post", "{results}", "--csv", "{tmp}/nowhere/h.csv"],
+     ["'--csv'", "cannot write"]),
+    ("post_plots_on_a_file", ["post", "{results}", "--plots", "{file}"],
+     ["'--plots'", "cannot write"]),
+    ("post_csv_empty", ["post", "{results}", "--csv", ""], ["--csv", "not an empty string"]),
+    ("post_plots_blank", ["post", "{results}", "--plots", " "], ["--plots", "not an empty"]),
+    ("run_out_empty", ["run", "{tmp}/both.toml", "--out", ""], ["--out", "not an empty"]),
+    ("modes_out_empty", ["modes", "{tmp}/both.toml", "--out", ""], ["--out", "not an empty"]),
+    ("validate_report_empty", ["validate", "--report", ""], ["--report", "not an empty"]),
+    ("mesh_output_empty", ["mesh", str(BOX), "-o", ""], ["--output", "not an empty"]),
+    ("post_results_missing", ["post", "{tmp}/none.h5"], ["none.h5", "no such results file"]),
+    ("post_results_not_hdf5", ["post", "{file}"], ["notes.txt", "not an HDF5 file"]),
+    ("modes_rigid_only", ["modes", "{tmp}/rigid.toml", "--out", "{tmp}/out"],
+     ["rigid.toml", "no elastic structure", "'ram' (rigid)"]),
+    ("modes_ice_only", ["modes", "{tmp}/ice.toml", "--out", "{tmp}/out"],
+     ["ice.toml", "no elastic structure", "structures: none"]),
+    ("modes_structure_rigid", ["modes", "{tmp}/both.toml", "--structure", "ram", "--out",
+                               "{tmp}/out"], ["structure[1].kind", "only elastic structures"]),
+    ("modes_structure_unknown", ["modes", "{tmp}/both.toml", "--structure", "hull", "--out",
+                                 "{tmp}/out"], ["'--structure'", "no structure of that name"]),
+    ("modes_n_zero", ["modes", "{tmp}/both.toml", "--n", "0", "--out", "{tmp}/out"],
+     ["'--n'", "at least 1"]),
+    ("modes_out_is_a_file", ["modes", "{tmp}/both.toml", "--out", "{file}"],
+     ["'--out'", "is a file"]),
+    ("validate_unknown_case", ["validate", "--case", "no_such_case"],
+     ["'--case'", "unknown validation case"]),
+    ("validate_report_is_a_file", ["validate", "--report", "{file}", "--case", "wave_speed"],
+     ["'--report'", "is a file"]),
+    ("mesh_output_below_a_file", ["mesh", str(BOX), "-o", "{file}/box.msh"],
+     ["'--output'", "is a file"]),
+    ("mesh_output_is_a_dir", ["mesh", str(BOX), "-o", "{tmp}"], ["'--output'", "directory"]),
+    ("mesh_parameter_nan", ["mesh", str(BOX), "--set", "length_x=nan"],
+     ["'length_x'", "finite"]),
+    ("mesh_parameter_zero", ["mesh", str(BOX), "--set", "length_x=0"], ["'length_x'", "> 0"]),
+    ("mesh_script_exits", ["mesh", "{tmp}/ex.py"], ["ex.py, line 2", "called sys.exit(3)"]),
+]
+
+
+@pytest.fixture(scope="module")
+def results_file(tmp_path_factory) -> Path:
+    """A hand-made results file: one elastic tetrahedron and a monitor 'root' whose xx stress
+    swings 40 +- 50 MPa over 10 cycles."""
+    return write_swinging_monitor(tmp_path_factory.mktemp("results") / "results.h5",
+                                  "bad options")
+
+
+@pytest.mark.parametrize("name,argv,fragments", COMMANDS, ids=[c[0] for c in COMMANDS])
+def test_bad_option_exits_2_and_writes_nothing(name, argv, fragments, tmp_path, monkeypatch,
+                                               results_file):
+    """Exit status 2, no traceback, the last line of stderr names the option or file, and not
+    a file is written (``pdfem modes`` refuses before meshing; ``mesh`` writes no .msh)."""
+    monkeypatch.chdir(tmp_path)
+    for fname, text in CASES.items():
+        (tmp_path / fname).write_text(text)
+    (tmp_path / "notes.txt").write_text("not a results file\n")
+    (tmp_path / "ex.py").write_text("import sys\nsys.exit(3)\n")
+    before = {p for p in tmp_path.rglob("*")}
+    r = run_main(*[a.format(results=results_file, tmp=tmp_path, file=tmp_path / "notes.txt")
+                   for a in argv])
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr
+    message = r.stderr.strip().splitlines()[-1]
+    for fragment in fragments:
+        assert fragment in message, (fragment, message)
+    assert {p for p in tmp_path.rglob("*")} == before, "a file or directory was written"
+
+
+def test_closed_stdout_ends_quietly(results_file):
+    """``pdfem post --json`` into a pipe nobody reads (``| head`` gone): exit 1, no
+    BrokenPipeError traceback (the reader's end is closed before pdfem starts, so the first
+    write fails: deterministic)."""
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        r = subprocess.run([*pdfem_command(), "post", str(results_file), "--json"], stdout=write,
+                           stderr=subprocess.PIPE, text=True, timeout=300)
+    finally:
+        os.close(write)
+    assert r.returncode == 1, r.stderr
+    assert "Traceback" not in r.stderr and "BrokenPipe" not in r.stderr, r.stderr

@@ -166,3 +166,44 @@ def test_bad_input_exits_2_with_one_paragraph(beam_case, tmp_path, args, words):
     r = run_pdfem("modes", str(beam_case), "--out", str(tmp_path), *args)
     assert r.returncode == 2 and words in r.stderr
     assert "Traceback" not in r.stderr and r.stderr.strip().count("\n") == 0
+
+
+ATTACHED = """
+[run]
+end_time = 1e-3
+{hull}
+[[structure]]
+name = "beam"
+mesh = "{box}"
+params = {{ length_x = 1.0, length_y = 0.1, length_z = 0.1, divisions_x = 10, divisions_y = 1, divisions_z = 1, fixed_faces = "x0", contact_faces = "x1" }}
+fixed_groups = ["fixed"]
+element_order = 1
+{attached}
+"""
+
+HULL = """
+[water]
+
+[[structure]]
+name = "hull"
+kind = "ship"
+mesh = "{box}"
+params = {{ surface_only = true, origin_x = -0.5, origin_y = -0.5, origin_z = -0.1, length_x = 2.0, length_y = 1.0, length_z = 0.2, element_size = 0.1 }}
+"""
+
+
+def test_structure_on_a_ship_has_its_modes_on_its_supports(tmp_path):
+    """A beam attached to a ship: ``pdfem modes`` skips the ship and gives the beam the modes
+    of the same beam clamped on its own (the hull held still), to round-off."""
+    from pdfem.cli.modes import compute
+    box = (ROOT / "models" / "validation" / "box.py").as_posix()
+    files = {}
+    for name, hull, attached in (("alone", "", ""),
+                                 ("on_ship", HULL.format(box=box), 'attached_to = "hull"')):
+        files[name] = tmp_path / f"{name}.toml"
+        files[name].write_text(ATTACHED.format(box=box, hull=hull, attached=attached))
+    said = []
+    alone = compute(load_case(files["alone"]), tmp_path / "a", None, 3, said.append)
+    on_ship = compute(load_case(files["on_ship"]), tmp_path / "b", None, 3, said.append)
+    assert [m.name for m in on_ship] == ["beam"] and "'hull' is ship" in said[0]
+    np.testing.assert_allclose(on_ship[0].frequencies_hz, alone[0].frequencies_hz, rtol=1e-12)

@@ -20,10 +20,11 @@ import pytest
 from pdfem.case.schema import load_case
 from pdfem.cli import main as cli
 from pdfem.errors import InputError
-from pdfem.output import ResultsWriter
 from pdfem.post.fatigue import (SNCurve, counted_stress, fatigue_figures, miner_damage,
                                 parse_sn, rainflow_cycles)
 from pdfem.run.driver import run_case
+
+from support.results import write_swinging_monitor
 
 D_CURVE = "m=3,stress=90e6,cycles=2e6,m2=5,knee=1e7"  # DNV-RP-C203 D curve in air, FAT 90
 BOX = Path(__file__).resolve().parents[2] / "models" / "validation" / "box.py"
@@ -125,17 +126,7 @@ def test_bad_sn_text_names_the_option(text, says):
 @pytest.fixture(scope="module")
 def small_file(tmp_path_factory) -> Path:
     """A hand-made results file: monitor 'root' with xx = 40 MPa +- 50 MPa, 10 cycles."""
-    path = tmp_path_factory.mktemp("fatigue") / "results.h5"
-    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
-    with ResultsWriter(path, "", {"title": "fatigue"}) as w:
-        w.add_structure("panel", points, np.array([[0, 1, 2, 3]]), "tetra")
-        w.write_frame(0.0, {}, {"panel": {"u": np.zeros((4, 3)), "von_mises": np.zeros(1)}})
-        for k in range(21):
-            sxx = 40e6 + 50e6 * (-1.0) ** k
-            w.append_history("monitors/root", k * 1e-3, {
-                "u": [0.0, 0.0, 0.0], "von_mises": abs(sxx),
-                "stress": [sxx, 0.0, 0.0, 0.0, 0.0, 0.0]})
-    return path
+    return write_swinging_monitor(tmp_path_factory.mktemp("fatigue") / "results.h5")
 
 
 @pytest.mark.parametrize("args, option", [
