@@ -5,6 +5,9 @@
 coupled case (tests/run/test_mpi_run.py, tests/forces/test_mpi_short_range.py). SI units.
 ``CYLINDER_BODIES`` is its plate and cylinder without the ``[run]`` section, for tests that
 run them otherwise (tests/run/test_mpi_checkpoint_ranks.py: floating, with checkpoints).
+``PANEL_BODIES``: an ice floe pushed at 1 m/s against the elastic hull panel (coarse, first
+contact within 0.2 ms), without the ``[run]`` section (tests/run/test_mpi_run.py,
+tests/output/test_paraview.py).
 """
 
 CYLINDER_RUN = """
@@ -29,3 +32,17 @@ motion = { velocity = [0.0, -4.0, 0.0] }
 """
 
 CYLINDER = CYLINDER_RUN + CYLINDER_BODIES
+
+PANEL_BODIES = """
+[[ice]]
+name = "floe"
+dx = 0.04
+shape = { box = { min = [0.8, 0.4, -0.019999], max = [1.2, 0.8, 0.140001] } }
+material = { fracture_energy = 10.0 }
+prescribed_velocity = [ { region = { box = { min = [0.7, 0.3, 0.09], max = [1.3, 0.9, 0.2] } }, velocity = [0.0, 0.0, -1.0], ramp_time = 2.0e-4 } ]
+[[structure]]
+name = "panel"
+mesh = "hull_panel"
+params = { element_size = 0.12 }
+fixed_groups = ["fixed"]
+"""
