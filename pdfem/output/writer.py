@@ -266,6 +266,7 @@ class ResultsWriter:
         """Show the per-rank ice and ``grids`` in the XDMF file, every field on every grid."""
         grids = self._rank_grids + grids
         xdmf_grids.pad(grids, self._h5, self._h5name)
+        self._h5.flush()  # the NaN datasets the XDMF file is about to name
         self._xdmf.grids = grids
 
     # -- per output time -----------------------------------------------------------------

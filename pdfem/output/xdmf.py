@@ -23,12 +23,11 @@ import numpy as np
 
 class Series(Protocol):
     """What a grid of frames reads from the frame series it shows
-    (:class:`pdfem.output.frames.FrameSeries`): its HDF5 ``path``, its ``fields`` (name ->
-    (centre, shape per entity)) and the entity count per centre ``sizes``."""
+    (:class:`pdfem.output.frames.FrameSeries`): its HDF5 ``path`` and its ``fields`` (name ->
+    (centre, shape per entity); ``None`` before the first frame)."""
 
     path: str
     fields: dict | None
-    sizes: dict
 
 
 XDMF_TOPOLOGY = {"tetra": ("Tetrahedron", 4), "hexahedron": ("Hexahedron", 8),

@@ -38,6 +38,7 @@ filter. Why this layout, reader by reader (ParaView 5.11, VTK's ``IO/Xdmf2`` and
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
 
 import h5py
@@ -45,6 +46,9 @@ import h5py
 from pdfem.output.layout import POSITIONS
 from pdfem.output.xdmf import (Series, attribute, cell_topology, data_item, geometry,
                                missing_values, polyvertex_topology, view_path)
+
+if TYPE_CHECKING:
+    from pdfem.output.frames import FrameSeries
 
 
 @dataclass
@@ -55,8 +59,6 @@ class FieldSet:
     """HDF5 path of the body in its file, e.g. ``/ice/sheet``."""
     fields: dict
     """Field name -> (centre, shape of one item)."""
-    sizes: dict
-    """Centre -> items."""
 
 
 class Piece:
@@ -120,7 +122,8 @@ class BodyGrid:
         body written per rank, by other processes).
     """
 
-    def __init__(self, name: str, pieces: list[Piece], series: Series | None = None) -> None:
+    def __init__(self, name: str, pieces: list[Piece], series: FrameSeries | None = None
+                 ) -> None:
         self.name, self.pieces, self.series = name, pieces, series
 
     def head(self) -> str:
@@ -143,14 +146,14 @@ def _ice_piece(name: str, h5name: str, body: str, n: int, volume: bool,
 
 
 def ice_grid(h5name: str, name: str, body: str, n: int, volume: bool,
-             series: Series) -> BodyGrid:
+             series: FrameSeries) -> BodyGrid:
     """The grid of an ice body at HDF5 path ``body`` of file ``h5name``: ``n`` particles, and
     their ``volume`` in every frame if the file holds them."""
     return BodyGrid(name, [_ice_piece(name, h5name, body, n, volume, series)], series)
 
 
 def structure_grid(h5name: str, name: str, body: str, cell_type: str, nn: int, ne: int,
-                   series: Series) -> BodyGrid:
+                   series: FrameSeries) -> BodyGrid:
     """The grid of a structure at HDF5 path ``body``: ``ne`` elements over ``nn`` nodes."""
     piece = Piece(name, h5name, cell_topology(h5name, f"{body}/cells", cell_type, ne),
                   {"Node": nn, "Cell": ne}, {}, series)
@@ -177,7 +180,7 @@ def rank_ice_grid(name: str, body: str, files: list[tuple[str, int]], volume: bo
     """
     fields = {k: ("Node", s) for k, s in RANK_ICE_FIELDS.items()}
     return BodyGrid(name, [_ice_piece(f"{name}.rank{r}", h5, body, n, volume,
-                                      FieldSet(body, fields, {"Node": n}))
+                                      FieldSet(body, fields))
                            for r, (h5, n) in enumerate(files)])
 
 

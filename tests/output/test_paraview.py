@@ -42,8 +42,8 @@ READERS = ("XDMFReader", "Xdmf3ReaderS", "Xdmf3ReaderT")
 
 PER_RANK = """
 [run]
-end_time = 4.0e-4
-output_interval = 2.0e-4
+end_time = 2.0e-4
+output_interval = 1.0e-4
 output_per_rank = true
 energy_tolerance = 0.1  # coarse first contact (not what this tests)
 """ + PANEL_BODIES
@@ -148,8 +148,8 @@ def check(seen: dict, results: dict, pieces: set[str]) -> None:
 
 
 def test_demo_in_paraview(pvbatch, tmp_path):
-    """The demo (0.4 ms): the sheet, the panel's contact surface and the panel."""
-    run_case(shortened(ROOT / "models" / "demo_ice_sheet_panel.toml", 4e-4, 2e-4), tmp_path,
+    """The demo (0.2 ms): the sheet, the panel's contact surface and the panel."""
+    run_case(shortened(ROOT / "models" / "demo_ice_sheet_panel.toml", 2e-4, 1e-4), tmp_path,
              quiet=True)
     results = read_results(tmp_path / "results.h5")
     assert len(results["time"]) == 3
@@ -170,9 +170,9 @@ def test_per_rank_run_in_paraview(pvbatch, tmp_path):
 
 
 def test_turning_propeller_in_paraview(pvbatch, tmp_path):
-    """The tiny milling propeller spinning up (1 ms): drawn turned, as far as ``u`` says."""
+    """The tiny milling propeller spinning up (0.5 ms): drawn turned, as far as ``u`` says."""
     with case_path("propeller_milling_tiny.toml") as path:
-        case = shortened(path, 1e-3, 5e-4)
+        case = shortened(path, 5e-4, 2.5e-4)
     run_case(case, tmp_path, quiet=True)
     results = read_results(tmp_path / "results.h5")
     turned = results["structure"]["propeller"]["u"][-1]
