@@ -1,6 +1,7 @@
 """Per-frame fields of one body in a results file: dataset ``<body>/<field>`` of shape (F, n, ...).
 
-Each output frame appends one row to every field of every body. Every frame also gets, for
+Each output frame appends one row to every field of every body, and to ``x`` (F, n, 3), the
+positions (reference + ``u``, m) that the XDMF file draws the body at. Every frame also gets, for
 the XDMF file, a virtual dataset per field (:func:`pdfem.output.xdmf.create_view`). The
 views are made ``VIEW_BATCH`` frames ahead, so the groups that hold them change only once per
 batch: fewer chances for a run killed mid-flush to damage them (the reader never uses them).
@@ -15,7 +16,7 @@ import h5py
 import numpy as np
 
 from pdfem.output.datasets import growing_dataset, put_rows
-from pdfem.output.layout import check_name
+from pdfem.output.layout import POSITIONS, check_name
 from pdfem.output.xdmf import create_view
 
 CHUNK_BYTES = 256 * 1024
@@ -60,6 +61,10 @@ class FrameSeries:
         Fields the first frame must have.
     cell_fields
         Field names centred on the cells (if the body has cells); all others are on the nodes.
+    positions
+        (n, 3) reference positions of the nodes (m), or ``None``: each frame then also records
+        the field ``x`` = ``positions`` + ``u`` (the frame's ``u`` is required; a frame may not
+        give ``x`` itself).
 
     Notes
     -----
@@ -70,8 +75,10 @@ class FrameSeries:
 
     def __init__(self, file: h5py.File, path: str, sizes: Mapping[str, int],
                  item_shapes: tuple[tuple[int, ...], ...], required: tuple[str, ...],
-                 cell_fields: frozenset[str] = frozenset()) -> None:
+                 cell_fields: frozenset[str] = frozenset(),
+                 positions: np.ndarray | None = None) -> None:
         self.file = file
+        self.positions = positions
         self.cell_fields = cell_fields
         self.path = path
         self.sizes = dict(sizes)
@@ -96,6 +103,9 @@ class FrameSeries:
         """Validate one frame's fields; return them as C-contiguous float64 arrays."""
         arrays = {check_name(k, "field"): np.ascontiguousarray(v, dtype=np.float64)
                   for k, v in values.items()}
+        if self.positions is not None and POSITIONS in arrays:
+            raise ValueError(f"{self.path}: field {POSITIONS!r} is recorded by the writer "
+                             "(reference positions + u); do not give it")
         if self.fields is None:
             missing = [k for k in self.required if k not in arrays]
             if missing:
@@ -104,7 +114,7 @@ class FrameSeries:
             for k, a in arrays.items():
                 self._centre(k, a.shape)
         else:
-            missing = sorted(set(self.fields) - set(arrays))
+            missing = sorted(set(self.fields) - set(arrays) - {POSITIONS})
             extra = sorted(set(arrays) - set(self.fields))
             if missing or extra:
                 raise ValueError(f"{self.path}: the field set is fixed by the first frame "
@@ -114,6 +124,8 @@ class FrameSeries:
                 if a.shape != (n,) + self.fields[k][1]:
                     raise ValueError(f"field {k!r} of {self.path} has shape {a.shape}, "
                                      f"expected {(n,) + self.fields[k][1]}")
+        if self.positions is not None:
+            arrays[POSITIONS] = self.positions + arrays["u"]
         return arrays
 
     def append(self, index: int, arrays: Mapping[str, np.ndarray]) -> None:
@@ -141,6 +153,9 @@ class FrameSeries:
                  if isinstance(ds, h5py.Dataset) and ds.maxshape[0] is None]
         if not names:
             return
+        if self.positions is not None and POSITIONS not in names:
+            raise ValueError(f"{self.path} has no per-frame positions {POSITIONS!r} (a file of "
+                             "an older pdfem): it cannot be continued; start the run again")
         self.fields = {}
         for k in names:
             ds = group[k]

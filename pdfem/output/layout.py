@@ -12,11 +12,14 @@ Layout of ``<stem>.h5`` (all quantities SI)::
     /ice/<body>/u            (F, N, 3) displacement, m
     /ice/<body>/v            (F, N, 3) velocity, m/s
     /ice/<body>/damage       (F, N)    broken fraction of the initial bonds, dimensionless
+    /ice/<body>/x            (F, N, 3) positions, x0 + u, m (the writer records them; the
+                             XDMF file draws the particles there)
     /ice/<body>/<field>      (F, N) or (F, N, 3)  any further per-particle field, e.g. theta
     /structure/<name>/points (Nn, 3)   reference node positions, m
     /structure/<name>/cells  (Ne, k)   int32 connectivity (VTK node order); attr cell_type
                              ("tetra", "hexahedron", "triangle" or "quad")
     /structure/<name>/u      (F, Nn, 3) nodal displacement, m
+    /structure/<name>/x      (F, Nn, 3) node positions, points + u, m (recorded by the writer)
     /structure/<name>/von_mises (F, Ne) element von Mises stress, Pa (elastic structures)
     /structure/<name>/<field> (F, Nn or Ne) or (F, Nn or Ne, 3)  any further node or cell field
     /structure/<name>.contact/...  a structure's contact surface (triangles, u) with the cell
@@ -25,8 +28,9 @@ Layout of ``<stem>.h5`` (all quantities SI)::
     /<history>/time          (K,)      e.g. /energy/time, /loads/<name>/time: step times, s
     /<history>/<key>         (K,) or (K, 3)  e.g. /energy/kinetic in J, /loads/<name>/force in N,
                              /loads/<name>/moment in N m, /loads/<name>.<patch>/force in N
-    /xdmf/...                per-frame views for the XDMF file (:mod:`pdfem.output.xdmf`), no
-                             data of their own
+    /xdmf/...                per-frame views for the XDMF file (:mod:`pdfem.output.xdmf`) and
+                             the NaN a grid shows for a field its body has not
+                             (:mod:`pdfem.output.xdmf_grids`), no data of their own
 
 Frame fields are float64, chunked by up to 64 frames (about 256 KiB a chunk) and resizable
 along the frame axis (:mod:`pdfem.output.frames`). Histories are float64, chunked by ``HISTORY_BLOCK`` rows and
@@ -51,6 +55,10 @@ REQUIRED_ICE_FIELDS = ("u", "v", "damage")
 
 REQUIRED_STRUCTURE_FIELDS = ("u",)
 """Fields every structure must give in every frame."""
+
+POSITIONS = "x"
+"""The per-frame field the writer records itself for every body: the positions at the frame,
+reference + ``u`` (m), which the XDMF file draws the body at."""
 
 CELL_FIELDS = frozenset({"von_mises", "contact_pressure", "contact_pressure_max"})
 """Structure fields centred on the cells (elements); all others are nodal."""

@@ -6,8 +6,8 @@ its ice bodies have more than :data:`PER_RANK_PARTICLES` particles in total
 in one process. Each rank writes the ice particles it owns to ``results.rank<R>.h5`` beside
 ``results.h5`` (with ``/ice/<body>/index``, the global particle numbers); ``results.h5`` holds the
 structures and histories, and its ``/meta`` attribute ``ice_per_rank`` the number of ranks;
-its XDMF file shows the ice of every rank file as one spatial collection per frame
-(:class:`pdfem.output.xdmf.RankIceGrid`), so ParaView opens the whole run from it.
+its XDMF file shows, per frame, every rank's part of an ice body, each from its own file
+(:func:`pdfem.output.xdmf_grids.rank_ice_grid`), so ParaView opens the whole run from it.
 :func:`pdfem.output.reader.read_results` puts the parts back together in global order.
 """
 

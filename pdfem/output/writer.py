@@ -3,12 +3,12 @@
 The time loop creates one :class:`ResultsWriter`, registers the ice bodies and structures,
 then calls :meth:`ResultsWriter.write_frame` at every output time and
 :meth:`ResultsWriter.append_history` at every step. The file layout is described in
-:mod:`pdfem.output.layout`, the XDMF file in :mod:`pdfem.output.xdmf`.
+:mod:`pdfem.output.layout`, the XDMF file in :mod:`pdfem.output.xdmf_grids`.
 
 Robustness: the file stays open (HDF5's default, oldest file format) and every frame is
 committed in steps, each ended by a flush: its fields and the pending history columns; the
 histories' time rows; its ``/time`` row. Then the frame is added to the XDMF file in place
-(:class:`pdfem.output.xdmf.XdmfFile`: well-formed after every write, rewritten atomically
+(:class:`pdfem.output.xdmf_file.XdmfFile`: well-formed after every write, rewritten atomically
 when its reserve runs out), at a cost per frame that does not grow with the run. Time datasets read NaN where unwritten, so a finite time
 row means its data reached the file, and a committed frame means every history row appended
 before it did too.
@@ -39,7 +39,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from pdfem.output import xdmf
+from pdfem.output import xdmf, xdmf_grids
 from pdfem.output.bodies import store_ice_body, store_structure
 from pdfem.output.datasets import growing_dataset, has_committed, put_rows
 from pdfem.output.files import bound_metadata_cache, refuse_if_being_written
@@ -47,6 +47,7 @@ from pdfem.output.frames import FrameSeries
 from pdfem.output.histories import HISTORY_BLOCK, History, first_row
 from pdfem.output.layout import (CELL_FIELDS, REQUIRED_ICE_FIELDS, REQUIRED_STRUCTURE_FIELDS,
                                  attr_value, check_name, history_groups, write_meta)
+from pdfem.output.xdmf_file import XdmfFile
 
 
 class ResultsWriter:
@@ -68,7 +69,7 @@ class ResultsWriter:
         then call :meth:`resume` before writing.
     expected_frames
         Frames the run expects to write, or 0: the XDMF file reserves room for them at once
-        (:class:`pdfem.output.xdmf.XdmfFile`), so its cost per frame stays the same all run.
+        (:class:`pdfem.output.xdmf_file.XdmfFile`), so its cost per frame stays the same all run.
 
     Raises
     ------
@@ -96,9 +97,9 @@ class ResultsWriter:
                              "(XDMF separates file and dataset with ':')")
         self.xdmf_path = self.path.with_suffix(".xdmf")
         self._h5name = self.path.name
-        self._grids: dict[str, xdmf.XdmfGrid] = {}
-        self._rank_grids: list[xdmf.RankIceGrid] = []  # ice in per-rank files (XDMF only)
-        self._xdmf = xdmf.XdmfFile(self.xdmf_path, self._h5name, expected_frames)
+        self._grids: dict[str, xdmf_grids.BodyGrid] = {}
+        self._rank_grids: list[xdmf_grids.BodyGrid] = []  # ice in per-rank files (XDMF only)
+        self._xdmf = XdmfFile(self.xdmf_path, expected_frames)
         self._histories: dict[str, History] = {}
         self._frames = 0
         self._last_time = -np.inf
@@ -167,14 +168,15 @@ class ResultsWriter:
         n = store_ice_body(f, path, x0, volume, index, self._append)
         if not self._append:
             xdmf.write_vertices(f, path, n)
-        self._grids[f"ice/{name}"] = xdmf.ice_grid(
+        self._grids[f"ice/{name}"] = xdmf_grids.ice_grid(
             self._h5name, f"ice/{name}", path, n, volume is not None,
-            FrameSeries(f, path, {"Node": n}, ((), (3,)), REQUIRED_ICE_FIELDS))
+            FrameSeries(f, path, {"Node": n}, ((), (3,)), REQUIRED_ICE_FIELDS,
+                        positions=np.ascontiguousarray(x0, dtype=np.float64)))
 
     def add_rank_ice_body(self, name: str, files: list[tuple[str, int]], volume: bool) -> None:
         """Show an ice body that the MPI ranks write to their own files (``run.output_per_rank``)
-        in this file's XDMF: one spatial collection per frame of the ranks' grids
-        (:class:`pdfem.output.xdmf.RankIceGrid`). Nothing is stored in the HDF5 file.
+        in this file's XDMF: each frame shows the ranks' grids, each from its own file
+        (:func:`pdfem.output.xdmf_grids.rank_ice_grid`). Nothing is stored in the HDF5 file.
 
         Parameters
         ----------
@@ -187,8 +189,8 @@ class ResultsWriter:
         """
         if self._frames:
             raise ValueError(f"ice {name!r} added after the first frame; add all bodies first")
-        self._rank_grids.append(xdmf.RankIceGrid(f"ice/{name}", f"/ice/{name}", list(files),
-                                                 volume))
+        self._rank_grids.append(xdmf_grids.rank_ice_grid(f"ice/{name}", f"/ice/{name}",
+                                                         list(files), volume))
 
     def add_structure(self, name: str, points: np.ndarray, cells: np.ndarray,
                       cell_type: str) -> None:
@@ -209,8 +211,9 @@ class ResultsWriter:
         path = self._new_body("structure", name)
         nn, ne = store_structure(f, path, points, cells, cell_type, self._append)
         series = FrameSeries(f, path, {"Node": nn, "Cell": ne}, ((), (3,)),
-                             REQUIRED_STRUCTURE_FIELDS, CELL_FIELDS)
-        self._grids[f"structure/{name}"] = xdmf.structure_grid(
+                             REQUIRED_STRUCTURE_FIELDS, CELL_FIELDS,
+                             np.ascontiguousarray(points, dtype=np.float64))
+        self._grids[f"structure/{name}"] = xdmf_grids.structure_grid(
             self._h5name, f"structure/{name}", path, cell_type, nn, ne, series)
 
     def resume(self, frames: int, history_rows: Mapping[str, int]) -> None:
@@ -252,13 +255,19 @@ class ResultsWriter:
         self._last_time = float(kept[-1])
         self._resumed = True
         self._sync()
-        self._xdmf.grids = [g for g in self._grids.values() if g.series.fields is not None
-                            ] + self._rank_grids
+        self._set_xdmf_grids([g for g in self._grids.values() if g.series.fields is not None])
         self._xdmf.set_times(kept)
 
     def history_rows(self) -> dict[str, int]:
         """``{history group: rows appended so far}`` (committed or buffered), for a checkpoint."""
         return {g: h.rows for g, h in self._histories.items()}
+
+    def _set_xdmf_grids(self, grids: list[xdmf_grids.BodyGrid]) -> None:
+        """Show the per-rank ice and ``grids`` in the XDMF file, every field on every grid."""
+        grids = self._rank_grids + grids
+        xdmf_grids.pad(grids, self._h5, self._h5name)
+        self._h5.flush()  # the NaN datasets the XDMF file is about to name
+        self._xdmf.grids = grids
 
     # -- per output time -----------------------------------------------------------------
 
@@ -307,7 +316,7 @@ class ResultsWriter:
             self._grids[k].series.append(index, arrays)
         self._sync(time)
         if index == 0:
-            self._xdmf.grids = list(self._grids.values()) + self._rank_grids
+            self._set_xdmf_grids(list(self._grids.values()))
         self._xdmf.add_frame(time)
         return index
 

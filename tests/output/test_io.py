@@ -1,8 +1,8 @@
 """Tests of the results file (pdfem.output): HDF5 layout, histories, XDMF, and a killed writer.
 
 References: the arrays handed to the writer (an HDF5 round trip must be exact), h5py reading
-the file directly, the XML parser of the standard library, and meshio's XDMF
-``TimeSeriesReader`` as an independent XDMF reader (our stand-in for ParaView).
+the file directly, and a small XDMF reader of the tests (tests/support/xdmf.py: the standard
+library's XML parser and h5py). ParaView's own readers are tests/output/test_paraview.py's.
 """
 
 from __future__ import annotations
@@ -26,6 +26,8 @@ import pdfem
 from pdfem.output import ResultsWriter, read_results
 from pdfem.output.frames import VIEW_BATCH
 from pdfem.output.histories import HISTORY_BLOCK
+
+from support.xdmf import read_xdmf
 
 
 def _frame(rng: np.random.Generator, n: int, extra: bool = False) -> dict[str, np.ndarray]:
@@ -69,7 +71,9 @@ def test_round_trip_exact_and_meta(tmp_path):
             np.testing.assert_array_equal(b["volume"], vol)
         for field in frames[0][name]:
             np.testing.assert_array_equal(b[field], np.stack([fr[name][field] for fr in frames]))
-    assert set(r["ice"]["floe"]) == {"x0", "u", "v", "damage"}
+    assert set(r["ice"]["floe"]) == {"x0", "u", "v", "damage", "x"}
+    for name, (x0, _) in bodies.items():  # the positions the writer records: x0 + u
+        np.testing.assert_array_equal(r["ice"][name]["x"], x0 + r["ice"][name]["u"])
     meta = r["meta"]
     assert meta["units"] == "SI"
     assert meta["version"] == pdfem.__version__
@@ -111,6 +115,8 @@ def test_extra_field_and_field_set_errors(tmp_path):
             w.write_frame(1.0, {"c": first})
         with pytest.raises(ValueError, match="after the first frame"):
             w.add_ice_body("late", x0)
+        with pytest.raises(ValueError, match="'x' is recorded by the writer"):
+            w.write_frame(1.0, {"b": dict(first, x=x0)})
         assert w.write_frame(1.0, {"b": first}) == 1
     with pytest.raises(ValueError, match="closed"):
         w.write_frame(2.0, {"b": first})
@@ -225,9 +231,13 @@ def _check_data_items(xdmf_path) -> int:
     return count
 
 
-def test_xdmf_read_by_meshio(tmp_path):
-    """Reference: meshio's independent XDMF TimeSeriesReader and the HDF5 data; also after the
-    pair is moved to another directory (the .h5 is named relative to the .xdmf)."""
+def test_xdmf_frames_show_each_body_where_it_is(tmp_path):
+    """Reference: the arrays written, read back through the XDMF file (tests/support/xdmf.py),
+    also after the pair is moved to another directory (the .h5 is named relative to the .xdmf):
+    one temporal collection per body, each frame a spatial collection holding the body's grid,
+    drawn at x0 + u, with every field of the file (NaN where the body has none: ``volume``
+    and ``theta`` on the floe, stored in a dataset that holds no data). meshio's
+    ``TimeSeriesReader`` does not read this layout (docs/post.md says so)."""
     path = tmp_path / "a" / "run.h5"
     path.parent.mkdir()
     bodies, times, frames = _write_two_bodies(path, n_frames=3)
@@ -237,30 +247,37 @@ def test_xdmf_read_by_meshio(tmp_path):
     collections = root.find("Domain").findall("Grid")
     assert [c.get("Name") for c in collections] == ["ice/sheet", "ice/floe"]
     assert all(c.get("CollectionType") == "Temporal" and len(c) == 3 for c in collections)
-    # grid of sheet: topology, geometry, volume, u, v, damage, theta
-    assert _check_data_items(xdmf) == 3 * 7 + 3 * 5
+    spatial = collections[0].findall("Grid")
+    assert {g.get("CollectionType") for g in spatial} == {"Spatial"}
+    assert all(g.get("Name") is None for g in spatial)  # unnamed: see pdfem.output.xdmf_grids
+    # each grid: topology, geometry, volume, u, v, damage, theta (the floe's last two NaN)
+    assert _check_data_items(xdmf) == 3 * 7 + 3 * 7
+    with h5py.File(path, "r") as f:
+        assert f["xdmf/missing/7"].id.get_storage_size() == 0
     moved = tmp_path / "b"
     moved.mkdir()
     for p in (path, xdmf):
         shutil.move(p, moved / p.name)
-    r = read_results(moved / "run.h5")
-    # meshio reads the last temporal collection of the domain: body "floe"
-    with meshio.xdmf.TimeSeriesReader(moved / "run.xdmf") as reader:
-        points, cells = reader.read_points_cells()
-        np.testing.assert_array_equal(points, bodies["floe"][0])
-        assert cells[0].type == "vertex" and len(cells[0].data) == 7
-        assert reader.num_steps == 3
-        for k in range(3):
-            t, point_data, _ = reader.read_data(k)
-            assert t == times[k]
-            assert set(point_data) == {"u", "v", "damage"}
-        np.testing.assert_array_equal(point_data["u"], r["ice"]["floe"]["u"][-1])
-        np.testing.assert_array_equal(point_data["damage"], frames[-1]["floe"]["damage"])
+    seen = read_xdmf(moved / "run.xdmf")
+    for name, (x0, vol) in bodies.items():
+        assert [f.time for f in seen[f"ice/{name}"]] == list(times)
+        for k, frame in enumerate(seen[f"ice/{name}"]):
+            (grid_name, grid), = frame.grids.items()
+            assert grid_name == f"ice/{name}" and grid.topology == "Polyvertex"
+            np.testing.assert_array_equal(grid.points, x0 + frames[k][name]["u"])
+            for field, a in frames[k][name].items():
+                np.testing.assert_array_equal(grid.point_data[field], a)
+    floe = seen["ice/floe"][-1].grids["ice/floe"]
+    assert set(floe.point_data) == {"volume", "u", "v", "damage", "theta"}
+    assert np.isnan(floe.point_data["volume"]).all() and np.isnan(floe.point_data["theta"]).all()
+    with pytest.raises(meshio.ReadError, match="mesh grid"):
+        meshio.xdmf.TimeSeriesReader(moved / "run.xdmf")
 
 
 def test_xdmf_single_body_values(tmp_path):
-    """Reference: meshio reading every frame of a one-body file equals the arrays written;
-    more frames than one batch of views (VIEW_BATCH), and no unused view left after close."""
+    """Reference: every frame of a one-body file read through the XDMF file equals the arrays
+    written; more frames than one batch of views (VIEW_BATCH), and no unused view left after
+    close."""
     rng = np.random.default_rng(3)
     x0 = rng.random((20, 3))
     path = tmp_path / "one.h5"
@@ -271,18 +288,17 @@ def test_xdmf_single_body_values(tmp_path):
         for k in range(n_frames):
             written.append(_frame(rng, 20, extra=True))
             w.write_frame(0.01 * k, {"sheet": written[-1]})
-    with meshio.xdmf.TimeSeriesReader(path.with_suffix(".xdmf")) as reader:
-        points, _ = reader.read_points_cells()
-        np.testing.assert_array_equal(points, x0)
-        assert reader.num_steps == n_frames
-        for k in range(n_frames):
-            t, pd, _ = reader.read_data(k)
-            assert t == 0.01 * k
-            for name, a in written[k].items():
-                np.testing.assert_array_equal(pd[name], a)
-            np.testing.assert_array_equal(pd["volume"], np.full(20, 2e-4))
+    seen = read_xdmf(path.with_suffix(".xdmf"))["ice/sheet"]
+    assert len(seen) == n_frames
+    for k, frame in enumerate(seen):
+        assert frame.time == 0.01 * k
+        grid = frame.grids["ice/sheet"]
+        np.testing.assert_array_equal(grid.points, x0 + written[k]["u"])
+        for name, a in written[k].items():
+            np.testing.assert_array_equal(grid.point_data[name], a)
+        np.testing.assert_array_equal(grid.point_data["volume"], np.full(20, 2e-4))
     with h5py.File(path, "r") as f:
-        for name in ("u", "v", "damage", "theta"):
+        for name in ("u", "v", "damage", "theta", "x"):
             assert len(f[f"xdmf/ice/sheet/{name}"]) == n_frames
 
 
@@ -337,7 +353,7 @@ _KILLED_WRITER = textwrap.dedent("""
 def test_killed_writer_leaves_readable_file(tmp_path):
     """A writer killed with SIGKILL mid-run leaves an HDF5 file that h5py opens, holding frames
     0..k each complete (reference: the closed-form values the child wrote), and an XDMF file
-    that parses and that meshio reads up to a frame present in the HDF5 file."""
+    that parses and reads (every data item) up to a frame present in the HDF5 file."""
     script = tmp_path / "child.py"
     script.write_text(_KILLED_WRITER)
     path = tmp_path / "killed.h5"
@@ -374,26 +390,25 @@ def test_killed_writer_leaves_readable_file(tmp_path):
     force = r["histories"]["loads/p"]["force"]
     assert len(force) >= 20 * n  # a committed frame implies the rows appended before it
     np.testing.assert_array_equal(force[:, 0], np.arange(len(force), dtype=float))
-    xdmf = path.with_suffix(".xdmf")
-    ET.parse(xdmf)
-    with meshio.xdmf.TimeSeriesReader(xdmf) as reader:
-        reader.read_points_cells()
-        steps = reader.num_steps
-        assert last + 1 <= steps <= n
-        t, pd, _ = reader.read_data(steps - 1)
-        assert t == 1e-3 * steps
-        np.testing.assert_array_equal(pd["u"], x0 + steps - 1)
+    seen = read_xdmf(path.with_suffix(".xdmf"))["ice/sheet"]
+    steps = len(seen)
+    assert last + 1 <= steps <= n
+    assert seen[-1].time == 1e-3 * steps
+    np.testing.assert_array_equal(seen[-1].grids["ice/sheet"].point_data["u"], x0 + steps - 1)
+    np.testing.assert_array_equal(seen[-1].grids["ice/sheet"].points, 2 * x0 + steps - 1)
 
 
-@pytest.mark.parametrize("cell_type, cells", [
-    ("tetra", [[0, 1, 2, 3], [1, 2, 3, 4]]),
-    ("hexahedron", [[0, 1, 2, 3, 4, 5, 6, 7]]),
-    ("triangle", [[0, 1, 2], [1, 2, 3], [2, 3, 4]]),
+@pytest.mark.parametrize("cell_type, cells, topology", [
+    ("tetra", [[0, 1, 2, 3], [1, 2, 3, 4]], "Tetrahedron"),
+    ("hexahedron", [[0, 1, 2, 3, 4, 5, 6, 7]], "Hexahedron"),
+    ("triangle", [[0, 1, 2], [1, 2, 3], [2, 3, 4]], "Triangle"),
 ])
-def test_structure_frames_round_trip_and_xdmf(tmp_path, cell_type, cells):
+def test_structure_frames_round_trip_and_xdmf(tmp_path, cell_type, cells, topology):
     """A structure's mesh, nodal displacement and element von Mises stress: read_results
-    returns exactly what was written, and meshio's independent XDMF reader sees the same mesh
-    (cell type, connectivity), the nodal ``u`` as point data and ``von_mises`` as cell data."""
+    returns exactly what was written, and the XDMF file (read with tests/support/xdmf.py)
+    shows the same mesh (XDMF topology type, connectivity) drawn at points + u, the nodal ``u``
+    as point data and ``von_mises`` as cell data; the ice shows ``von_mises`` as NaN on its
+    particles (one Polyvertex cell each) and the structure ``damage`` and ``v`` as NaN."""
     rng = np.random.default_rng(11)
     cells = np.array(cells)
     nn, ne = int(cells.max()) + 1, len(cells)
@@ -414,19 +429,21 @@ def test_structure_frames_round_trip_and_xdmf(tmp_path, cell_type, cells):
     assert s["cell_type"] == cell_type
     np.testing.assert_array_equal(s["u"], np.stack([f["u"] for f in written]))
     np.testing.assert_array_equal(s["von_mises"], np.stack([f["von_mises"] for f in written]))
-    root = ET.parse(path.with_suffix(".xdmf")).getroot()
-    names = [c.get("Name") for c in root.find("Domain").findall("Grid")]
-    assert names == ["ice/floe", "structure/panel"]
-    with meshio.xdmf.TimeSeriesReader(path.with_suffix(".xdmf")) as reader:  # the last: panel
-        p, c = reader.read_points_cells()
-        np.testing.assert_array_equal(p, points)
-        assert c[0].type == cell_type
-        np.testing.assert_array_equal(c[0].data, cells)
-        for k in range(3):
-            t, point_data, cell_data = reader.read_data(k)
-            assert t == 1e-3 * k
-            np.testing.assert_array_equal(point_data["u"], written[k]["u"])
-            np.testing.assert_array_equal(cell_data["von_mises"][0], written[k]["von_mises"])
+    np.testing.assert_array_equal(s["x"], points + s["u"])
+    seen = read_xdmf(path.with_suffix(".xdmf"))
+    assert list(seen) == ["ice/floe", "structure/panel"]
+    for k, frame in enumerate(seen["structure/panel"]):
+        assert frame.time == 1e-3 * k
+        grid = frame.grids["structure/panel"]
+        assert grid.topology == topology
+        np.testing.assert_array_equal(grid.cells, cells)
+        np.testing.assert_array_equal(grid.points, points + written[k]["u"])
+        np.testing.assert_array_equal(grid.point_data["u"], written[k]["u"])
+        np.testing.assert_array_equal(grid.cell_data["von_mises"], written[k]["von_mises"])
+        assert np.isnan(grid.point_data["damage"]).all() and grid.point_data["v"].shape == (nn, 3)
+        floe = seen["ice/floe"][k].grids["ice/floe"]
+        assert floe.cell_data["von_mises"].shape == (6,)
+        assert np.isnan(floe.cell_data["von_mises"]).all()
 
 
 def test_structure_input_errors(tmp_path):

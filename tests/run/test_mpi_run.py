@@ -15,7 +15,7 @@ import pytest
 
 from pdfem.output import read_results
 
-from support.cases import CYLINDER
+from support.cases import CYLINDER, PANEL_BODIES
 from support.cli import run_ok, run_pdfem
 
 
@@ -24,17 +24,7 @@ PANEL = """
 end_time = 1.0e-3
 output_interval = 5.0e-4
 energy_tolerance = 0.1  # coarse first contact: 1.3-3.2 % of the input (not what this tests)
-[[ice]]
-name = "floe"
-dx = 0.04
-shape = { box = { min = [0.8, 0.4, -0.019999], max = [1.2, 0.8, 0.140001] } }
-material = { fracture_energy = 10.0 }
-prescribed_velocity = [ { region = { box = { min = [0.7, 0.3, 0.09], max = [1.3, 0.9, 0.2] } }, velocity = [0.0, 0.0, -1.0], ramp_time = 2.0e-4 } ]
-[[structure]]
-name = "panel"
-mesh = "hull_panel"
-params = { element_size = 0.12 }
-fixed_groups = ["fixed"]
+""" + PANEL_BODIES + """
 [[monitor]]
 name = "centre"
 structure = "panel"

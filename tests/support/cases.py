@@ -8,6 +8,9 @@ run them otherwise (tests/run/test_mpi_checkpoint_ranks.py: floating, with check
 ``BLOCK``: a 6 cm ice cube (216 particles, dx 1 cm) on a fixed base, its top layer pushed down
 at 0.5 m/s for 20 us (three frames): elastic, no structure, no meshing; the loads are the
 reactions ``block.base`` and ``block.top`` (tests/api, tests/study: runs of a second or less).
+``PANEL_BODIES``: an ice floe pushed at 1 m/s against the elastic hull panel (coarse, first
+contact within 0.2 ms), without the ``[run]`` section (tests/run/test_mpi_run.py,
+tests/output/test_paraview.py).
 """
 
 CYLINDER_RUN = """
@@ -45,4 +48,18 @@ shape = { box = { min = [0.0, 0.0, 0.0], max = [0.06, 0.06, 0.06] } }
 material = { density = 900.0, youngs_modulus = 4.0e9, poisson_ratio = 0.3, fracture_energy = 10.0 }
 fixed = [ { name = "base", box = { min = [-0.01, -0.01, -0.01], max = [0.07, 0.07, 0.01] } } ]
 prescribed_velocity = [ { name = "top", region = { box = { min = [-0.01, -0.01, 0.05], max = [0.07, 0.07, 0.07] } }, velocity = [0.0, 0.0, -0.5] } ]
+"""
+
+PANEL_BODIES = """
+[[ice]]
+name = "floe"
+dx = 0.04
+shape = { box = { min = [0.8, 0.4, -0.019999], max = [1.2, 0.8, 0.140001] } }
+material = { fracture_energy = 10.0 }
+prescribed_velocity = [ { region = { box = { min = [0.7, 0.3, 0.09], max = [1.3, 0.9, 0.2] } }, velocity = [0.0, 0.0, -1.0], ramp_time = 2.0e-4 } ]
+[[structure]]
+name = "panel"
+mesh = "hull_panel"
+params = { element_size = 0.12 }
+fixed_groups = ["fixed"]
 """
