@@ -139,11 +139,13 @@ def run_guarded(fn, *args, comm=None, **kwargs):
         import sys
         import time
 
-        from pdfem.errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError, InstabilityError
+        from pdfem.errors import (EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError,
+                                  InstabilityError, OutputError)
 
         code = (EXIT_BAD_INPUT if isinstance(exc, InputError) else
                 EXIT_INSTABILITY if isinstance(exc, InstabilityError) else EXIT_FAILURE)
-        text = exc.text() if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
+        text = (exc.text() if isinstance(exc, InputError) else str(exc)
+                if isinstance(exc, OutputError) else f"{type(exc).__name__}: {exc}")
         print(f"pdfem rank {comm.rank}: {text}", file=sys.stderr, flush=True)
         time.sleep(ABORT_GRACE_SECONDS)  # let the launcher forward the message before the abort
         comm.abort(code)
