@@ -54,9 +54,8 @@ from pdfem.output import xdmf
 from pdfem.output.bodies import store_ice_body, store_structure
 from pdfem.output.datasets import growing_dataset, has_committed, put_rows
 from pdfem.output.files import bound_metadata_cache, refuse_if_being_written
-from pdfem.output.frames import FrameSeries
+from pdfem.output.frames import VIEW_BATCH, FrameSeries, frames_per_chunk
 from pdfem.output.histories import HISTORY_BLOCK, History, first_row
-from pdfem.output.frames import VIEW_BATCH, frames_per_chunk
 from pdfem.output.layout import (CELL_FIELDS, REQUIRED_ICE_FIELDS, REQUIRED_STRUCTURE_FIELDS,
                                  attr_value, check_name, history_groups, write_meta)
 from pdfem.output.room import NoRoom, Room, failure, release
@@ -425,7 +424,8 @@ class ResultsWriter:
             views = self._grids[body].series.views_due(index)
             for a in arrays.values():
                 frames = frames_per_chunk(a.shape)
-                total += (index % frames == 0) * frames * a.nbytes + views * VIEW_BATCH * VIEW_BYTES
+                total += frames * a.nbytes if index % frames == 0 else 0
+                total += VIEW_BATCH * VIEW_BYTES if views else 0
         return total
 
     def _xdmf_write(self, write, *args) -> None:
@@ -434,9 +434,8 @@ class ResultsWriter:
         try:
             write(*args)
         except OSError as exc:
-            frames = self._frames
             self._failure = failure("the ParaView index", self.xdmf_path, exc, (
-                f"{self.path.name} keeps the {frames} frames written and reads with h5py and "
+                f"{self.path.name} keeps its {self._frames} frame(s) and reads with h5py and "
                 "pdfem post; nothing more is written."))
             raise OutputError(self._failure) from None
 
@@ -500,4 +499,3 @@ class ResultsWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-

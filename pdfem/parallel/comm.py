@@ -2,7 +2,7 @@
 
 mpi4py is imported only when the process was started by an MPI launcher (so a serial run needs
 no mpiexec and no MPI library at all). Both communicators offer the few operations pdfem
-needs: rank and size, a sum over ranks, a gather to rank 0, an all-gather, a broadcast, and the point-to-point
+needs: rank and size, a sum over ranks, a maximum over ranks, a gather to rank 0, an all-gather, a broadcast, and the point-to-point
 halo exchange of :mod:`pdfem.pd.layout.halo`.
 """
 
@@ -26,6 +26,9 @@ class SerialComm:
 
     def allreduce_sum(self, value):
         return value
+
+    def allreduce_max(self, values: np.ndarray) -> np.ndarray:
+        return values
 
     def gather(self, value):
         return [value]
@@ -64,6 +67,15 @@ class MPIComm:
         for p in parts[1:]:
             total = total + p
         return total
+
+    def allreduce_max(self, values: np.ndarray) -> np.ndarray:
+        """The elementwise maximum over ranks of a small int64 array (one MPI_Allreduce)."""
+        from mpi4py import MPI
+
+        values = np.ascontiguousarray(values, dtype=np.int64)
+        out = np.empty_like(values)
+        self.comm.Allreduce(values, out, op=MPI.MAX)
+        return out
 
     def gather(self, value):
         return self.comm.gather(value, root=0)

@@ -156,13 +156,14 @@ class Frames:
 
 
 class Checkpoints:
-    """A checkpoint every ``every`` steps and every ``minutes`` of wall time (rank 0's clock
-    decides for all ranks), never at the last step; and the stop on a signal.
+    """A checkpoint every ``every`` steps and every ``minutes`` of wall time, never at the last
+    step; and the stop on a signal.
 
-    After every step the ranks exchange, in one small all-gather, rank 0's clock decision and
-    the signal each rank received (``stop``, a :class:`pdfem.run.stop.StopRequest`): a signal
-    on any rank stops every rank at the same step. A stopped run writes its checkpoint, then a
-    last frame (:meth:`Frames.at_stop`), and :attr:`stopped` names the signal.
+    After every step one small max-reduction over the ranks (two integers) gives every rank
+    the same answers: whether a rank's clock says a checkpoint is due, and the stop signal a
+    rank received (``stop``, a :class:`pdfem.run.stop.StopRequest`), so a signal on any rank
+    stops every rank at the same step. A stopped run writes its checkpoint, then a last frame
+    (:meth:`Frames.at_stop`), and :attr:`stopped` names the signal.
     """
 
     label = "frames and checkpoints"
@@ -179,13 +180,13 @@ class Checkpoints:
     def after_step(self, s: Step) -> None:
         due = bool(self.every) and s.number % self.every == 0
         clock = bool(self.minutes) and time.monotonic() - self.last >= 60 * self.minutes
-        flags = self.comm.allgather((clock, self.stop.signal if self.stop else 0))
-        due = due or flags[0][0]
-        signals = [sig for _, sig in flags if sig]
+        clock, sig = self.comm.allreduce_max(
+            np.array([clock, self.stop.signal if self.stop else 0], dtype=np.int64))
+        due = due or bool(clock)
         if s.last:
             return
-        if signals:
-            self.stopped = signal.Signals(signals[0]).name
+        if sig:
+            self.stopped = signal.Signals(int(sig)).name
             self.say(f"  {self.stopped}: stopping at t = {s.t:.6e} s (step {s.number:,}) with a "
                      "checkpoint and a last frame (a second Ctrl-C stops at once)")
             self.write(s)

@@ -148,3 +148,17 @@ def test_a_second_sigint_stops_at_once_and_handlers_are_restored():
         assert stop.name == "SIGUSR1"
         assert signal.getsignal(signal.SIGTERM) == stop.handle
     assert {s: signal.getsignal(s) for s in before} == before
+
+
+def test_sigterm_still_stops_after_gmsh_meshed_a_structure():
+    """gmsh's library installs its own SIGTERM handler (it prints "Terminated" and exits 143),
+    behind Python's back; a gmsh session puts Python's back when it ends, so a run whose
+    structure was meshed by a model script still stops with a checkpoint (before: the demo
+    died at once with status 143)."""
+    from pdfem.meshing import gmsh_session
+
+    with stop_signals() as stop:
+        with gmsh_session("box") as gmsh:
+            gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
+        os.kill(os.getpid(), signal.SIGTERM)
+        assert stop.name == "SIGTERM"
