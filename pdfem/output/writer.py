@@ -413,7 +413,8 @@ class ResultsWriter:
                 "h5py and pdfem post" if self._flushed else f"{self.path.name} holds nothing")
         self._failure = failure(what, self.path, exc, (
             f"{kept}; nothing more is written to it.{note} Free space (or raise the limit), "
-            "then continue from the run's last checkpoint with --restart, or run again."))
+            "then run again, or continue from the run's checkpoint with --restart if it wrote "
+            "one."))
         return OutputError(self._failure)
 
     def _frame_bytes(self, checked: Mapping[str, Mapping[str, np.ndarray]]) -> int:
