@@ -2,7 +2,10 @@
 
 ``InputError`` (exit 2) is for anything the user gave us that is wrong: it names the file,
 the field, the value and what would be valid. ``InstabilityError`` (exit 3) stops a run whose
-state blew up. Every other exception is a bug or an environment failure (exit 1).
+state blew up. ``OutputError`` (exit 1, no traceback) is a results or checkpoint file that
+could not be written (no space left, a file-size limit, an I/O error). Every other exception
+is a bug or an environment failure (exit 1). A run stopped by a signal (SIGTERM, SIGUSR1,
+SIGINT) with a checkpoint to restart from is not an error: exit 4 (:data:`EXIT_STOPPED`).
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
 EXIT_INSTABILITY = 3
+EXIT_STOPPED = 4
+"""A run stopped by a signal after writing a checkpoint and a last frame (:mod:`pdfem.run.stop`)."""
 
 
 SHOWN_CHARS = 200
@@ -68,3 +73,8 @@ class InputError(Exception):
 
 class InstabilityError(Exception):
     """A run stopped because its state became unphysical (NaN, runaway motion, energy growth)."""
+
+
+class OutputError(Exception):
+    """A results or checkpoint file could not be written: the message (one paragraph) says
+    what failed, where, how much was written and what is kept."""

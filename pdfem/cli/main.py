@@ -15,10 +15,12 @@
 Each command is a module of :mod:`pdfem.cli` (its docstring says what it does).
 
 Exit status: 0 success, 2 bad input (the message names file and field), 3 a run stopped by a
-detected instability, 1 anything else. With ``--json`` standard output holds exactly one JSON
-object and nothing else. A reader that closes standard output early (``pdfem post --json |
-head``) ends the command quietly with exit 1 (its output was not all delivered; no traceback):
-the ``BrokenPipeError`` is caught and standard output pointed at /dev/null, as the Python
+detected instability, 4 a run stopped by a signal (SIGTERM, SIGUSR1, Ctrl-C) with a checkpoint
+to restart from, 1 anything else (a results or checkpoint file that cannot be written: one
+paragraph, no traceback). With ``--json`` standard output holds exactly one JSON object and
+nothing else. A reader that closes standard output early (``pdfem post --json | head``) ends
+the command quietly with exit 1 (its output was not all delivered; no traceback): the
+``BrokenPipeError`` is caught and standard output pointed at /dev/null, as the Python
 documentation's "Note on SIGPIPE" does (the run itself, if any, has written its results).
 """
 
@@ -31,7 +33,8 @@ import traceback
 import warnings
 
 from pdfem import __version__
-from pdfem.errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, EXIT_OK, InputError, InstabilityError
+from pdfem.errors import (EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, EXIT_OK, InputError,
+                          InstabilityError, OutputError)
 
 from pdfem.cli import bench, info, mesh, modes, post, run, schema, sweep, validate
 
@@ -74,6 +77,9 @@ def main(argv: list[str] | None = None) -> int:
     except InstabilityError as exc:
         print(f"Run stopped: {exc}", file=sys.stderr)
         return EXIT_INSTABILITY
+    except OutputError as exc:  # a full disk, a file-size limit, an I/O error: no traceback
+        print(f"pdfem: {exc}", file=sys.stderr)
+        return EXIT_FAILURE
     except KeyboardInterrupt:
         print("interrupted; results written so far are kept", file=sys.stderr)
         return EXIT_FAILURE

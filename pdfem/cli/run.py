@@ -9,6 +9,12 @@ needs) if not. It writes nothing (``--out`` is not created).
 
 ``pdfem run CASE --restart DIR/checkpoint.h5`` continues a run of CASE from its last checkpoint,
 appending to the results file in DIR (``--out`` defaults to the checkpoint's directory).
+
+SIGTERM, SIGUSR1 or a first Ctrl-C (SIGINT) stop the run at the end of its coupling step with a
+checkpoint and a last frame (:mod:`pdfem.run.stop`): exit status 4 and a message giving the
+restart command; a second Ctrl-C stops at once (exit 1). A results or checkpoint file that
+cannot be written (no space left, a file-size limit, an I/O error) ends the run with exit 1 and
+one paragraph saying what was kept (:mod:`pdfem.output.room`).
 Without a case it runs the built-in demo (``demo_ice_sheet_panel.toml`` of the package
 ``pdfem.models``) into ``results/demo_ice_sheet_panel/`` and prints its post summary.
 """
@@ -20,13 +26,19 @@ import contextlib
 import importlib.resources
 import io
 import json
+import shlex
+import sys
 from pathlib import Path
 
 from pdfem.cli.options import path_text
-from pdfem.errors import EXIT_BAD_INPUT, EXIT_OK, InputError
+from pdfem.errors import EXIT_BAD_INPUT, EXIT_OK, EXIT_STOPPED, InputError
 
 NAME = "run"
 HELP = "run a case file (no case: the built-in demo)"
+EPILOG = ("exit status: 0 done, 1 an error (a results or checkpoint file that cannot be written "
+          "included), 2 bad input, 3 the run blew up, 4 stopped by SIGTERM, SIGUSR1 or Ctrl-C "
+          "(SIGINT) at the end of a coupling step with a checkpoint: continue it with "
+          "pdfem run CASE --out DIR --restart DIR/checkpoint.h5 (a second Ctrl-C stops at once)")
 
 DEMO_CASE = "demo_ice_sheet_panel.toml"
 """The built-in demo case (package data of ``pdfem.models``) that ``pdfem run`` runs without a case."""
@@ -34,6 +46,7 @@ DEMO_CASE = "demo_ice_sheet_panel.toml"
 
 def add_arguments(r: argparse.ArgumentParser) -> None:
     """The options of ``pdfem run``."""
+    r.epilog = EPILOG
     r.add_argument("case", nargs="?", default=None,
                    help=f"case file (TOML, SI units); default: the demo {DEMO_CASE}")
     r.add_argument("--out", default=None, type=path_text,
@@ -133,16 +146,23 @@ def run(args: argparse.Namespace) -> int:
         out = Path("results") / stem
     demo = args.case is None
     from pdfem.parallel.comm import run_guarded, world
+    from pdfem.run.stop import stop_signals
     comm = world()  # under mpiexec: every rank runs, rank 0 writes and reports
     from pdfem.run.parallel import warm_before_ranks
-    run_guarded(warm_before_ranks, comm, comm=comm)  # one rank fills numba's cache first
+    with stop_signals() as stop:  # SIGTERM, SIGUSR1, SIGINT: stop with a checkpoint
+        run_guarded(warm_before_ranks, comm, comm=comm)  # one rank fills numba's cache first
+        if args.json:
+            buf = io.StringIO()
+            with contextlib.redirect_stdout(buf):
+                summary = run_guarded(run_case, case, out, quiet=True, restart=args.restart,
+                                      comm=comm, profile=args.profile, stop=stop)
+        else:
+            summary = run_guarded(run_case, case, out, quiet=args.quiet, restart=args.restart,
+                                  comm=comm, profile=args.profile, stop=stop)
+    if comm.rank != 0:
+        return EXIT_STOPPED if summary.stopped else EXIT_OK
+    restart = _restart_command(case.file, out, summary.checkpoint, comm.size)
     if args.json:
-        buf = io.StringIO()
-        with contextlib.redirect_stdout(buf):
-            summary = run_guarded(run_case, case, out, quiet=True, restart=args.restart,
-                                  comm=comm, profile=args.profile)
-        if comm.rank != 0:
-            return EXIT_OK
         report = {"results": str(summary.results), "steps": summary.steps,
                   "time_step": summary.time_step, "end_time": summary.end_time,
                   "wall_seconds": summary.wall_seconds, "particles": summary.particles,
@@ -151,25 +171,36 @@ def run(args: argparse.Namespace) -> int:
                   "energy_budget": _budget(summary.energy)}
         if summary.profile is not None:
             report["profile"] = summary.profile
-        if demo:
+        if summary.stopped:
+            report.update(stopped=summary.stopped, checkpoint=str(summary.checkpoint),
+                          restart=restart)
+        elif demo:
             from pdfem.post import load_results, summarize
             report["case"] = str(case.file)
             report["xdmf"] = str(summary.results.with_suffix(".xdmf"))
             report["post"] = summarize(load_results(summary.results))
         print(json.dumps(report))
-    else:
-        summary = run_guarded(run_case, case, out, quiet=args.quiet, restart=args.restart,
-                              comm=comm, profile=args.profile)
-        if not args.quiet and comm.rank == 0:
-            print(summary.text())
-            if demo:
-                from pdfem.post import format_summary, load_results, summarize
-                print()
-                print(format_summary(summarize(load_results(summary.results))))
-                print()
-                print(f"Results: {summary.results} (HDF5); open "
-                      f"{summary.results.with_suffix('.xdmf')} in ParaView.\n"
-                      f"Plots: pdfem post {summary.results} --plots {out / 'plots'}")
-    return EXIT_OK
+    elif not args.quiet:
+        print(summary.text())
+        if demo and not summary.stopped:
+            from pdfem.post import format_summary, load_results, summarize
+            print()
+            print(format_summary(summarize(load_results(summary.results))))
+            print()
+            print(f"Results: {summary.results} (HDF5); open "
+                  f"{summary.results.with_suffix('.xdmf')} in ParaView.\n"
+                  f"Plots: pdfem post {summary.results} --plots {out / 'plots'}")
+    if not summary.stopped:
+        return EXIT_OK
+    print(f"pdfem: stopped by {summary.stopped} at t = {summary.end_time:.6e} s (step "
+          f"{summary.steps:,}): checkpoint {summary.checkpoint}; {summary.results} holds "
+          f"{summary.frames} frames, the last at the stop. Continue the run with\n  {restart}",
+          file=sys.stderr, flush=True)
+    return EXIT_STOPPED
 
 
+def _restart_command(case_file, out: Path, checkpoint: Path | None, ranks: int) -> str:
+    """The command line that continues a stopped run (on as many ranks; any count works)."""
+    launch = f"mpiexec -n {ranks} " if ranks > 1 else ""
+    return (f"{launch}pdfem run {shlex.quote(str(case_file))} --out {shlex.quote(str(out))} "
+            f"--restart {shlex.quote(str(checkpoint))}")

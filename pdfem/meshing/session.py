@@ -4,6 +4,8 @@ meshing failures turned into clear errors (:class:`~pdfem.meshing.quality.MeshQu
 from __future__ import annotations
 
 import contextlib
+import signal
+import threading
 from typing import Any, Iterator
 
 from pdfem.meshing.quality import MeshQualityError
@@ -15,7 +17,10 @@ def gmsh_session(name: str = "model") -> Iterator[Any]:
 
     Calls ``gmsh.initialize(interruptible=False)`` (safe outside the main thread), silences the
     terminal output and selects MSH 4.1 (ASCII) for writing. gmsh has one global state per
-    process, so sessions cannot be nested.
+    process, so sessions cannot be nested. gmsh's library puts its own SIGTERM handler in place
+    of Python's (measured with gmsh 4: it prints "Terminated" and exits, while
+    ``signal.getsignal`` still names Python's handler); the main thread's handler is put back
+    when the session ends, so a run's stop on SIGTERM (:mod:`pdfem.run.stop`) still works.
 
     Parameters
     ----------
@@ -31,6 +36,8 @@ def gmsh_session(name: str = "model") -> Iterator[Any]:
 
     if gmsh.isInitialized():
         raise RuntimeError("a gmsh session is already open in this process; sessions cannot be nested")
+    main = threading.current_thread() is threading.main_thread()
+    term = signal.getsignal(signal.SIGTERM) if main else None
     gmsh.initialize(readConfigFiles=False, interruptible=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -43,6 +50,8 @@ def gmsh_session(name: str = "model") -> Iterator[Any]:
         yield gmsh
     finally:
         gmsh.finalize()
+        if term is not None:  # None: a handler not installed from Python, left as it is
+            signal.signal(signal.SIGTERM, term)
 
 
 def set_mesh_size(max_size: float, min_size: float = 0.0, curvature: int = 0) -> None:

@@ -145,6 +145,10 @@ class FrameSeries:
                     create_view(self._view_groups[k], self._datasets[k], j, a.shape)
             self._views = index + VIEW_BATCH
 
+    def views_due(self, index: int) -> bool:
+        """Whether writing frame ``index`` makes a batch of views."""
+        return index >= self._views
+
     def resume(self, n_frames: int) -> None:
         """Take over the datasets of an existing file (append mode), cut to ``n_frames`` frames;
         views of later frames are deleted (they are made again as frames are added)."""

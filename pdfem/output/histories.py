@@ -111,8 +111,8 @@ class History:
             ds.resize(rows, axis=0)
         return cls(file, path, datasets, time, rows)
 
-    def append(self, time: float, values: Mapping[str, Any]) -> None:
-        """Buffer one row; a full block is written and committed at once."""
+    def append(self, time: float, values: Mapping[str, Any]) -> bool:
+        """Buffer one row; returns whether the buffer is full (then :meth:`write_block`)."""
         if values.keys() != self.shapes.keys():
             raise ValueError(f"history {self.path!r}: keys are fixed by the first row "
                              f"{sorted(self.shapes)}, got {sorted(values)}")
@@ -124,10 +124,13 @@ class History:
             self.buffers[k][c] = v
         self.times[c] = time
         self.count = c + 1
-        if self.count == HISTORY_BLOCK:
-            self.write_columns()
-            self.file.flush()
-            self.commit()
+        return self.count == HISTORY_BLOCK
+
+    def write_block(self) -> None:
+        """Write and commit the buffered rows: key columns, flush, time column."""
+        self.write_columns()
+        self.file.flush()
+        self.commit()
 
     def write_columns(self) -> None:
         """Phase 1: write the key columns of the buffered rows."""
@@ -142,6 +145,17 @@ class History:
             put_rows(self.time, self.written, self.times[:self.count])
             self.written += self.count
             self.count = 0
+
+    @property
+    def new_bytes(self) -> int:
+        """Bytes writing the buffered rows adds to the file: a chunk of every column if they
+        start a new one (a block of rows is one chunk), else nothing."""
+        if not self.count:
+            return 0
+        first, last = self.written, self.written + self.count - 1
+        if first % HISTORY_BLOCK and first // HISTORY_BLOCK == last // HISTORY_BLOCK:
+            return 0
+        return self.times.nbytes + sum(b.nbytes for b in self.buffers.values())
 
     @property
     def rows(self) -> int:

@@ -23,6 +23,15 @@ written the file holds HDF5's lock, and a second :class:`ResultsWriter` on it is
 itself would truncate it first); to read it during a run, start the reader (e.g. ParaView)
 with ``HDF5_USE_FILE_LOCKING=FALSE`` (``read_results`` does this itself).
 
+Write errors (no space left, a file-size limit, a quota, an I/O error): before every write that
+can grow the file, room for it is reserved on disk (:class:`pdfem.output.room.Room`), so a write
+that would not fit fails before HDF5 touches the file, which keeps every frame flushed before.
+The failure raises :class:`pdfem.errors.OutputError` (the message says what failed, why, and
+what the file holds); the writer then never writes to the file again, and :meth:`close`
+releases it without a write (:func:`pdfem.output.room.release`). Measured: without the
+reserve, HDF5's failed flush leaves a file that no longer opens, and closing it crashes the
+process (:mod:`pdfem.output.room`).
+
 Restart: ``ResultsWriter(path, case_text, append=True)`` reopens the file of a run (killed or
 not) of the same case; after the bodies are registered again, :meth:`ResultsWriter.resume`
 cuts every frame dataset and history back to the counts a checkpoint recorded (frames and
@@ -33,21 +42,28 @@ run continues appending as before.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 
 import h5py
 import numpy as np
 
+from pdfem.errors import OutputError
 from pdfem.output import xdmf, xdmf_grids
 from pdfem.output.bodies import store_ice_body, store_structure
 from pdfem.output.datasets import growing_dataset, has_committed, put_rows
 from pdfem.output.files import bound_metadata_cache, refuse_if_being_written
-from pdfem.output.frames import FrameSeries
+from pdfem.output.frames import VIEW_BATCH, FrameSeries, frames_per_chunk
 from pdfem.output.histories import HISTORY_BLOCK, History, first_row
 from pdfem.output.layout import (CELL_FIELDS, REQUIRED_ICE_FIELDS, REQUIRED_STRUCTURE_FIELDS,
                                  attr_value, check_name, history_groups, write_meta)
+from pdfem.output.room import NoRoom, Room, failure, release
 from pdfem.output.xdmf_file import XdmfFile
+
+VIEW_BYTES = 512
+"""Bytes an XDMF view of one field and frame takes in the file (measured: 170 to 350; the
+reserve's margin holds more)."""
 
 
 class ResultsWriter:
@@ -77,6 +93,9 @@ class ResultsWriter:
         With ``append``, if the file holds another case.
     FileExistsError
         If another process is writing ``path`` (it holds the HDF5 file lock).
+    OutputError
+        If the new file cannot be written (no space, a file-size limit, an I/O error); so
+        may every method that writes.
 
     Notes
     -----
@@ -105,9 +124,14 @@ class ResultsWriter:
         self._last_time = -np.inf
         self._append = append
         self._resumed = not append
+        self._room = Room(self.path)
+        self._need = 0            # bytes the write under way may add (for the reserve)
+        self._failure = ""        # the message of a failed write: nothing is written after it
+        self._file: h5py.File | None = None
         refuse_if_being_written(self.path)
         if append:
-            self._file: h5py.File | None = h5py.File(self.path, "r+")
+            self._file = h5py.File(self.path, "r+")
+            self._flushed = self._file.id.get_filesize()  # bytes up to the last flush
             bound_metadata_cache(self._file)
             stored = attr_value(self._file["meta"].attrs.get("case", ""))
             if stored != case_text:
@@ -115,17 +139,23 @@ class ResultsWriter:
                 raise ValueError(f"results file {str(self.path)!r} was written by another case "
                                  "(its /meta case text differs); cannot append to it")
             return
-        self._file = h5py.File(self.path, "w")
+        try:
+            self._file = h5py.File(self.path, "w")
+        except OSError as exc:
+            raise OutputError(failure("a new results file", self.path, exc,
+                                      "Nothing was written.")) from None
+        self._flushed = 0
         bound_metadata_cache(self._file)
         try:
-            write_meta(self._file, case_text, meta or {})
-        except TypeError:
-            self._file.close()
+            with self._writing("the run's metadata", len(case_text)):
+                write_meta(self._file, case_text, meta or {})
+                growing_dataset(self._file, "time", (), HISTORY_BLOCK, fillvalue=np.nan)
+                self._file.create_group("ice")
+                self._sync()
+        except (TypeError, OutputError):
+            self.close()
             raise
-        growing_dataset(self._file, "time", (), HISTORY_BLOCK, fillvalue=np.nan)
-        self._file.create_group("ice")
-        self.flush()
-        self._xdmf.rewrite()
+        self._xdmf_write(self._xdmf.rewrite)
 
     # -- setup ---------------------------------------------------------------------------
 
@@ -163,11 +193,12 @@ class ResultsWriter:
             MPI rank's particles, :func:`~pdfem.output.reader.read_results` puts the parts
             together).
         """
-        f = self._h5
         path = self._new_body("ice", name)
-        n = store_ice_body(f, path, x0, volume, index, self._append)
-        if not self._append:
-            xdmf.write_vertices(f, path, n)
+        data = sum(np.asarray(a).nbytes for a in (x0, volume, index) if a is not None)
+        with self._writing(f"ice body {name!r}", 2 * data) as f:
+            n = store_ice_body(f, path, x0, volume, index, self._append)
+            if not self._append:
+                xdmf.write_vertices(f, path, n)
         self._grids[f"ice/{name}"] = xdmf_grids.ice_grid(
             self._h5name, f"ice/{name}", path, n, volume is not None,
             FrameSeries(f, path, {"Node": n}, ((), (3,)), REQUIRED_ICE_FIELDS,
@@ -207,9 +238,10 @@ class ResultsWriter:
         cell_type
             ``"tetra"``, ``"hexahedron"``, ``"triangle"`` (rigid surfaces) or ``"quad"``.
         """
-        f = self._h5
         path = self._new_body("structure", name)
-        nn, ne = store_structure(f, path, points, cells, cell_type, self._append)
+        with self._writing(f"structure {name!r}",
+                           2 * (np.asarray(points).nbytes + np.asarray(cells).nbytes)) as f:
+            nn, ne = store_structure(f, path, points, cells, cell_type, self._append)
         series = FrameSeries(f, path, {"Node": nn, "Cell": ne}, ((), (3,)),
                              REQUIRED_STRUCTURE_FIELDS, CELL_FIELDS,
                              np.ascontiguousarray(points, dtype=np.float64))
@@ -242,21 +274,23 @@ class ResultsWriter:
         if frames < 1 or not has_committed(times, frames):
             raise ValueError(f"the results file holds fewer than the {frames} frames to "
                              "resume from")
-        times.resize(frames, axis=0)
-        kept = times[:frames]
-        for grid in self._grids.values():
-            grid.series.resume(frames)
-        for name, _ in history_groups(f):
-            if name in history_rows:
-                self._histories[name] = History.resume(f, "/" + name, int(history_rows[name]))
-            else:
-                del f[name]
-        self._frames = frames
-        self._last_time = float(kept[-1])
-        self._resumed = True
-        self._sync()
+        with self._writing(f"the results file cut back to frame {frames}"):
+            times.resize(frames, axis=0)
+            kept = times[:frames]
+            for grid in self._grids.values():
+                grid.series.resume(frames)
+            for name, _ in history_groups(f):
+                if name in history_rows:
+                    self._histories[name] = History.resume(f, "/" + name,
+                                                           int(history_rows[name]))
+                else:
+                    del f[name]
+            self._frames = frames
+            self._last_time = float(kept[-1])
+            self._resumed = True
+            self._sync()
         self._set_xdmf_grids([g for g in self._grids.values() if g.series.fields is not None])
-        self._xdmf.set_times(kept)
+        self._xdmf_write(self._xdmf.set_times, kept)
 
     def history_rows(self) -> dict[str, int]:
         """``{history group: rows appended so far}`` (committed or buffered), for a checkpoint."""
@@ -265,8 +299,9 @@ class ResultsWriter:
     def _set_xdmf_grids(self, grids: list[xdmf_grids.BodyGrid]) -> None:
         """Show the per-rank ice and ``grids`` in the XDMF file, every field on every grid."""
         grids = self._rank_grids + grids
-        xdmf_grids.pad(grids, self._h5, self._h5name)
-        self._h5.flush()  # the NaN datasets the XDMF file is about to name
+        with self._writing("the empty fields the ParaView index names"):
+            xdmf_grids.pad(grids, self._h5, self._h5name)
+            self._h5.flush()  # the NaN datasets the XDMF file is about to name
         self._xdmf.grids = grids
 
     # -- per output time -----------------------------------------------------------------
@@ -312,12 +347,13 @@ class ResultsWriter:
                              f"{sorted(self._grids)}, got {sorted(bodies)}")
         checked = {k: self._grids[k].series.check(v) for k, v in bodies.items()}
         index = self._frames
-        for k, arrays in checked.items():
-            self._grids[k].series.append(index, arrays)
-        self._sync(time)
+        with self._writing(f"frame {index} (t = {time:.6e} s)", self._frame_bytes(checked)):
+            for k, arrays in checked.items():
+                self._grids[k].series.append(index, arrays)
+            self._sync(time)
         if index == 0:
             self._set_xdmf_grids(list(self._grids.values()))
-        self._xdmf.add_frame(time)
+        self._xdmf_write(self._xdmf.add_frame, time)
         return index
 
     def append_history(self, group: str, time: float,
@@ -337,16 +373,82 @@ class ResultsWriter:
         f = self._check_writable()
         h = self._histories.get(group)
         if h is None:
-            h = History.create(f, "/" + group, first_row(group, values, self._histories))
+            row = first_row(group, values, self._histories)
+            with self._writing(f"the new history {group!r}"):
+                h = History.create(f, "/" + group, row)
             self._histories[group] = h
-        h.append(time, values)
+        if h.append(time, values):
+            with self._writing(f"a block of rows of the history {group!r}"):
+                h.write_block()
 
     # -- file state ----------------------------------------------------------------------
 
     def flush(self) -> None:
         """Write buffered history rows and flush the HDF5 file (the XDMF file is always up to
         date: every frame is added to it as it is written)."""
-        self._sync()
+        with self._writing("the buffered history rows"):
+            self._sync()
+
+    @contextmanager
+    def _writing(self, what: str, nbytes: int = 0) -> Iterator[h5py.File]:
+        """Reserve room for a write of ``what`` (``nbytes`` of data, plus a block of every
+        history and the margin), run it, and turn a failure into :class:`OutputError`.
+
+        Raises
+        ------
+        OutputError
+            No room for the write (the file is untouched), or HDF5 failed writing it (the
+            file may be damaged past its last frame), or an earlier write failed.
+        """
+        if self._failure:
+            raise OutputError(self._failure)
+        f = self._h5
+        self._need = int(nbytes) + sum(h.new_bytes for h in self._histories.values())
+        try:
+            self._room.ensure(f, self._need)
+            yield f
+        except NoRoom as exc:  # before HDF5 wrote past the file's end: the file is whole
+            raise self._fail(what, exc, "") from None
+        except (OSError, RuntimeError) as exc:
+            raise self._fail(what, exc, " HDF5 failed part-way through this write, so the "
+                             "file may not open.") from None
+        self._room.observe(f)
+
+    def _fail(self, what: str, exc: BaseException, note: str) -> OutputError:
+        """Remember a failed write (nothing is written after it) and make its error."""
+        n = self._frames
+        frames = (f"the {n} frame{'s' if n > 1 else ''} written before (to t = "
+                  f"{self._last_time:.6e} s)" if n else "no frame yet")
+        kept = (f"{self.path.name} keeps {frames}, {self._flushed:,} bytes, and reads with "
+                "h5py and pdfem post" if self._flushed else f"{self.path.name} holds nothing")
+        self._failure = failure(what, self.path, exc, (
+            f"{kept}; nothing more is written to it.{note} Free space (or raise the limit), "
+            "then run again, or continue from the run's checkpoint with --restart if it wrote "
+            "one."))
+        return OutputError(self._failure)
+
+    def _frame_bytes(self, checked: Mapping[str, Mapping[str, np.ndarray]]) -> int:
+        """Bytes the next frame (fields ``checked`` by body) adds to the file: a chunk of every
+        field that starts one and, when a batch of views is due, the views."""
+        index, total = self._frames, 0
+        for body, arrays in checked.items():
+            views = self._grids[body].series.views_due(index)
+            for a in arrays.values():
+                frames = frames_per_chunk(a.shape)
+                total += frames * a.nbytes if index % frames == 0 else 0
+                total += VIEW_BATCH * VIEW_BYTES if views else 0
+        return total
+
+    def _xdmf_write(self, write, *args) -> None:
+        """Run a write of the XDMF file; its failure is an :class:`OutputError` (the HDF5 file
+        is unharmed)."""
+        try:
+            write(*args)
+        except OSError as exc:
+            self._failure = failure("the ParaView index", self.xdmf_path, exc, (
+                f"{self.path.name} keeps its {self._frames} frame(s) and reads with h5py and "
+                "pdfem post; nothing more is written."))
+            raise OutputError(self._failure) from None
 
     def _sync(self, frame_time: float | None = None) -> None:
         """Flush in steps, so that what is on disk is always a committed prefix.
@@ -360,26 +462,43 @@ class ResultsWriter:
         f = self._h5
         for h in self._histories.values():
             h.write_columns()
-        f.flush()
+        self._flush(f)
         for h in self._histories.values():
             h.commit()
-        f.flush()
+        self._flush(f)
         if frame_time is not None:
             put_rows(f["time"], self._frames, np.array([frame_time]))
             self._frames += 1
             self._last_time = frame_time
-            f.flush()
+            self._flush(f)
+
+    def _flush(self, f: h5py.File) -> None:
+        """Flush ``f`` with the room of the write under way reserved again (HDF5 may have cut
+        the file back to its end)."""
+        self._room.keep(f)
+        f.flush()
+        self._flushed = f.id.get_filesize()
 
     def close(self) -> None:
-        """Write what is buffered and close the file (closing twice is allowed)."""
-        if self._file is not None:
-            try:
-                for grid in self._grids.values():
-                    grid.series.drop_unused_views(self._frames)
-                self.flush()
-            finally:
-                self._file.close()
-                self._file = None
+        """Write what is buffered and close the file (closing twice is allowed); after a failed
+        write, release it without writing (:func:`pdfem.output.room.release`)."""
+        if self._file is None:
+            return
+        try:
+            if not self._failure:
+                with self._writing("the last history rows"):
+                    for grid in self._grids.values():
+                        grid.series.drop_unused_views(self._frames)
+                    self._sync()
+        finally:
+            f, self._file = self._file, None
+            if self._failure:
+                release(f)
+                self._room.trim(self._flushed)
+            else:
+                end = f.id.get_filesize()  # closing only shrinks the file's end
+                f.close()
+                self._room.trim(end)
 
     @property
     def n_frames(self) -> int:

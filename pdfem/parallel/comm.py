@@ -2,7 +2,7 @@
 
 mpi4py is imported only when the process was started by an MPI launcher (so a serial run needs
 no mpiexec and no MPI library at all). Both communicators offer the few operations pdfem
-needs: rank and size, a sum over ranks, a gather to rank 0, an all-gather, a broadcast, and the point-to-point
+needs: rank and size, a sum over ranks, a maximum over ranks, a gather to rank 0, an all-gather, a broadcast, and the point-to-point
 halo exchange of :mod:`pdfem.pd.layout.halo`.
 """
 
@@ -26,6 +26,9 @@ class SerialComm:
 
     def allreduce_sum(self, value):
         return value
+
+    def allreduce_max(self, values: np.ndarray) -> np.ndarray:
+        return values
 
     def gather(self, value):
         return [value]
@@ -64,6 +67,15 @@ class MPIComm:
         for p in parts[1:]:
             total = total + p
         return total
+
+    def allreduce_max(self, values: np.ndarray) -> np.ndarray:
+        """The elementwise maximum over ranks of a small int64 array (one MPI_Allreduce)."""
+        from mpi4py import MPI
+
+        values = np.ascontiguousarray(values, dtype=np.int64)
+        out = np.empty_like(values)
+        self.comm.Allreduce(values, out, op=MPI.MAX)
+        return out
 
     def gather(self, value):
         return self.comm.gather(value, root=0)
@@ -139,11 +151,13 @@ def run_guarded(fn, *args, comm=None, **kwargs):
         import sys
         import time
 
-        from pdfem.errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError, InstabilityError
+        from pdfem.errors import (EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INSTABILITY, InputError,
+                                  InstabilityError, OutputError)
 
         code = (EXIT_BAD_INPUT if isinstance(exc, InputError) else
                 EXIT_INSTABILITY if isinstance(exc, InstabilityError) else EXIT_FAILURE)
-        text = exc.text() if isinstance(exc, InputError) else f"{type(exc).__name__}: {exc}"
+        text = (exc.text() if isinstance(exc, InputError) else str(exc)
+                if isinstance(exc, OutputError) else f"{type(exc).__name__}: {exc}")
         print(f"pdfem rank {comm.rank}: {text}", file=sys.stderr, flush=True)
         time.sleep(ABORT_GRACE_SECONDS)  # let the launcher forward the message before the abort
         comm.abort(code)

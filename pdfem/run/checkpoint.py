@@ -22,7 +22,10 @@ their global numbers). A run on K ranks (K = 1 serially) has every rank write
 their sizes (``/part_sizes`` dataset), LAST: written to
 ``checkpoint.h5.tmp``, fsync'ed, moved over the old one with ``os.replace``; only then are the
 previous generation's part files deleted. A run killed at any moment therefore leaves a valid
-set: the previous manifest with its parts, or the new one with its parts.
+set: the previous manifest with its parts, or the new one with its parts. A write that fails
+(no space left, a file-size limit, an I/O error: :func:`pdfem.output.room.write_atomically`)
+removes its temporary file, leaves the previous checkpoint whole, and raises
+:class:`pdfem.errors.OutputError` saying which checkpoint a restart will use.
 
 A restart on N ranks from a checkpoint of M ranks (or serial <-> parallel): every rank reads the
 manifest, then from every part only the particles and bonds it holds, so no rank holds a global
@@ -39,6 +42,8 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -46,7 +51,8 @@ import h5py
 import numpy as np
 
 from pdfem import __version__
-from pdfem.errors import InputError
+from pdfem.errors import InputError, OutputError
+from pdfem.output.room import write_atomically
 from pdfem.run.checkpoint_ranks import (has_force_state, part_path, remove_other_generations,
                                         restore_force, restore_ice, write_part_file)
 
@@ -137,17 +143,25 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
     -------
     Path or None
         ``path`` (``None`` on ranks other than 0).
+
+    Raises
+    ------
+    OutputError
+        A part or the manifest could not be written; the previous checkpoint is kept whole
+        (the message names it). Under MPI the failing rank ends the job
+        (:func:`pdfem.parallel.comm.run_guarded`).
     """
     path, gen = Path(path), int(driver.step)
-    mine = write_part_file(part_path(path, gen, comm.rank), gen, comm.rank, bodies,
-                           coupler.forces)
+    with _keeping(path):
+        mine = write_part_file(part_path(path, gen, comm.rank), gen, comm.rank, bodies,
+                               coupler.forces)
     sizes = comm.gather(mine)  # every part is on disk before the manifest names it
     before_manifest(gen)
     coupler_state = coupler.checkpoint_state()  # collective under MPI
     if comm.rank != 0:
         return None
-    tmp = path.with_name(path.name + ".tmp")
-    with h5py.File(tmp, "w") as f:
+
+    def fill(f: h5py.File) -> None:
         f.attrs["format"] = FORMAT
         f.attrs["pdfem_version"] = __version__
         f.attrs["case_sha256"] = case_hash(case_text)
@@ -167,12 +181,29 @@ def write_checkpoint(path: str | os.PathLike, case_text: str, driver: DriverStat
         for s in structures:
             _put(f.create_group(f"structure/{s.name}"), s.checkpoint_state())
         _put(f.create_group("coupler"), coupler_state)
-    with open(tmp, "rb+") as fh:
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+
+    with _keeping(path):
+        write_atomically(path, fill, f"the checkpoint of step {gen:,}")
     _fsync_dir(path.parent)
     remove_other_generations(path, gen, len(sizes))
     return path
+
+
+@contextmanager
+def _keeping(path: Path) -> Iterator[None]:
+    """Add to a failed checkpoint write's message what it leaves: the previous checkpoint at
+    ``path``, if any."""
+    try:
+        yield
+    except OutputError as exc:
+        try:
+            with h5py.File(path, "r") as f:
+                step = int(f["driver"].attrs["step"])
+        except (OSError, KeyError):
+            raise OutputError(f"{exc} There is no earlier checkpoint; the results written so "
+                              "far are kept.") from None
+        raise OutputError(f"{exc} The previous checkpoint {path} (step {step:,}) is kept "
+                          "whole: restart from it with --restart once there is room.") from None
 
 
 def _fsync_dir(folder: Path) -> None:

@@ -16,13 +16,13 @@ chunk (:data:`CHUNK` rows) and reads the values only over the span of rows it ho
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
 
 import h5py
 import numpy as np
 
+from pdfem.output.room import write_atomically
 from pdfem.pd.checkpoint.parts import (BOND_KEYS, PARTICLE_KEYS, PartLayout, PartPicker, owned_part,
                                        locate, rank_scalars)
 
@@ -64,17 +64,20 @@ def write_part(f: h5py.File, bodies: list, forces: list) -> None:
 
 
 def write_part_file(path: Path, generation: int, rank: int, bodies: list, forces: list) -> int:
-    """Write this rank's part to ``path`` (temporary file, fsync, ``os.replace``); returns its
-    size in bytes."""
-    tmp = path.with_name(path.name + ".tmp")
-    with h5py.File(tmp, "w") as f:
+    """Write this rank's part to ``path`` (temporary file, fsync, ``os.replace``:
+    :func:`pdfem.output.room.write_atomically`); returns its size in bytes.
+
+    Raises
+    ------
+    OutputError
+        The part could not be written; nothing of it is left.
+    """
+    def fill(f: h5py.File) -> None:
         f.attrs["generation"] = int(generation)
         f.attrs["rank"] = int(rank)
         write_part(f, bodies, forces)
-    with open(tmp, "rb+") as fh:
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
-    return path.stat().st_size
+
+    return write_atomically(path, fill, f"the checkpoint part of rank {rank}")
 
 
 def remove_other_generations(manifest: Path, keep: int, parts: int) -> None:

@@ -11,7 +11,8 @@
    contact pairs and monitors every step, a frame every ``output_interval`` (fields, energies,
    structure reactions: :mod:`pdfem.run.outputs`), blow-up detection
    (:mod:`pdfem.run.blowup`; exit 3 with the results so far kept) and checkpoints
-   (:mod:`pdfem.run.checkpoint`; a restart continues the results file in place);
+   (:mod:`pdfem.run.checkpoint`; a restart continues the results file in place); a stop
+   signal (:mod:`pdfem.run.stop`) ends it early with a checkpoint and a last frame;
 3. finish: close the files and report (:class:`RunSummary`).
 
 The driver calls interfaces only (structures: :class:`pdfem.fem.base.Structure`; ice:
@@ -41,6 +42,7 @@ from pdfem.run.outputs import Outputs, open_outputs, sources
 from pdfem.run.preflight import preflight
 from pdfem.run.profile import PROFILE_NAME, Profile, table
 from pdfem.run.progress import Progress
+from pdfem.run.stop import StopRequest
 
 
 @dataclass
@@ -50,7 +52,7 @@ class RunSummary:
     results: Path
     steps: int
     time_step: float
-    end_time: float
+    end_time: float              # the simulated time reached (the case's end_time unless stopped)
     wall_seconds: float
     particles: int
     bonds: int
@@ -58,6 +60,8 @@ class RunSummary:
     frames: int
     energy: dict | None = None   # the energy row of the last frame (J), for the budget
     profile: list[dict] | None = None  # with profile=True: the time by component (s)
+    stopped: str = ""            # the signal that stopped the run early ("SIGTERM"), or ""
+    checkpoint: Path | None = None  # the checkpoint to restart from, when stopped
 
     def budget(self) -> str:
         """The energy budget at the end of the run (:func:`pdfem.run.energy.budget_text`)."""
@@ -68,7 +72,8 @@ class RunSummary:
 
     def text(self) -> str:
         """A few lines for the terminal, the energy budget last."""
-        return (f"pdfem: {self.steps} steps of {self.time_step:.3e} s to t = {self.end_time:.4e} s "
+        return (f"pdfem: {'stopped by ' + self.stopped + ' after ' if self.stopped else ''}"
+                f"{self.steps} steps of {self.time_step:.3e} s to t = {self.end_time:.4e} s "
                 f"in {self.wall_seconds:.1f} s wall\n"
                 f"  particles {self.particles:,}, bonds {self.bonds:,}, broken {self.broken_bonds:,}\n"
                 f"  results: {self.results} ({self.frames} frames; open {self.results.with_suffix('.xdmf')} "
@@ -96,7 +101,7 @@ def _start(case: Case, setup: Setup, outputs: Outputs, ckpt, say, comm) -> LoopS
 
 def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: bool | None = None,
              log=None, restart: str | Path | None = None, comm=None,
-             profile: bool = False) -> RunSummary:
+             profile: bool = False, stop: StopRequest | None = None) -> RunSummary:
     """Run a validated case and write ``results.h5`` (+ ``results.xdmf``) into ``out_dir``.
 
     Before building anything the particles, bonds and memory of the ice are estimated
@@ -126,6 +131,11 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     profile
         Time the run's components (:mod:`pdfem.run.profile`): the summary's ``profile`` and
         ``profile.json`` in ``out_dir``.
+    stop
+        A :class:`pdfem.run.stop.StopRequest` (set by the signal handlers of
+        :func:`pdfem.run.stop.stop_signals`): once set on any rank, the run stops at the end of
+        a coupling step with a checkpoint and a last frame, and the summary's ``stopped`` and
+        ``checkpoint`` say so.
 
     Returns
     -------
@@ -140,15 +150,18 @@ def run_case(case: Case, out_dir: str | Path, *, quiet: bool = False, progress: 
     InstabilityError
         The run blew up; the results file holds every frame up to then (and one at the
         failure when the state is still finite).
+    OutputError
+        A results or checkpoint file could not be written (no space left, a file-size limit,
+        an I/O error); the results file holds the frames written before.
     """
     comm = comm or world()
     out = check_out_dir(out_dir)
     with OutDirLock(out, enabled=comm.rank == 0):  # one run per output directory
-        return _run(case, out, quiet, progress, log, restart, comm, profile)
+        return _run(case, out, quiet, progress, log, restart, comm, profile, stop)
 
 
 def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart, comm,
-         profile: bool = False) -> RunSummary:
+         profile: bool = False, stop: StopRequest | None = None) -> RunSummary:
     """:func:`run_case` in its checked and locked output directory ``out``."""
     quiet = quiet or comm.rank != 0  # one rank speaks for all
     say = (lambda s: None) if quiet else (log or (lambda s: print(s, flush=True)))
@@ -194,7 +207,7 @@ def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart
                    start_time=(state.first - 1) * setup.dt, start_step=state.first - 1)
     try:
         done = run_loop(case, setup, outputs, monitor, state, comm, bar, ckpt_path, say,
-                        timing)
+                        timing, stop)
     finally:  # -- 3. finish
         wall = bar.finish()
         outputs.close()
@@ -204,6 +217,6 @@ def _run(case: Case, out: Path, quiet: bool, progress: bool | None, log, restart
         rows = timing.rows(comm, setup.particles, steps, steps * setup.n_ice)
         if comm.rank == 0:
             (out / PROFILE_NAME).write_text(json.dumps(rows, indent=1))
-    return RunSummary(writer.path, done.step, setup.dt, setup.nsteps * setup.dt, wall,
+    return RunSummary(writer.path, done.step, setup.dt, done.step * setup.dt, wall,
                       setup.particles, setup.bonds, setup.cut + done.broken, done.frames,
-                      done.energy, rows)
+                      done.energy, rows, done.stopped, ckpt_path if done.stopped else None)

@@ -12,7 +12,9 @@ own schedule:
 5. :class:`Frames`: a results frame every ``output_interval`` and at the last step, with its
    energy check;
 6. :class:`Checkpoints`: every ``checkpoint_interval_steps`` steps or
-   ``checkpoint_interval_minutes`` of wall time (:func:`pdfem.run.checkpoint.write_checkpoint`);
+   ``checkpoint_interval_minutes`` of wall time (:func:`pdfem.run.checkpoint.write_checkpoint`),
+   and the stop on a signal (:mod:`pdfem.run.stop`): a checkpoint and a last frame at the step
+   every rank agreed on, after which the loop ends;
 7. :class:`ProgressTask`: the progress line.
 
 A task is an object with ``after_step(s)`` taking the :class:`Step` just taken.
@@ -20,6 +22,7 @@ A task is an object with ``after_step(s)`` taking the :class:`Step` just taken.
 
 from __future__ import annotations
 
+import signal
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,6 +52,7 @@ class LoopResult:
     frames: int
     broken: int
     energy: dict | None = None  # the energy row of the last frame (J)
+    stopped: str = ""           # the signal that stopped the run ("SIGTERM"), "" if it ended
 
 
 @dataclass
@@ -139,27 +143,59 @@ class Frames:
         self.energy = e
         self.monitor.check_energy(s.t, s.number, e)
 
+    def at_stop(self, s: Step) -> None:
+        """The last frame of a run stopped at step ``s`` (unless one was written there); the
+        schedule is not advanced (a restart drops this frame: the checkpoint counts the frames
+        before it)."""
+        if s.frame:
+            return
+        self.monitor.check_motion(s.t, s.number, force=True)
+        self.energy = self.outputs.frame(s.t)
+        self.last_time = s.t
+        self.frames += 1
+
 
 class Checkpoints:
-    """A checkpoint every ``every`` steps and every ``minutes`` of wall time (rank 0's clock
-    decides for all ranks), never at the last step."""
+    """A checkpoint every ``every`` steps and every ``minutes`` of wall time, never at the last
+    step; and the stop on a signal.
+
+    After every step one small max-reduction over the ranks (two integers) gives every rank
+    the same answers: whether a rank's clock says a checkpoint is due, and the stop signal a
+    rank received (``stop``, a :class:`pdfem.run.stop.StopRequest`), so a signal on any rank
+    stops every rank at the same step. A stopped run writes its checkpoint, then a last frame
+    (:meth:`Frames.at_stop`), and :attr:`stopped` names the signal.
+    """
 
     label = "frames and checkpoints"
 
     def __init__(self, case, setup, outputs, frames: Frames, path: Path, comm,
-                 broken) -> None:
+                 broken, stop=None, say=lambda s: None) -> None:
         run = case.run
         self.every, self.minutes = run.checkpoint_interval_steps, run.checkpoint_interval_minutes
         self.case, self.setup, self.outputs, self.frames = case, setup, outputs, frames
-        self.path, self.comm, self.broken = path, comm, broken
+        self.path, self.comm, self.broken, self.stop, self.say = path, comm, broken, stop, say
         self.last = time.monotonic()
+        self.stopped = ""
 
     def after_step(self, s: Step) -> None:
         due = bool(self.every) and s.number % self.every == 0
-        if self.minutes and not due:
-            due = self.comm.bcast(time.monotonic() - self.last >= 60 * self.minutes)
-        if s.last or not due:
+        clock = bool(self.minutes) and time.monotonic() - self.last >= 60 * self.minutes
+        clock, sig = self.comm.allreduce_max(
+            np.array([clock, self.stop.signal if self.stop else 0], dtype=np.int64))
+        due = due or bool(clock)
+        if s.last:
             return
+        if sig:
+            self.stopped = signal.Signals(int(sig)).name
+            self.say(f"  {self.stopped}: stopping at t = {s.t:.6e} s (step {s.number:,}) with a "
+                     "checkpoint and a last frame (a second Ctrl-C stops at once)")
+            self.write(s)
+            self.frames.at_stop(s)
+        elif due:
+            self.write(s)
+
+    def write(self, s: Step) -> None:
+        """Write the checkpoint at the end of step ``s``."""
         st, out = self.setup, self.outputs
         out.flush()
         write_checkpoint(self.path, self.case.text,
@@ -183,10 +219,12 @@ class ProgressTask:
 
 
 def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
-             ckpt_path: Path, say=lambda s: None, profile=None) -> LoopResult:
+             ckpt_path: Path, say=lambda s: None, profile=None, stop=None) -> LoopResult:
     """Take the steps ``state.first`` .. ``setup.nsteps`` (see the module docstring); ``say``
     reports re-partitions; ``profile`` (a :class:`pdfem.run.profile.Profile`, with the
-    coupling step's parts wrapped) also times the tasks and the loop.
+    coupling step's parts wrapped) also times the tasks and the loop; ``stop`` (a
+    :class:`pdfem.run.stop.StopRequest`) ends the loop early, with a checkpoint, once a stop
+    signal reached any rank.
 
     Raises
     ------
@@ -200,9 +238,10 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
     step = state.first - 1
     t = step * dt
     frames = Frames(outputs, monitor, case.run.output_interval, state, t)
+    checkpoints = Checkpoints(case, setup, outputs, frames, ckpt_path, comm, lambda: broken,
+                              stop, say)
     tasks = [Histories(outputs), Balance(LoadBalance(case, setup, comm, say), outputs),
-             MotionCheck(monitor), EnergyCheck(monitor, outputs), frames,
-             Checkpoints(case, setup, outputs, frames, ckpt_path, comm, lambda: broken),
+             MotionCheck(monitor), EnergyCheck(monitor, outputs), frames, checkpoints,
              ProgressTask(bar)]
     if profile is not None:
         profile.start_loop(tasks)
@@ -218,6 +257,8 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
             s = Step(step, t, last, frames.due(t, last))
             for task in tasks:
                 task.after_step(s)
+            if checkpoints.stopped:
+                break
     except InstabilityError as exc:
         note = ""
         if comm.failures_shared and t > frames.last_time and _finite_state(setup):
@@ -231,7 +272,7 @@ def run_loop(case, setup, outputs, monitor, state: LoopState, comm, bar,
                                f"({outputs.writer.n_frames} frames{note})") from None
     if profile is not None:
         profile.stop_loop()
-    return LoopResult(step, frames.frames, broken, frames.energy)
+    return LoopResult(step, frames.frames, broken, frames.energy, checkpoints.stopped)
 
 
 def _finite_state(setup) -> bool:

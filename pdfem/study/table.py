@@ -6,8 +6,9 @@
 - ``run``: the run's name (its folder ``runs/<name>``);
 - the inputs that vary: each key of the study that takes more than one value;
 - the key outputs (SI units, in the column name), each a figure of the post summary:
-  per structure ``loads.<structure>.peak``, ``.mean`` and ``.windowed_peak`` (the magnitude of
-  the ice force: its largest sample, its time average and the largest 0.1 ms average; N);
+  per structure ``loads.<structure>.peak``, ``.mean`` and ``.per_step_peak`` (the magnitude of
+  the ice force: its largest 0.1 ms average, the headline figure that converges with the step;
+  its time average; and its largest per-step sample, step-dependent; N, docs/post.md);
   per fixed or prescribed ice region the same figures of its reaction, ``regions.<body>.<region>.*``;
   per ship hull its ice resistance ``resistance.<hull>.mean`` and ``.peak`` (N); per rotating
   structure ``shaft.<name>.peak_ice_torque``, ``.mean_ice_torque`` (N m) and ``.mean_thrust``
@@ -36,7 +37,7 @@ SUMMARY = "summary.csv"
 """The table's name in the study folder."""
 
 _LOAD_FIGURES = ((("magnitude", "peak"), "peak"), (("magnitude", "mean"), "mean"),
-                 (("windowed", "peak"), "windowed_peak"))
+                 (("magnitude", "per_step_peak"), "per_step_peak"))
 OUTPUTS: tuple[tuple[str, tuple[tuple[tuple[str, ...], str], ...], str], ...] = (
     ("loads", _LOAD_FIGURES, "N"),
     ("regions", _LOAD_FIGURES, "N"),

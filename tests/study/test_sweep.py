@@ -39,8 +39,8 @@ SETS = ["--set", f"{E}=3e9,4e9", "--set", f"{V}=[0,0,-0.5],[0,0,-1.0]"]
 NAMES = ["youngs_modulus=3e+09__velocity=0,0,-0.5", "youngs_modulus=3e+09__velocity=0,0,-1.0",
          "youngs_modulus=4e+09__velocity=0,0,-0.5", "youngs_modulus=4e+09__velocity=0,0,-1.0"]
 COLUMNS = ["run", E, V, "regions.block.base.peak [N]", "regions.block.base.mean [N]",
-           "regions.block.base.windowed_peak [N]", "regions.block.top.peak [N]",
-           "regions.block.top.mean [N]", "regions.block.top.windowed_peak [N]",
+           "regions.block.base.per_step_peak [N]", "regions.block.top.peak [N]",
+           "regions.block.top.mean [N]", "regions.block.top.per_step_peak [N]",
            "energy.residual [J]", "energy.supplied [J]", "exit_status"]
 
 

@@ -11,6 +11,10 @@ reactions ``block.base`` and ``block.top`` (tests/api, tests/study: runs of a se
 ``PANEL_BODIES``: an ice floe pushed at 1 m/s against the elastic hull panel (coarse, first
 contact within 0.2 ms), without the ``[run]`` section (tests/run/test_mpi_run.py,
 tests/output/test_paraview.py).
+``TWO_CUBES``: two 5 cm ice cubes (125 particles each) meeting at 4 m/s with short-range
+contact, breaking about half their bonds in 4 ms (1,583 coupling steps, 9 frames): the tiny
+run of the stop-signal and write-error tests (tests/run/test_stop.py,
+tests/run/test_write_errors.py).
 """
 
 CYLINDER_RUN = """
@@ -62,4 +66,26 @@ name = "panel"
 mesh = "hull_panel"
 params = { element_size = 0.12 }
 fixed_groups = ["fixed"]
+"""
+
+TWO_CUBES = """
+[run]
+end_time = 4.0e-3
+output_interval = 5.0e-4
+short_range_contact = true
+energy_tolerance = 0.2
+
+[[ice]]
+name = "a"
+dx = 0.01
+shape = { box = { min = [0.0, 0.0, 0.0], max = [0.05, 0.05, 0.05] } }
+material = { density = 900.0, youngs_modulus = 4.1e9, poisson_ratio = 0.3, fracture_energy = 10.0 }
+initial_velocity = [0.0, 0.0, 2.0]
+
+[[ice]]
+name = "b"
+dx = 0.01
+shape = { box = { min = [0.0, 0.0, 0.0505], max = [0.05, 0.05, 0.1005] } }
+material = { density = 900.0, youngs_modulus = 4.1e9, poisson_ratio = 0.3, fracture_energy = 10.0 }
+initial_velocity = [0.0, 0.0, -2.0]
 """
