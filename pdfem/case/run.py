@@ -55,8 +55,12 @@ class RunSection(Section):
     energy_tolerance: Annotated[float, Number(gt=0.0, le=1.0)] = Field(
         0.01, description="Energy the run may create, as a fraction (-) of the energy supplied "
                           "(initial energy + work in, J), checked every "
-                          "stability_check_interval_steps; more stops the run (exit 3) with the "
-                          "energy budget. In (0, 1]. Default: 0.01 (1 %).")
+                          "stability_check_interval_steps; halved when the step is above its "
+                          "stable estimate. Crossing it stops the run (exit 3, with the energy "
+                          "budget) once the created energy keeps growing, lasts with nothing "
+                          "supplied to dilute it, or exceeds 10 x the limit; a transient that the "
+                          "run's supply dilutes does not (docs/ice_failure.md, \"Energy guard\"). "
+                          "In (0, 1]. Default: 0.01 (1 %).")
     output_per_rank: Boolean = Field(
         False, description="On several MPI ranks, each rank writes its own ice particles to "
                            "`results.rank<R>.h5` instead of sending them to rank 0 (for very large "

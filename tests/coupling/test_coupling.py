@@ -200,7 +200,6 @@ def test_two_ice_bodies_and_two_structures_in_one_case(tmp_path):
 [run]
 end_time = 1.0e-3
 output_interval = 5.0e-4
-energy_tolerance = 0.1  # coarse bodies' first contact: 3.3 % of the input (not what this tests)
 [[ice]]
 name = "a"
 dx = 0.01

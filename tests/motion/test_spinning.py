@@ -178,7 +178,6 @@ title = "a spinning bar strikes an ice cube"
 end_time = 2.0e-3
 output_interval = 2.0e-4
 safety_factor = 0.8
-energy_tolerance = 0.03    # the strike creates 1.2 % of the input for a moment (0.1 % at the end)
 
 [[ice]]
 name = "ice"

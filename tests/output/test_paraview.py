@@ -45,7 +45,6 @@ PER_RANK = """
 end_time = 2.0e-4
 output_interval = 1.0e-4
 output_per_rank = true
-energy_tolerance = 0.1  # coarse first contact (not what this tests)
 """ + PANEL_BODIES
 """Ice pushed against the hull panel (tests/run/test_mpi_run.py's case), its ice per rank."""
 

@@ -136,7 +136,6 @@ CRUSH = """
 [run]
 end_time = 1.2e-3
 output_interval = 4.0e-4
-energy_tolerance = 0.1  # coarse first contact (not what this tests)
 
 [[ice]]
 name = "plate"

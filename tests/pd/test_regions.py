@@ -296,7 +296,6 @@ WALL_CASE = """
 [run]
 end_time = 3.0e-4
 output_interval = 1.0e-4
-energy_tolerance = 0.05  # the first steps' error is 1.2 % of the little work done by then
 [[ice]]
 name = "bar"
 dx = 0.005

@@ -30,7 +30,6 @@ TINY_CASE = """
 title = "tiny coupled case"
 end_time = 4.0e-4
 output_interval = 1.0e-4
-energy_tolerance = 0.1  # a coarse first contact creates 1.1 % of the input (not what this tests)
 
 [[ice]]
 name = "box"

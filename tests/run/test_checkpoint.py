@@ -33,7 +33,6 @@ end_time = 1.2e-3
 output_interval = 1e-4
 checkpoint_interval_steps = 40
 short_range_contact = true
-energy_tolerance = 0.05     # the coarse cube's impact creates 1.6 % of its input by 0.2 ms
 
 [[ice]]
 name = "cube"

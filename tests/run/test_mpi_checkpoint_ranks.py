@@ -40,7 +40,6 @@ end_time = 6.0e-4
 output_interval = 2.0e-4
 checkpoint_interval_steps = 60
 checkpoint_interval_minutes = 0
-energy_tolerance = 0.1
 [water]
 level = 0.0351
 linear_drag = 2.0

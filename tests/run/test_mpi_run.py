@@ -23,7 +23,6 @@ PANEL = """
 [run]
 end_time = 1.0e-3
 output_interval = 5.0e-4
-energy_tolerance = 0.1  # coarse first contact: 1.3-3.2 % of the input (not what this tests)
 """ + PANEL_BODIES + """
 [[monitor]]
 name = "centre"

@@ -24,7 +24,6 @@ CASE = """
 [run]
 end_time = 2.0e-4
 output_interval = 1.0e-4
-energy_tolerance = 0.1   # the coarse first contact (not what this tests)
 gravity = [0.0, 0.0, -9.81]
 [[ice]]
 name = "block"

@@ -125,8 +125,8 @@ def test_no_space_left_for_a_checkpoint(case_file, tmp_path, monkeypatch):
             raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr(checkpoint_ranks, "write_part", full_disk)
-    text = case_file.read_text().replace("energy_tolerance = 0.2",
-                                         "energy_tolerance = 0.2\ncheckpoint_interval_steps = 100")
+    text = case_file.read_text().replace("short_range_contact = true",
+                                         "short_range_contact = true\ncheckpoint_interval_steps = 100")
     case = tmp_path / "case.toml"
     case.write_text(text)
     out = tmp_path / "out"

@@ -21,7 +21,6 @@ CYLINDER_RUN = """
 [run]
 end_time = 1.2e-3
 output_interval = 4.0e-4
-energy_tolerance = 0.1  # coarse first contact: 1.3-3.2 % of the input (not what this tests)
 """
 
 CYLINDER_BODIES = """
@@ -73,7 +72,6 @@ TWO_CUBES = """
 end_time = 4.0e-3
 output_interval = 5.0e-4
 short_range_contact = true
-energy_tolerance = 0.2
 
 [[ice]]
 name = "a"
