@@ -19,7 +19,7 @@ Checked over the run (5 cm of penetration at 0.1 m/s; ``--quick``: at 0.5 m/s):
   tolerance 1/3 of it, i.e. the cycle's range 0.5-1 k1 k2 <k3> (0.66-1.31 sigma_c for the
   quick run). The crushed ice's friction (``crushed_friction``, by default tan(friction_angle),
   :mod:`pdfem.pd.failure.crushed_shear`) holds the crushed layer in the contact; without it the
-  layer is squeezed out at 0.27-0.37 sigma_c (docs/ice_failure.md).
+  layer is squeezed out: 0.23 sigma_c in the quick run (docs/ice_failure.md).
 - reported beside it (:func:`iso_strength_coefficient`, not asserted): the ISO 19906 (2010,
   A.8.2.4.3.3) coefficient C_R that p_G = C_R (h/h1)^n (w/h)^m needs to give the run's mean
   pressure; ISO's C_R is empirical (fitted to measured global loads), not sigma_c.
