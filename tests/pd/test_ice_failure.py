@@ -244,8 +244,8 @@ def test_a_block_crushed_to_pieces_keeps_its_energy(law_name):
 
 def test_nominal_pressure_of_the_edge_crushing_case():
     """A constant wall load F after a 10 ms ramp of the push gives F / (h w(t)) averaged over
-    time, with w = 2 (push + dx/2) / tan(30 deg) the wedge's width (the measure issue 14's
-    0.5-2.5 sigma_c band, after Korzhavin, applies to)."""
+    time, with w = 2 (push + dx/2) / tan(30 deg) the wedge's width (the measure the Korzhavin /
+    IEC 61400-3 band of ``edge_crushing_pressure`` applies to)."""
     import types
 
     from pdfem.validation.case import load_validation_case

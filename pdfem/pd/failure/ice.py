@@ -50,7 +50,7 @@ with and the work done while it slides are counted with the fracture dissipation
 is thus granular: it carries compression up to a crushing pressure and, through the compressed
 bonds at every angle in a horizon, shear in proportion to the confinement (a frictional
 resistance), but no tension; it is never deleted and can be squeezed out of the contact
-zone. Optionally (``crushed_friction`` > 0, off by default) a shear spring with Coulomb slip
+zone. With ``crushed_friction`` > 0 (a case file's default: tan(friction_angle)) a shear spring with Coulomb slip
 between the ends of a pushing crushed bond (:mod:`pdfem.pd.failure.crushed_shear`) holds the crushed
 layer in the contact as a granular material's internal friction does. Pairs that were never bonded meet through the
 short-range contact force

@@ -248,15 +248,32 @@ def rule_comparison(case: Case, data: dict, polar_class: str = "PC7") -> dict[st
             "von_mises_ratio": von_mises / stress}
 
 
+def shaft_angle(case: Case, time: np.ndarray) -> np.ndarray:
+    """Shaft angle (deg) turned by ``time`` (s): the full speed from t = 0, or the linear ramp
+    of ``ramp_time`` before it."""
+    s = case.structures[0]
+    omega = float(np.linalg.norm(s.angular_velocity))
+    ramp = float(s.ramp_time)
+    turned = np.where(time < ramp, 0.5 * omega * time**2 / max(ramp, 1e-30),
+                      omega * (time - 0.5 * ramp))
+    return np.degrees(turned)
+
+
 def spectrum_plot(fig: Figure, outcome: Outcome, value: float, ref: float) -> None:
-    """Ice torque against time and its spectrum with the blade passing frequency's multiples."""
+    """Ice torque against the shaft angle (as the ice class rules give the ice torque
+    excitation; grid lines every 360/Z degrees, one blade spacing) and its spectrum with the
+    blade passing frequency's multiples."""
     t, q = shaft_torque(outcome.case, outcome.data)
     start = spectrum_start(outcome.case)
     freq, amp, peak = spectral_peak(t, q, start)
     bpf = blade_passing_frequency(outcome.case)
     ax1, ax2 = fig.subplots(2, 1)
-    ax1.plot(t, q / 1e3)
-    ax1.set_xlabel("time [s]")
+    angle = shaft_angle(outcome.case, t)
+    ax1.plot(angle, q / 1e3)
+    spacing = 360.0 / propeller_parameters(outcome.case)["blades"]
+    for k in range(1, int(angle[-1] / spacing) + 1):
+        ax1.axvline(k * spacing, color="0.8", lw=0.6)
+    ax1.set_xlabel("shaft angle [deg]")
     ax1.set_ylabel("ice torque [kN m]")
     ax2.plot(freq, amp / amp.max())
     for k in range(1, int(freq[-1] / bpf) + 1):
