@@ -151,6 +151,7 @@ class AttachedStructure(FrameStructure):
         self._started = None
         self._maa = 0.0   # kg m^2/s^4: sum of m a^2 of the free DOFs' world accelerations
         self._p0 = np.zeros(3)
+        self._own_eigenvalue = self.solver.max_eigenvalue()   # 1/s^2, supports held still
         self._world_now()
         ship.attach(self)
 
@@ -170,8 +171,10 @@ class AttachedStructure(FrameStructure):
         return self.K, self.solver.free, self.solver.m, rigid_rows(r, self._dofs)
 
     def set_max_eigenvalue(self, value: float) -> None:
-        """Take ``value`` (1/s^2) as the ``omega_max^2`` of the stable step (the assembly's)."""
-        self.solver.set_max_eigenvalue(value)
+        """Take ``value`` (1/s^2), the assembly's ``omega_max^2``, for the stable step, or the
+        structure's own with its supports held still if that estimate is larger (both power
+        iterations approach from below, and the assembly's is at least the structure's own)."""
+        self.solver.set_max_eigenvalue(max(value, self._own_eigenvalue))
 
     def _support_loads(self, u: np.ndarray, internal: np.ndarray,
                        load: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -307,6 +310,11 @@ class AttachedStructure(FrameStructure):
         if held.any():
             work += self.ship.apply_impulse_at(self.surface_points(), held @ R.T)
         return work
+
+    def applied_load(self) -> np.ndarray:
+        """(3,) resultant (N, world) of the applied loads now (contact and the ship's inertial
+        loads excluded)."""
+        return self.ship.R @ self.dofmap.to_nodal(self._f_load).sum(axis=0)
 
     def energy_terms(self) -> dict[str, float]:
         """World work of the applied loads, damping loss, and the kinetic correction of the
