@@ -24,9 +24,9 @@ from pdfem.case.schema import load_case
 from pdfem.errors import InputError
 from pdfem.motion.rigid_inertia import dof_inertia
 from pdfem.run.build_structures import build_all, structure_mesh
-from pdfem.validation.case import replace_structure
 from pdfem.validation.cases.attached import meshed_case
-from tests.support.cli import run_main
+
+from support.cli import run_main
 
 CASES = Path(__file__).resolve().parents[2] / "models" / "validation"
 VOLUME = 0.6 * 0.2 * 0.02   # m^3, the case's plate
