@@ -132,13 +132,17 @@ class ShipSection(Section):
     """A free-floating rigid hull (``kind = "ship"``): mass, inertia, start and propulsion."""
 
     mass: Annotated[float, Positive("kg")] | None = Field(
-        None, description="Mass (kg). Default: the displaced mass of the hull as meshed "
-                          "(water density x submerged volume), i.e. floating at its mesh draught.")
+        None, description="Mass (kg) of the whole ship, the structures attached to it "
+                          "(attached_to) included. Default: the displaced mass of the hull as "
+                          "meshed (water density x submerged volume), i.e. floating at its mesh "
+                          "draught.")
     center_of_gravity: Annotated[Vec3, Vector("m")] | None = Field(
-        None, description="Centre of gravity in the mesh's coordinates (m). Default: above "
-                          "the hull's centre of buoyancy, at the water surface.")
+        None, description="Centre of gravity of the whole ship (attached structures "
+                          "included) in the mesh's coordinates (m). Default: above the hull's "
+                          "centre of buoyancy, at the water surface.")
     radii_of_gyration: Annotated[PositiveVec3, Vector("m", positive=True)] | None = Field(
-        None, description="Radii of gyration about the body x (roll), y (pitch), z (yaw) axes "
+        None, description="Radii of gyration of the whole ship (attached structures "
+                          "included) about the body x (roll), y (pitch), z (yaw) axes "
                           "through the centre of gravity (m), each > 0. Default: 0.4 x breadth, "
                           "0.25 x length, 0.25 x length of the hull's waterline (typical ship "
                           "values).")
@@ -275,9 +279,10 @@ class StructureSection(Section):
         None, description="Elastic structures only: the name of a ship (kind = \"ship\", listed "
                           "before this structure) whose hull carries it, e.g. an elastic bow "
                           "panel: its frame moves with the ship (position, attitude, velocity, "
-                          "acceleration) and the loads on it reach the ship through its supports "
-                          "(docs/icebreaking.md). The mesh is in the hull mesh's coordinates. "
-                          "Default: none.")
+                          "acceleration) and the loads on it reach the ship through its supports; "
+                          "the ship's mass, centre of gravity and radii of gyration include it, "
+                          "and it may carry up to all of the ship's mass (docs/ship.md). The "
+                          "mesh is in the hull mesh's coordinates. Default: none.")
 
     ship: ShipSection | None = Field(
         None, description="Ships only (kind = \"ship\"): `mass` (kg), `center_of_gravity` (m), "

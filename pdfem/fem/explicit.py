@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -47,6 +48,18 @@ from pdfem.fem.central_difference_kernels import NO_OFFSET, correct, predict, tr
 from pdfem.fem.node_blocks import NodeBlockOperator, NodeBlockPair
 
 Prescribed = Callable[[float], np.ndarray]
+
+
+class StepStart(NamedTuple):
+    """The first half of a central-difference step (:meth:`CentralDifference.begin_step`)."""
+
+    dt: float                  # s, the step
+    v_half: np.ndarray         # m/s, mid-step velocity
+    u: np.ndarray              # m, displacement at the step's end
+    f_damp: np.ndarray         # N, damping force of the mid-step velocity
+    ku: np.ndarray             # N, K u at the step's end
+    cu: np.ndarray | None      # N, the companion matrix's product (None without one)
+    moving: bool               # whether prescribed supports move (their reaction works)
 
 
 def power_iteration_max_eigenvalue(stiffness: sp.spmatrix, mass: np.ndarray,
@@ -182,6 +195,7 @@ class CentralDifference:
         self.damping_dissipated = 0.0
         self._reaction = np.zeros(self.fixed.size)
         self._held = np.zeros(self.fixed.size)   # the displacement of supports held still
+        self._started: StepStart | None = None   # a step begun (begin_step), not yet ended
 
     def distribute(self, comm) -> None:
         """Nothing to share over the ranks of ``comm``: an explicit step is a few products per
@@ -275,7 +289,8 @@ class CentralDifference:
         self._reaction = self.residual_force()[self.fixed]
 
     def step(self, dt: float, f_ext: np.ndarray | None = None) -> None:
-        """Advance the state by ``dt`` (s) with the external force ``f_ext`` (N) at the new time.
+        """Advance the state by ``dt`` (s) with the external force ``f_ext`` (N) at the new time:
+        :meth:`begin_step`, then :meth:`end_step`.
 
         Parameters
         ----------
@@ -284,25 +299,43 @@ class CentralDifference:
         f_ext
             (n,) external force DOF vector at ``time + dt``; default zero.
         """
+        self.begin_step(dt)
+        self.end_step(f_ext)
+
+    def begin_step(self, dt: float) -> StepStart:
+        """The first half of a step of ``dt`` (s): the half kick and the drift to the new
+        displacement, and the internal forces there (``K u_new`` and the damping force of the
+        mid-step velocity), which need no external force. The state is unchanged until
+        :meth:`end_step` (a structure coupled to another body computes the loads of the step's
+        end from these first, :mod:`pdfem.motion.attached_frame`)."""
         t_new = self.time + dt
-        n = self.n
-        v_half, u_new, a_new, v_new = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        v_half, u_new = np.empty(self.n), np.empty(self.n)
         moving = self._supports_move
         g = self._dirichlet(t_new) if moving else self._held
         predict(self.u, self.v, self.a, dt, self.fixed, g, v_half, u_new)
+        ku, cu = self._products(u_new)
+        self._started = StepStart(float(dt), v_half, u_new, self._damping_force(v_half), ku,
+                                  cu, moving)
+        return self._started
+
+    def end_step(self, f_ext: np.ndarray | None = None) -> None:
+        """Finish the step :meth:`begin_step` began, with the external force ``f_ext`` (N, (n,),
+        at the step's end; default zero): the accelerations, the second half kick, the works."""
+        s, self._started = self._started, None
+        n = self.n
+        a_new, v_new = np.empty(n), np.empty(n)
         f = self._zero if f_ext is None else np.array(f_ext, dtype=np.float64)
         f_damp_old = self.f_damp
-        self.f_damp = self._damping_force(v_half)
-        ku, cu = self._products(u_new)
+        self.f_damp = s.f_damp
         # Dirichlet DOFs: acceleration from the change of their mid-step velocity (zero when
         # held still)
-        correct(f, ku, self.f_damp, self.f_damp is not self._zero, self.m, dt, v_half,
+        correct(f, s.ku, self.f_damp, self.f_damp is not self._zero, self.m, s.dt, s.v_half,
                 self.v_half, self.fixed, a_new, v_new)
         # work of each force over the step by the trapezoidal rule on the displacement
         # increment: with it the scheme's energy balance holds exactly (module docstring)
-        self._book_work(dt * v_half, f, f_damp_old, ku if moving else None, a_new)
-        self._advance(dt, u_new, v_half, a_new, v_new, f)
-        self._ku, self._cu = ku, cu
+        self._book_work(s.dt * s.v_half, f, f_damp_old, s.ku if s.moving else None, a_new)
+        self._advance(s.dt, s.u, s.v_half, a_new, v_new, f)
+        self._ku, self._cu = s.ku, s.cu
 
     def stiffness_force(self) -> np.ndarray:
         """``K u`` (N) of the current state (the step's product, kept; do not change it)."""

@@ -102,11 +102,14 @@ class FrameStructure(ElasticStructure):
         return (self._r0 + self.dofmap.to_nodal(self.solver.u),
                 self.dofmap.to_nodal(self.solver.v))
 
-    def _inertial_dofs(self, t: float) -> np.ndarray:
-        """Inertial loads (N, DOF vector, frame axes) at time ``t`` (s) on the current state."""
+    def _inertial_dofs(self, t: float, u: np.ndarray | None = None,
+                       v: np.ndarray | None = None) -> np.ndarray:
+        """Inertial loads (N, DOF vector, frame axes) at time ``t`` (s) on the current state,
+        or on the displacement ``u`` (m) and velocity ``v`` (m/s) given."""
         f = np.empty(self.dofmap.n_dofs)
         ksu = _NONE if self.K_sigma is None else self.solver.companion_force()
-        inertial_loads(self._r0, self.solver.u, self.solver.v, self._dofs, self.node_mass,
+        inertial_loads(self._r0, self.solver.u if u is None else u,
+                       self.solver.v if v is None else v, self._dofs, self.node_mass,
                        *self.frame.inertial_rates(t), self.frame.speed_factor(t)[0] ** 2, ksu, f)
         return f
 

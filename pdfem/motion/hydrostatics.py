@@ -21,6 +21,7 @@ import numba
 import numpy as np
 
 from pdfem.geometry.vectors import cross
+from pdfem.motion.rotation import rotation_matrix
 
 
 @dataclass
@@ -143,3 +144,26 @@ def hydrostatics(x: np.ndarray, triangles: np.ndarray, level: float, density: fl
     else:
         centre = c.copy()
     return Hydrostatics(f, m, u, volume, centre)
+
+
+def restoring_stiffness(ship, step: float = 1e-6) -> np.ndarray:
+    """(6, 6) the water's stiffness on small rigid motions of ``ship`` (a
+    :class:`pdfem.motion.ship.Ship`) about its pose now: ``-d(F, M_G) / d(dc, dtheta)``, the
+    hydrostatic force (N) and moment about G (N m) against a displacement (m) of G and a rotation
+    (rad), body axes, by central differences of :func:`hydrostatics` with ``step`` (m, rad),
+    symmetrised (the heave, roll and pitch springs: ``rho g A_wp``, ``rho g V GM``).
+    """
+    R = ship.R
+    out = np.zeros((6, 6))
+    for j in range(6):
+        loads = []
+        for sign in (1.0, -1.0):
+            d = np.zeros(6)
+            d[j] = sign * step
+            c = ship.c + R @ d[:3]
+            turned = R @ rotation_matrix(d[3:])
+            h = hydrostatics(c + ship.body_points @ turned.T, ship.surface_triangles,
+                             ship.level, ship.density, ship.g, c)
+            loads.append(np.concatenate([R.T @ h.force, R.T @ h.moment]))
+        out[:, j] = -(loads[0] - loads[1]) / (2.0 * step)
+    return 0.5 * (out + out.T)

@@ -18,7 +18,7 @@ from pdfem.fem.base import Structure
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.motion.moving_frame import MovingFrame
 from pdfem.motion.rigid import RigidBody
-from pdfem.motion.ship import Ship
+from pdfem.motion.ship import InertiaError, Ship
 from pdfem.geometry.path import DisplacementPath
 from pdfem.motion.frame_structure import FrameStructure
 from pdfem.fem.structure import ElasticStructure
@@ -116,6 +116,8 @@ def build_structure(cfg: StructureConfig, out_dir: Path, file: str = "<case>",
         return STRUCTURE_KINDS[cfg.kind](cfg, path, file)
     except InputError:
         raise
+    except InertiaError as exc:   # the riders outweigh the ship (pdfem.motion.attached_step)
+        raise InputError(file, f"{ship.field}.ship.{exc.key}", str(exc)) from None
     except (ValueError, OSError) as exc:
         raise InputError(file, f"{cfg.field}.mesh", f"{exc} (mesh file {path})") from None
 

@@ -135,7 +135,7 @@ BUDGET_LINES = (("work in (initial energy + work done on the system)", ("supplie
                 ("ice strain", ("strain",)),
                 ("structure kinetic", ("structure_kinetic", "structure_kinetic_correction")),
                 ("structure strain", ("structure_strain",)),
-                ("potentials (gravity, short-range contact, ...)", None),
+                ("potentials (gravity, ship afloat, short-range, ...)", None),
                 ("dissipated by contact (plastic impulses, friction)", ("contact_dissipated",)),
                 ("dissipated by fracture", ("fracture_dissipated",)),
                 ("dissipated by damping", ("damping_dissipated",)),
@@ -148,7 +148,8 @@ def budget(row: dict[str, float]) -> list[tuple[str, float, float]]:
     """The energy budget of an energy row (:meth:`EnergyBalance.row`): ``(label, J, % of the
     energy supplied)`` per line of :data:`BUDGET_LINES`; the lines after the first sum to the
     first (the residual closes it)."""
-    potentials = ("gravity_potential", "short_range_potential") + _further_potentials()
+    potentials = (("gravity_potential", "structure_potential", "short_range_potential")
+                  + _further_potentials())
     supplied = row["supplied"]
     out = []
     for label, keys in BUDGET_LINES:

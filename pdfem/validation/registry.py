@@ -28,6 +28,7 @@ MODULES: tuple[str, ...] = (
     "floating",            # floating_draught.toml, floating_heave.toml: draught, heave period
     "winkler",             # floating_plate_winkler.toml: P / w0 and l of a plate on water
     "ship",                # ship_rest.toml, ship_heave.toml, ship_pitch.toml: drift, periods
+    "attached",            # ship_attached_plate*.toml: a ship carrying a plate at rest, pulled
     "spinning",            # spinning_bar*.toml: radial stress, flapwise frequency (Southwell)
     "shaft_energy",        # shaft_energy*.toml: shaft + ice work and angular impulse (explicit, implicit)
     "milling",             # propeller_milling_tiny.toml: impulse balance, torque spectrum at Z n
