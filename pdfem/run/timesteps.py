@@ -8,6 +8,7 @@ import warnings
 from pdfem.case.schema import Case
 from pdfem.coupling.coupler import substep_counts
 from pdfem.errors import InputError
+from pdfem.run.step_limits import check_ice_steps, check_structure_steps, check_substeps
 
 
 def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float, int, int]:
@@ -24,13 +25,18 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
     ------
     InputError
         If ``run.time_step`` exceeds the stable ice step and the case does not set
-        ``run.allow_unstable_time_step = true`` (with it: a warning).
+        ``run.allow_unstable_time_step = true`` (with it: a warning); if either side would take
+        more than :data:`pdfem.run.step_limits.MAX_STEPS` steps to the end time.
     """
     run = case.run
-    ice = min((b.stable_time_step() for b in bodies), default=math.inf)
+    stable = [b.stable_time_step() for b in bodies]
+    critical = [s.critical_time_step() for s in structures]
+    check_ice_steps(case, stable)
+    check_structure_steps(case, structures, critical)
+    ice = min(stable, default=math.inf)
     if run.time_step is not None:
-        if run.time_step > ice:
-            worst = min(bodies, key=lambda b: b.stable_time_step()).name
+        if not run.time_step <= ice:  # NaN: a stable step that overflowed
+            worst = bodies[stable.index(ice)].name
             if not run.allow_unstable_time_step:
                 raise InputError(case.file, "run.time_step",
                                  f"exceeds the stable step {ice:.4e} s of ice body '{worst}' "
@@ -44,7 +50,7 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
         ice = run.time_step
     else:
         ice *= run.safety_factor
-    st = run.safety_factor * min((s.critical_time_step() for s in structures), default=math.inf)
+    st = run.safety_factor * min(critical, default=math.inf)
     if not math.isfinite(ice) and not math.isfinite(st):
         if any(c.integrator == "implicit" for c in case.structures):
             raise InputError(case.file, "run.time_step", "an implicit structure has no "
@@ -54,4 +60,5 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
         ice = run.output_interval / 10  # rigid bodies only
     dt, n_ice, n_st = substep_counts(ice, st, run.substeps)
     nsteps = max(1, math.ceil(run.end_time / dt - 1e-9))
+    check_substeps(case, nsteps, n_ice, n_st)
     return run.end_time / nsteps, n_ice, n_st
