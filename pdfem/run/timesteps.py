@@ -18,8 +18,9 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
     (:meth:`pdfem.pd.body.IceBody.stable_time_step`); the structure step is safety_factor x the
     smallest critical structure step (:meth:`pdfem.fem.base.Structure.critical_time_step`,
     ``inf`` for rigid bodies). The faster side subcycles
-    (:func:`pdfem.coupling.coupler.substep_counts`); ``run.substeps`` overrides the count. The
-    coupling step is then shortened so that a whole number of steps ends the run.
+    (:func:`pdfem.coupling.coupler.substep_counts`, each side's step at most ``end_time``, so
+    the faster side never takes more substeps than the run needs); ``run.substeps`` overrides
+    the count. The coupling step is then shortened so that a whole number of steps ends the run.
 
     Raises
     ------
@@ -58,7 +59,10 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
                              "run.time_step (s), e.g. a twentieth of the period of the highest "
                              "mode the loads excite (period error (omega dt)^2 / 12)")
         ice = run.output_interval / 10  # rigid bodies only
-    dt, n_ice, n_st = substep_counts(ice, st, run.substeps)
+    # a side slower than the whole run (a step of 1e150 s: ice of no stiffness) would otherwise
+    # make the faster side take as many substeps (1e156) in its one step
+    dt, n_ice, n_st = substep_counts(*(min(h, run.end_time) if math.isfinite(h) else h
+                                       for h in (ice, st)), run.substeps)
     nsteps = max(1, math.ceil(run.end_time / dt - 1e-9))
     check_substeps(case, nsteps, n_ice, n_st)
     return run.end_time / nsteps, n_ice, n_st
