@@ -101,7 +101,7 @@ def power_iteration_max_eigenvalue(stiffness: sp.spmatrix, mass: np.ndarray,
             return 0.0, it
         if not math.isfinite(big):  # K overflowed: no finite step is stable
             return math.inf, it
-        if big > 1e150:  # |y|^2 would overflow (a stiffness no solid has): scale first
+        if not 1e-150 < big < 1e150:  # |y|^2 would overflow or underflow: scale first
             y = y / big
         x = y / np.linalg.norm(y)
         if it >= min_iterations and abs(lam - history[-11]) <= rtol * abs(lam):

@@ -71,14 +71,15 @@ def test_fixed_free_chain_matches_analytic_eigenvalues():
 
 def test_power_iteration_scales_with_the_stiffness():
     """The largest eigenvalue of M^-1 K is linear in K (issue 31: a stiffness of 1e300 gave 0,
-    an unlimited step, when |K x|^2 overflowed): the chain times 1e300 gives 1e300 times the
-    chain's, a K that overflowed gives inf, and the explicit critical step of a Rayleigh-damped
+    an unlimited step, when |K x|^2 overflowed): the chain times 1e300 (1e-300) gives 1e300
+    (1e-300) times the chain's, a K that overflowed gives inf, and the explicit critical step of a Rayleigh-damped
     system stays 2/w (sqrt(1 + xi^2) - xi) (Belytschko et al., Sec. 6.3), about 1 / (w xi) for a
     huge xi (it was inf when xi^2 overflowed)."""
     chain, m = _chain(20, 3.0e6, 2.5, 1), np.full(20, 2.5)
     lam, _ = power_iteration_max_eigenvalue(chain, m)
-    big, _ = power_iteration_max_eigenvalue(chain * 1e300, m)
-    assert big == pytest.approx(1e300 * lam, rel=1e-12)
+    for scale in (1e300, 1e-300):  # |K x|^2 overflows, underflows
+        scaled, _ = power_iteration_max_eigenvalue(chain * scale, m)
+        assert scaled == pytest.approx(scale * lam, rel=1e-12)
     overflowed = chain.copy()
     overflowed.data[0] = math.inf
     assert power_iteration_max_eigenvalue(overflowed, m)[0] == math.inf
