@@ -17,6 +17,12 @@ from pdfem.case.fields import (Identifier, Name, Number, Positive, Section, Tabl
 from pdfem.case.shapes import (BoxShape, MotionPath, NamedRegionSection, RegionName,
                                RegionSection, ShapeSection)
 
+MAX_HORIZON_FACTOR = 20.0
+"""Largest horizon / dx: a particle then has 33,400 neighbours (the lattice points within 20
+spacings), against 122 at the usual 3.015, and its bonds take about 0.5 MB (30 B each, half of
+them its own); the size estimates' lattice tables (``pdfem.run.estimates``) grow as the cube of
+horizon / dx."""
+
 #: Sea-ice defaults (SI), with their sources in the descriptions of :class:`IceMaterialSection`.
 SEA_ICE = {"density": 900.0, "youngs_modulus": 4.1e9, "poisson_ratio": 0.3, "fracture_energy": 10.0}
 
@@ -190,9 +196,11 @@ class IceSection(Section):
                                          "unique among bodies and structures. Required.")
     dx: Annotated[float, Positive("m")] = Field(description="Lattice spacing (m). Required.")
     horizon_factor: Annotated[float, Number(gt=1.0)] = Field(
-        3.015, description="Horizon as a multiple of dx (-). Not with horizon. Default: 3.015.")
+        3.015, description="Horizon as a multiple of dx (-), at most 20. Not with horizon. "
+                           "Default: 3.015.")
     horizon: Annotated[float, Positive("m")] | None = Field(
-        None, description="Horizon (m), instead of horizon_factor. Default: horizon_factor * dx.")
+        None, description="Horizon (m), instead of horizon_factor; at most 20 dx. Default: "
+                           "horizon_factor * dx.")
     shape: ShapeSection = Field(
         description="`box = {min, max}`, `cylinder = {base, axis, radius, length}`, "
                     "`sphere = {center, radius}` or `mesh = {file, group}` (a closed surface mesh, "
@@ -252,6 +260,12 @@ class IceSection(Section):
         if horizon <= self.dx:
             raise fail(f"the horizon must be larger than the spacing dx = {self.dx:g} m "
                        "(3 dx is usual: horizon_factor = 3.015)", horizon, key="horizon")
+        if horizon > MAX_HORIZON_FACTOR * self.dx:
+            key = "horizon" if self.horizon is not None else "horizon_factor"
+            raise fail(f"the horizon is {horizon / self.dx:.3g} dx; choose at most "
+                       f"{MAX_HORIZON_FACTOR:g} dx (then a particle has 33,400 neighbours: the "
+                       "family grows as (4/3) pi (horizon / dx)^3; 3.015 dx is usual)",
+                       self.horizon if key == "horizon" else self.horizon_factor, key=key)
         lo, hi = self.shape.geometry.bounds()
         thinnest = min(hi[k] - lo[k] for k in range(3))
         if thinnest < self.dx * (1 - 1e-9):

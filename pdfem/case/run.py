@@ -9,6 +9,10 @@ from pydantic import Field, model_validator
 from pdfem.case.fields import (Boolean, Choice, Number, Positive, Section, Text, Vec3, Vector, Whole,
                                fail)
 
+MAX_FRAMES = 10**6
+"""Most result frames a run may write (end_time / output_interval): each frame holds every ice
+particle's fields, so a million frames of a body of ten thousand particles are about 100 GB."""
+
 #: The peridynamic force loops.
 PdLoop = Choice("pairs", "full_family")
 
@@ -19,8 +23,8 @@ class RunSection(Section):
     end_time: Annotated[float, Positive("s")] = Field(
         description="Simulated time at which the run ends (s). Required.")
     output_interval: Annotated[float, Positive("s")] | None = Field(
-        None, description="Simulated time between result frames (s), at most end_time. "
-                          "Default: end_time / 20.")
+        None, description="Simulated time between result frames (s), at most end_time and at "
+                          "least end_time / 1e6 (a million frames). Default: end_time / 20.")
     time_step: Annotated[float, Number("s", ge=0.0)] = Field(
         0.0, description="Fixed coupling time step (s); 0 = automatic (the Silling & Askari stable "
                          "estimate times safety_factor). Default: 0 (automatic).")
@@ -81,6 +85,13 @@ class RunSection(Section):
         if self.output_interval is not None and self.output_interval > self.end_time:
             raise fail(f"longer than the run (end_time = {self.end_time:g} s); choose an interval "
                        "<= end_time", self.output_interval, key="output_interval")
+        if self.output_interval is not None and \
+                self.end_time / self.output_interval > MAX_FRAMES:
+            raise fail(f"end_time / output_interval = {self.end_time / self.output_interval:.3g} "
+                       f"frames, more than the {MAX_FRAMES:,} a run may write (each holds every "
+                       "particle's fields); choose output_interval >= "
+                       f"{self.end_time / MAX_FRAMES:.3g} s (end_time / {MAX_FRAMES:.0e})",
+                       self.output_interval, key="output_interval")
         if 0.0 < self.rebalance_imbalance <= 1.0:
             raise fail("the largest over the mean work is at least 1; choose 0 (never) or a "
                        "factor > 1, e.g. 1.2", self.rebalance_imbalance, key="rebalance_imbalance")

@@ -105,13 +105,18 @@ def power_iteration_max_eigenvalue(stiffness: sp.spmatrix, mass: np.ndarray,
     lam = 0.0
     it = 0
     for it in range(1, max_iterations + 1):
-        y = d * (stiffness @ (d * x))
-        lam = float(x @ y)
+        with np.errstate(over="ignore", invalid="ignore"):  # a non-finite y returns inf below
+            y = d * (stiffness @ (d * x))
+            lam = float(x @ y)
         history.append(lam)
-        norm = np.linalg.norm(y)
-        if norm == 0.0:
+        big = float(np.abs(y).max())
+        if big == 0.0:
             return 0.0, it
-        x = y / norm
+        if not math.isfinite(big):  # K overflowed: no finite step is stable
+            return math.inf, it
+        if not 1e-150 < big < 1e150:  # |y|^2 would overflow or underflow: scale first
+            y = y / big
+        x = y / np.linalg.norm(y)
         if it >= min_iterations and abs(lam - history[-11]) <= rtol * abs(lam):
             break
     return lam, it
@@ -245,7 +250,9 @@ class CentralDifference:
             return math.inf
         w = math.sqrt(lam)
         xi = 0.5 * self.alpha / w + 0.5 * self.beta * w
-        return 2.0 / w * (math.sqrt(1.0 + xi * xi) - xi)
+        # 2/w (sqrt(1 + xi^2) - xi) without its cancellation (and xi^2's overflow): heavy
+        # damping gives a small step, not inf; an overflowed lam (inf) gives 0 or NaN
+        return 2.0 / (w * (math.hypot(1.0, xi) + xi))
 
     def stable_time_step(self) -> float:
         """Safety factor times :meth:`critical_time_step` (s)."""

@@ -59,6 +59,14 @@ SHEAR_SPRING_BYTES_PER_PAIR = 12
 FIXED_BYTES = 200 * 2**20
 """Interpreter, libraries and compiled kernels (bytes), measured about 100-200 MB."""
 
+MAX_PARTICLES = 10**13
+"""Most ice particles of a case the estimates take (2.4 PB at ``BYTES_PER_PARTICLE``; the
+largest run measured has 1e7): more is refused before an integer of the count is formed (so
+counts and bytes stay exact in float64 and far inside int64)."""
+
+MAX_PAIRS = 10**15
+"""Most bonds of a case the estimates take (30 PB at ``BYTES_PER_PAIR``), for the same reason."""
+
 
 @dataclass(frozen=True)
 class BodyEstimate:
@@ -146,12 +154,17 @@ def best_split(counts, horizon_factor: float, n_ranks: int):
     return None if best is None else best[1:]
 
 
-def _particles(shape, dx: float) -> tuple[float, bool]:
+def particle_count(shape, dx: float) -> tuple[float, bool]:
+    """Particles of ``shape`` (m) at spacing ``dx`` (m) as a float (``inf`` when the count
+    overflows) and whether it is exact: the lattice points of the bounding box, or for a shape
+    that does not fill its box at most its volume / dx^3 (see the module docstring)."""
     lo, hi = shape.bounds()
-    counts = [max(1, int(round((hi[k] - lo[k]) / dx))) for k in range(3)]
-    box = float(np.prod(np.asarray(counts, dtype=np.float64)))
-    if shape.fills_bounds:
-        return box, True
+    with np.errstate(over="ignore"):  # an absurd size: inf, refused by the preflight
+        counts = np.maximum(1.0, np.rint((np.asarray(hi, dtype=np.float64)
+                                          - np.asarray(lo, dtype=np.float64)) / dx))
+        box = float(np.prod(counts))
+    if shape.fills_bounds or box > MAX_PARTICLES or dx ** 3 == 0.0:
+        return box, shape.fills_bounds
     return min(box, shape.volume_bound() / dx ** 3), False
 
 
@@ -160,11 +173,9 @@ def estimate_body(name: str, shape, dx: float, horizon: float,
     """Particles and pairs of an ice body from its shape (m), spacing dx (m) and horizon (m),
     without building it (see the module docstring); ``pair_bytes`` per bond."""
     offsets = lattice_offsets(horizon / dx)
-    n, exact = _particles(shape, dx)
+    n, exact = particle_count(shape, dx)
     if exact:
-        lo, hi = shape.bounds()
-        counts = np.array([max(1, int(round((hi[k] - lo[k]) / dx))) for k in range(3)],
-                          dtype=np.float64)
+        counts = np.array(lattice_counts(shape, dx), dtype=np.float64)
         pairs = float(np.prod(np.maximum(0.0, counts[None, :] - np.abs(offsets)), axis=1).sum())
     else:
         pairs = n * len(offsets)

@@ -28,9 +28,10 @@ from pdfem.case.schema import Case
 from pdfem.errors import InputError
 from pdfem.parallel.nodes import block_layout, node_layout, per_node
 from pdfem.run.estimates import (BYTES_PER_PAIR, BYTES_PER_PARTICLE, CRUSHED_ICE_BYTES_PER_PAIR,
-                                 FIXED_BYTES, SHEAR_SPRING_BYTES_PER_PAIR, BodyEstimate,
-                                 available_memory, best_split, estimate_body, format_bytes,
-                                 lattice_counts)
+                                 FIXED_BYTES, MAX_PAIRS, MAX_PARTICLES,
+                                 SHEAR_SPRING_BYTES_PER_PAIR, BodyEstimate, available_memory,
+                                 best_split, estimate_body, format_bytes, lattice_counts,
+                                 lattice_offsets, particle_count)
 
 SETUP_TEXT = {True: "distributed set-up: each rank builds only its subdomain and halo",
               False: "global set-up: every rank builds the whole ice body, then keeps its part, "
@@ -49,9 +50,37 @@ class RankEstimate:
     bytes: int
 
 
+def check_size(case: Case) -> None:
+    """Refuse ice of more than :data:`~pdfem.run.estimates.MAX_PARTICLES` particles or
+    :data:`~pdfem.run.estimates.MAX_PAIRS` bonds in all (counted as floats: a spacing or a shape
+    that overflows them is refused, not estimated).
+
+    Raises
+    ------
+    InputError
+        Naming the ``dx`` of the body with the most particles, its shape and the bounds.
+    """
+    counts = [particle_count(c.shape, c.dx)[0] for c in case.ice]
+    pairs = [n * len(lattice_offsets(c.horizon / c.dx)) for n, c in zip(counts, case.ice)]
+    if sum(counts) <= MAX_PARTICLES and sum(pairs) <= MAX_PAIRS:
+        return
+    k = max(range(len(counts)), key=lambda j: (counts[j], pairs[j]))
+    cfg = case.ice[k]
+    lo, hi = cfg.shape.bounds()
+    span = " x ".join(f"{hi[j] - lo[j]:.3g}" for j in range(3))
+    raise InputError(case.file, f"{cfg.field}.dx",
+                     f"ice body '{cfg.name}' would have about {counts[k]:.3g} particles and "
+                     f"{pairs[k]:.3g} bonds (its shape, {cfg.field}.shape, spans {span} m); the "
+                     f"estimates take at most {MAX_PARTICLES:.0e} particles and {MAX_PAIRS:.0e} "
+                     f"bonds in a case ({format_bytes(MAX_PARTICLES * BYTES_PER_PARTICLE)} of "
+                     "memory; the largest run measured has 1e7 particles): choose a larger dx (m) "
+                     "or a smaller shape", cfg.dx)
+
+
 def estimate_case(case: Case) -> list[BodyEstimate]:
     """Particles, pairs and memory of every ice body of a case, before building
-    (:func:`pdfem.run.estimates.estimate_body`)."""
+    (:func:`pdfem.run.estimates.estimate_body`), after :func:`check_size`."""
+    check_size(case)
     return [estimate_body(c.name, c.shape, c.dx, c.horizon, pair_bytes(c.material))
             for c in case.ice]
 

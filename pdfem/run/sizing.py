@@ -33,6 +33,7 @@ from pdfem.run.build_ice import ice_material
 from pdfem.run.estimates import available_memory, format_bytes, lattice_counts
 from pdfem.run.preflight import (SETUP_TEXT, body_lines, check_nodes, estimate_rank_memory,
                                  node_lines, node_needs, rank_table)
+from pdfem.run.step_limits import check_ice_steps
 
 CALIBRATION_SIDE = 32
 """Particles per side of the calibration cube (32^3 = 32,768 particles, about 1.6 M bonds)."""
@@ -92,11 +93,19 @@ class Calibration:
 
 def calibrate(case: Case, seconds: float = CALIBRATION_SECONDS) -> Calibration:
     """Measure the bond-step rate on the calibration cube and the case's ice step (module
-    docstring); no case body is built."""
+    docstring); no case body is built.
+
+    Raises
+    ------
+    InputError
+        If the ice would take more steps than a run can finish
+        (:func:`pdfem.run.step_limits.check_ice_steps`).
+    """
     run = case.run
+    stable = [_cube(c, run, STABLE_STEP_SIDE, clip=True).stable_time_step() for c in case.ice]
+    check_ice_steps(case, stable)
     body = _cube(case.ice[0], run, CALIBRATION_SIDE)
-    stable = min(_cube(c, run, STABLE_STEP_SIDE, clip=True).stable_time_step() for c in case.ice)
-    dt = run.time_step if run.time_step is not None else run.safety_factor * stable
+    dt = run.time_step if run.time_step is not None else run.safety_factor * min(stable)
     body.start()
     body.step(dt)  # untimed: touches the scratch memory
     steps, t0 = 0, time.perf_counter()

@@ -8,6 +8,7 @@ import warnings
 from pdfem.case.schema import Case
 from pdfem.coupling.coupler import substep_counts
 from pdfem.errors import InputError
+from pdfem.run.step_limits import check_ice_steps, check_structure_steps, check_substeps
 
 
 def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float, int, int]:
@@ -17,20 +18,26 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
     (:meth:`pdfem.pd.body.IceBody.stable_time_step`); the structure step is safety_factor x the
     smallest critical structure step (:meth:`pdfem.fem.base.Structure.critical_time_step`,
     ``inf`` for rigid bodies). The faster side subcycles
-    (:func:`pdfem.coupling.coupler.substep_counts`); ``run.substeps`` overrides the count. The
-    coupling step is then shortened so that a whole number of steps ends the run.
+    (:func:`pdfem.coupling.coupler.substep_counts`, each side's step at most ``end_time``, so
+    the faster side never takes more substeps than the run needs); ``run.substeps`` overrides
+    the count. The coupling step is then shortened so that a whole number of steps ends the run.
 
     Raises
     ------
     InputError
         If ``run.time_step`` exceeds the stable ice step and the case does not set
-        ``run.allow_unstable_time_step = true`` (with it: a warning).
+        ``run.allow_unstable_time_step = true`` (with it: a warning); if either side would take
+        more than :data:`pdfem.run.step_limits.MAX_STEPS` steps to the end time.
     """
     run = case.run
-    ice = min((b.stable_time_step() for b in bodies), default=math.inf)
+    stable = [b.stable_time_step() for b in bodies]
+    critical = [s.critical_time_step() for s in structures]
+    check_ice_steps(case, stable)
+    check_structure_steps(case, structures, critical)
+    ice = min(stable, default=math.inf)
     if run.time_step is not None:
-        if run.time_step > ice:
-            worst = min(bodies, key=lambda b: b.stable_time_step()).name
+        if not run.time_step <= ice:  # NaN: a stable step that overflowed
+            worst = bodies[stable.index(ice)].name
             if not run.allow_unstable_time_step:
                 raise InputError(case.file, "run.time_step",
                                  f"exceeds the stable step {ice:.4e} s of ice body '{worst}' "
@@ -44,7 +51,7 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
         ice = run.time_step
     else:
         ice *= run.safety_factor
-    st = run.safety_factor * min((s.critical_time_step() for s in structures), default=math.inf)
+    st = run.safety_factor * min(critical, default=math.inf)
     if not math.isfinite(ice) and not math.isfinite(st):
         if any(c.integrator == "implicit" for c in case.structures):
             raise InputError(case.file, "run.time_step", "an implicit structure has no "
@@ -52,6 +59,10 @@ def choose_time_steps(case: Case, bodies: list, structures: list) -> tuple[float
                              "run.time_step (s), e.g. a twentieth of the period of the highest "
                              "mode the loads excite (period error (omega dt)^2 / 12)")
         ice = run.output_interval / 10  # rigid bodies only
-    dt, n_ice, n_st = substep_counts(ice, st, run.substeps)
+    # a side slower than the whole run (a step of 1e150 s: ice of no stiffness) would otherwise
+    # make the faster side take as many substeps (1e156) in its one step
+    dt, n_ice, n_st = substep_counts(*(min(h, run.end_time) if math.isfinite(h) else h
+                                       for h in (ice, st)), run.substeps)
     nsteps = max(1, math.ceil(run.end_time / dt - 1e-9))
+    check_substeps(case, nsteps, n_ice, n_st)
     return run.end_time / nsteps, n_ice, n_st

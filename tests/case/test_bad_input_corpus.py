@@ -1,7 +1,8 @@
 """Bad inputs of issue 18 (names, paths, overlaps, output directories, model scripts, group
 fields, numeric ranges) and issue 31 (:data:`CORPUS_31`: water, ships, moving frames, supports,
 element order, the ice law and crushing, paths, NaN and inf in physical fields, keys that would
-have no effect, model scripts that exit, keys given twice and deeply nested TOML): each makes
+have no effect, model scripts that exit, keys given twice and deeply nested TOML, and extreme
+but valid numbers: sizes, steps and frames no run could hold or finish): each makes
 ``pdfem run`` exit 2 with a one-paragraph message naming the field, no traceback, and nothing
 written outside ``--out``.
 
@@ -511,6 +512,35 @@ CORPUS_31 = [
     ("water_without_ice_or_ship", _then(_no_ice, _water()), {}, ["field 'water'", "neither"]),
     ("water_current_without_ice", _then(_no_ice, _ship(water="\n[water]\ncurrent = [1, 0, 0]\n")),
      {}, ["water.current", "ice bodies only"]),
+    # extreme but valid numbers: sizes, steps and frames no run could hold or finish
+    ("ice_dx_tiny", _sub("dx = 0.05", "dx = 1e-300"), {}, ["ice[0].dx", "1e+13 particles"]),
+    ("ice_box_huge", _sub("max = [0.2, 0.2, 0.21]", "max = [1e300, 0.2, 0.21]"), {},
+     ["ice[0].dx", "ice[0].shape", "1e+300 x 0.2", "1e+13 particles"]),
+    ("ice_horizon_factor_huge", _floe("horizon_factor = 1e10"), {},
+     ["ice[0].horizon_factor", "at most 20 dx"]),
+    ("ice_horizon_huge", _floe("horizon = 1e9"), {}, ["ice[0].horizon", "at most 20 dx"]),
+    ("run_time_step_tiny", _run("time_step = 1e-300"), {},
+     ["run.time_step", "1e+09", "time_step >= end_time / 1e+09 = 1e-14 s"]),
+    ("run_safety_factor_tiny", _run("safety_factor = 1e-300"), {},
+     ["run.safety_factor", "1e+09"]),
+    ("run_end_time_huge", _sub("end_time = 1e-5", "end_time = 1e300"), {},
+     ["run.end_time", "1e+09", "choose end_time <="]),
+    ("run_output_interval_tiny", _run("output_interval = 1e-300"), {},
+     ["run.output_interval", "1,000,000", ">= 1e-11 s"]),
+    ("run_substeps_huge", _run("substeps = 1000000000000"), {},
+     ["run.substeps", "1e+09", "substeps <= 1,000,000,000"]),
+    ("ice_youngs_modulus_huge", _floe("material = { youngs_modulus = 1e300 }"), {},
+     ["ice[0].material", "youngs_modulus = 1e+300 Pa", "wave speed", "1e+09"]),
+    ("ice_density_tiny", _floe("material = { density = 1e-300 }"), {},
+     ["ice[0].material", "density = 1e-300", "infinitely many steps"]),
+    ("steel_youngs_modulus_huge", _wall("material = { youngs_modulus = 1e300 }"), {},
+     ["structure[0].material", "youngs_modulus = 1e+300 Pa", "1e+09"]),
+    ("steel_youngs_modulus_max_float", _wall("material = { youngs_modulus = 1.7e308 }"), {},
+     ["structure[0].material", "infinitely many steps"]),
+    ("steel_density_tiny", _wall("material = { density = 1e-300 }"), {},
+     ["structure[0].material", "density = 1e-300"]),
+    ("damping_beta_huge", _wall("damping = { beta = 1e300 }"), {},
+     ["structure[0].damping.beta", "1e+09"]),
 ]
 """Issue 31's entries: each is bad input (exit 2) naming the field."""
 
@@ -549,6 +579,18 @@ def test_bad_case_exits_2(tmp_path, capsys, monkeypatch, edit, files, fragments)
     assert len(err.strip().splitlines()) == 1, err  # one paragraph
     for fragment in fragments:
         assert fragment in err, (fragment, err)
+
+
+@pytest.mark.parametrize("name", ["ice_dx_tiny", "ice_density_tiny", "run_time_step_tiny"])
+def test_estimate_refuses_sizes_and_steps(tmp_path, capsys, monkeypatch, name):
+    """``pdfem run --estimate`` refuses the sizes and step counts a run refuses (issue 31),
+    naming the same field, before its calibration runs."""
+    monkeypatch.chdir(tmp_path)
+    edit, _, fragments = next(c[1:] for c in CORPUS_31 if c[0] == name)
+    case = tmp_path / "case.toml"
+    case.write_text(edit(BASE))
+    err = _run_bad(tmp_path, capsys, ["run", str(case), "--estimate"], tmp_path / "out")
+    assert fragments[0] in err and len(err.strip().splitlines()) == 1, err
 
 
 def _case(tmp_path: Path) -> Path:

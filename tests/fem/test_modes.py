@@ -15,6 +15,7 @@ import pytest
 import scipy.sparse as sp
 
 from pdfem.case import load_case
+from pdfem.fem.explicit import CentralDifference, power_iteration_max_eigenvalue
 from pdfem.fem.modes import generalized_modes, natural_modes
 from pdfem.fem.static import static_displacement
 from pdfem.run.build_structures import build_structure
@@ -66,6 +67,30 @@ def test_fixed_free_chain_matches_analytic_eigenvalues():
     np.testing.assert_allclose(phi.T @ (m * phi), np.eye(6), atol=1e-9)
     lam2, phi2 = generalized_modes(_chain(n, k, m, 1), np.full(n, m), 6)
     assert np.array_equal(lam, lam2) and np.array_equal(phi, phi2)
+
+
+def test_power_iteration_scales_with_the_stiffness():
+    """The largest eigenvalue of M^-1 K is linear in K (issue 31: a stiffness of 1e300 gave 0,
+    an unlimited step, when |K x|^2 overflowed): the chain times 1e300 (1e-300) gives 1e300
+    (1e-300) times the chain's, a K that overflowed gives inf, and the explicit critical step of a Rayleigh-damped
+    system stays 2/w (sqrt(1 + xi^2) - xi) (Belytschko et al., Sec. 6.3), about 1 / (w xi) for a
+    huge xi (it was inf when xi^2 overflowed)."""
+    chain, m = _chain(20, 3.0e6, 2.5, 1), np.full(20, 2.5)
+    lam, _ = power_iteration_max_eigenvalue(chain, m)
+    for scale in (1e300, 1e-300):  # |K x|^2 overflows, underflows
+        scaled, _ = power_iteration_max_eigenvalue(chain * scale, m)
+        assert scaled == pytest.approx(scale * lam, rel=1e-12)
+    overflowed = chain.copy()
+    overflowed.data[0] = math.inf
+    assert power_iteration_max_eigenvalue(overflowed, m)[0] == math.inf
+    w, beta = math.sqrt(lam), 3e-4
+    xi = 0.5 * beta * w
+    cd = CentralDifference(chain, m, rayleigh_beta=beta)
+    assert cd.critical_time_step() == pytest.approx(2 / w * (math.sqrt(1 + xi**2) - xi),
+                                                    rel=1e-12)
+    xi = 0.5 * 1e300 * w  # xi^2 overflows: the step is 1 / (w xi) to first order, not inf
+    assert CentralDifference(chain, m, rayleigh_beta=1e300).critical_time_step() == \
+        pytest.approx(1.0 / (w * xi), rel=1e-12)
 
 
 def test_free_chain_has_a_rigid_body_mode():
