@@ -38,13 +38,14 @@ def pytest_configure(config) -> None:
 FIRST = ("validation/test_validate.py", "pd/test_strength.py", "models/test_mpi_models.py",
          "validation/test_step_sweep.py", "validation/test_propeller.py",
          "forces/test_mpi_short_range.py", "run/test_mpi_run.py", "run/test_determinism.py",
-         "coupling/test_bow_panel.py", "validation/test_cantilever.py",
+         "coupling/test_bow_panel.py", "output/test_paraview.py", "validation/test_cantilever.py",
          "pd/test_verification.py", "pd/test_mpi_distributed.py", "run/test_checkpoint.py",
+         "study/test_sweep.py", "run/test_stop.py",
          "pd/test_distributed_setup.py", "coupling/test_coupling.py",
          "validation/test_validation_plate.py", "pd/test_mpi_rebalance.py",
          "fem/test_fem_cantilever.py", "run/test_mpi_checkpoint_ranks.py",
          "validation/test_plate_convergence.py", "pd/test_crushed_shear.py",
-         "forces/test_water.py", "validation/test_winkler.py")
+         "forces/test_water.py", "validation/test_winkler.py", "motion/test_attached.py")
 """The suite's files of 10 s and more, longest first (0.5-3 min on one core for the first
 seven; BENCHMARKS.md, "Test suite"). They are collected first, so that the workers start them
 first (``--dist loadfile`` hands the files out in collection order: longest first is the
