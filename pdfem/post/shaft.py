@@ -89,7 +89,7 @@ def shaft_figures(h: dict, blades: dict[str, dict]) -> dict:
     torque, push = peak_pair(t, q), peak_pair(t, thrust)
 
     def windowed_peak(y) -> float:
-        return peak_pair(t, np.asarray(y))["peak"]
+        return signed_peak(*windowed_force(t, np.asarray(y))[:2])[0]
 
     return {"rpm": rpm, "blades": z, "blade_passing_frequency": z * rpm / 60.0,
             "window": torque["window"],

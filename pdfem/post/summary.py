@@ -39,7 +39,7 @@ from pdfem.post.ice_loads import (SURFACE_SUFFIX, filtered_figures, is_contact_s
 from pdfem.post.motions import motion_figures, ship_motions
 from pdfem.post.resistance import resistance_summary
 from pdfem.post.shaft import shaft_summary
-from pdfem.post.windowed import peak_pair, windowed_force
+from pdfem.post.windowed import signed_peak, windowed_force
 
 
 def _num(x: Any) -> float | None:
@@ -100,10 +100,10 @@ def _load_figures(h: dict, cutoff: float | None = None) -> dict:
     tw, fw, window = windowed_force(t, force)
     out["window"] = _num(window)
     for a, name in enumerate(AXES):
-        p = peak_pair(t, force[:, a])
-        out[name] = {"peak": _num(p["peak"]), "time": _num(p["time"]),
-                     "per_step_peak": _num(p["per_step_peak"]),
-                     "per_step_time": _num(p["per_step_time"]), "mean": _num(mean[a])}
+        peak, when = signed_peak(tw, fw[:, a])
+        raw, raw_when = signed_peak(t, force[:, a])
+        out[name] = {"peak": _num(peak), "time": _num(when), "per_step_peak": _num(raw),
+                     "per_step_time": _num(raw_when), "mean": _num(mean[a])}
     mag = np.linalg.norm(force, axis=1)
     magw = np.linalg.norm(fw, axis=1)
     i, j = int(np.argmax(mag)), int(np.argmax(magw))

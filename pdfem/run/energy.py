@@ -76,7 +76,7 @@ class EnergyBalance:
     """
 
     def __init__(self, bodies: list, structures: list, forces: list, coupler,
-                 ice_step: float = 0.0) -> None:
+                 ice_step: float) -> None:
         self.bodies, self.structures = bodies, structures
         self.forces, self.coupler = forces, coupler
         self.ice_step = float(ice_step)

@@ -16,6 +16,7 @@ import subprocess
 from pathlib import Path
 
 import h5py
+import numpy as np
 import pytest
 
 from pdfem.output import read_results
@@ -67,7 +68,10 @@ def test_file_size_limit_ends_the_run_with_its_results_readable(case_file, tmp_p
     with h5py.File(out / "results.h5", "r") as f:
         assert "meta" in f
     frames = read_results(out / "results.h5")["time"]
-    assert 1 < frames.size < 161
+    whole_run = round(4.0e-3 / 2.5e-5) + 1          # 161 frames to end_time, every 2.5e-5 s
+    assert 1 < frames.size < whole_run              # stopped part-way, the first frames kept
+    # whole frames, in order: frame k at the first step at or after k x 2.5e-5 s
+    assert (np.floor(frames / 2.5e-5 + 1e-6) == np.arange(frames.size)).all(), frames
     assert f"keeps the {frames.size} frames written before (to t = {frames[-1]:.6e} s)" in text
 
 
