@@ -41,6 +41,12 @@ Sign conventions (SI units: N, N m, N m s, W, J, Pa, m, rad):
   moment the blade puts on its supports at the held nodes of ``blade{k}_root`` about the root
   centroid, ``-sum (r - p) x R`` with the supports' nodal forces R: the whole root-section
   moment, with the blade's inertia and centrifugal load (zero if the root is not held).
+  ``root_stress_tension``, ``root_stress_compression`` and ``root_stress_axial`` (Pa) are the
+  blade's nominal root stress by the cantilever-beam method (:mod:`pdfem.fem.section_stress`):
+  the supports' resultant force and moment at the root section over its area and second
+  moments (the section projected onto the plane normal to ``e_r``), the largest and smallest
+  normal stress over the section and the axial part ``F / A``. Unlike the elastic stress at
+  the clamped root edge (singular there), it converges under mesh refinement.
 
 Rows (every coupling step; forces are the step's impulses over its length): ``shaft/<name>``:
 ``frame_angle`` (rad), ``ice_torque``, ``thrust``, ``ice_force`` (3, world), ``shaft_torque``,
@@ -51,8 +57,10 @@ the energy (``energy_change``: true kinetic energy with the lumped mass plus str
 ``damping_dissipated``, and ``max_von_mises`` (Pa, element centres) with its element's centre
 ``max_von_mises_location`` (m, reference position in frame axes at t = 0); ``shaft/<name>.blade<k>``:
 ``force`` (world), ``force_blade``, ``ice_torque``, ``thrust``, ``spindle_torque``,
-``bending_out_of_plane``, ``bending_in_plane``, ``root_moment``, ``max_von_mises`` (over the
-elements of the volume group ``blade<k>``, else all) and its location.
+``bending_out_of_plane``, ``bending_in_plane``, ``root_moment``, ``root_stress_tension``,
+``root_stress_compression``, ``root_stress_axial`` (when the root is a surface group),
+``max_von_mises`` (over the elements of the volume group ``blade<k>``, else all) and its
+location.
 
 Blades are found by the mesh's surface groups ``blade{k}_surface`` (k = 1, 2, ...); without
 them the whole contact surface is one blade whose root is the union of the clamped groups.
@@ -65,6 +73,7 @@ import re
 import numpy as np
 import scipy.sparse as sp
 
+from pdfem.fem.section_stress import Section, nominal_stress, resultants, section_of
 from pdfem.fem.stress import hooke_stress, von_mises
 from pdfem.geometry.vectors import cross
 from pdfem.motion.frame_kernels import StepVectors, support_torque_power
@@ -77,23 +86,28 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-def blade_groups(structure) -> list[tuple[str, np.ndarray, np.ndarray]]:
-    """``[(label, surface-node mask (Ns,) bool, root nodes)]`` of the blades of ``structure``:
-    ``blade{k}`` from the groups ``blade{k}_surface`` and ``blade{k}_root`` of its mesh (the
-    root falls back on the clamped groups), in k order; else one ``blade1``, the whole contact
-    surface with the clamped groups as its root."""
+def blade_groups(structure) -> list[tuple[str, np.ndarray, np.ndarray, np.ndarray]]:
+    """``[(label, surface-node mask (Ns,) bool, root nodes, root faces)]`` of the blades of
+    ``structure``: ``blade{k}`` from the groups ``blade{k}_surface`` and ``blade{k}_root`` of
+    its mesh (the root falls back on the clamped groups), in k order; else one ``blade1``, the
+    whole contact surface with the clamped groups as its root. The root faces are the (F, 3 or
+    4) corner nodes of the root's mesh faces (none when the root is no surface group)."""
     found = sorted((int(m.group(1)), g) for g in structure.mesh.facet_sets
                    if (m := BLADE_SURFACE.match(g)))
     held = np.unique(np.concatenate([structure.group_nodes(g) for g in structure.fixed_groups]
                                     or [np.zeros(0, np.int32)]))
+    held_faces = [structure.mesh.group_facets(g) for g in structure.fixed_groups
+                  if g in structure.mesh.facet_sets]
+    held_faces = np.vstack(held_faces) if held_faces else np.zeros((0, 3), np.int32)
     if not found:
-        return [("blade1", np.ones(len(structure.surface_nodes), bool), held)]
+        return [("blade1", np.ones(len(structure.surface_nodes), bool), held, held_faces)]
     out = []
     for k, g in found:
         mask = np.isin(structure.surface_nodes, structure.group_nodes(g))
         root = f"blade{k}_root"
-        nodes = structure.group_nodes(root) if root in structure.mesh.facet_sets else held
-        out.append((f"blade{k}", mask, nodes))
+        own = root in structure.mesh.facet_sets
+        out.append((f"blade{k}", mask, structure.group_nodes(root) if own else held,
+                    structure.mesh.group_facets(root) if own else held_faces))
     return out
 
 
@@ -111,6 +125,18 @@ def spindle(axis: np.ndarray, psi: float, point: np.ndarray) -> np.ndarray:
     best = max((np.cos(a) * z + np.sin(a) * cross(axis, z) for a in (psi, -psi)),
                key=lambda e: float(e @ radial))
     return best if best @ radial > np.cos(np.radians(30.0)) else radial
+
+
+def root_stress(section: Section, positions: np.ndarray, forces: np.ndarray) -> dict[str, float]:
+    """A blade's nominal root stress (Pa, :mod:`pdfem.fem.section_stress`) from the supports'
+    forces ``forces`` (N, (H, 3)) on its held root nodes at ``positions`` (m, (H, 3), the
+    section's coordinates): ``root_stress_tension`` (the largest over the section),
+    ``root_stress_compression`` (the smallest) and ``root_stress_axial`` (``F / A``)."""
+    force, moment = resultants(section, positions, forces)
+    sigma = nominal_stress(section, force, moment)
+    return {"root_stress_tension": float(sigma.max()),
+            "root_stress_compression": float(sigma.min()),
+            "root_stress_axial": float(force[0] / section.area)}
 
 
 def gradient_operator(basis) -> sp.csr_matrix:
@@ -149,14 +175,17 @@ class ShaftLoads:
         r0 = structure.points - self.center
         self.blades = []
         groups = blade_groups(structure)
-        self._roots = [root for _, _, root in groups]
-        for k, (label, mask, root) in enumerate(groups):
+        self._roots = [root for _, _, root, _ in groups]
+        self._sections: list[Section | None] = []
+        for k, (label, mask, root, faces) in enumerate(groups):
             p = r0[root].mean(axis=0) if len(root) else r0[structure.surface_nodes[mask]].mean(0)
             e_r = spindle(self.axis, 2.0 * np.pi * k / len(groups),
                           r0[structure.surface_nodes[mask]].mean(axis=0) if len(root) == 0
                           or np.linalg.norm(p - (p @ self.axis) * self.axis) < 1e-9 else p)
             axes = np.array([e_r, cross(self.axis, e_r), self.axis])  # rows: e_r, e_t, e_a
             self.blades.append((label, mask, p, axes))
+            self._sections.append(section_of(r0, structure.space.face_triangles(faces), axes)
+                                  if len(faces) else None)
         self._held = structure.solver.fixed                       # held DOFs
         self._held_mask = ~structure.solver.free
         table = structure.dofmap.nodal_dofs                       # (3, Nn) DOF of each node
@@ -317,7 +346,8 @@ class ShaftLoads:
         on_blade = self._on_blade
         j_world, j_frame = on_blade @ self.impulse_world, on_blade @ self.impulse_frame
         m_frame = on_blade @ self.moment_frame
-        for b, ((label, mask, p, axes), rows) in enumerate(zip(self.blades, self._root_rows)):
+        for b, ((label, mask, p, axes), rows, section) in enumerate(
+                zip(self.blades, self._root_rows, self._sections)):
             root_moment = -cross(r_held[rows] - p, held[rows]).sum(axis=0)
             jf = j_frame[b] * scale
             m = (m_frame[b] - cross(p, j_frame[b])) * scale
@@ -331,6 +361,8 @@ class ShaftLoads:
                           "bending_in_plane": float(axes[2] @ m),
                           "root_moment": axes @ root_moment,
                           "max_von_mises": bpeak, "max_von_mises_location": bwhere}
+            if section is not None:
+                out[label].update(root_stress(section, r_held[rows], held[rows]))
         self.impulse_world[:] = 0.0
         self.impulse_frame[:] = 0.0
         self.moment_frame[:] = 0.0

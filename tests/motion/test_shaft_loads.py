@@ -227,7 +227,7 @@ def test_shaft_torque_balances_a_static_point_force(tmp_path):
     """A bar clamped at its root x = 0 (models/validation/box.py), turning very slowly about the
     z axis through the root centre, loaded by F = -F e_y at its tip (r = 0.5 m) and at static
     equilibrium: the shaft (root reactions) carries the torque F r, and the root section the
-    bending moment F r."""
+    bending moment F r, whose nominal stress is the flexure formula's F r c / I."""
     path = tmp_path / "bar.msh"
     mesh_model(str(files("pdfem.models").joinpath("validation/box.py")), {
         "length_x": 0.5, "divisions_x": 5, "divisions_y": 1, "divisions_z": 1,
@@ -245,6 +245,12 @@ def test_shaft_torque_balances_a_static_point_force(tmp_path):
     # 0) x (0, -F, 0) = -0.5 F e_z, in-plane bending in the blade axes (e_x, e_y, e_z)
     np.testing.assert_allclose(rows["blade1"]["root_moment"], [0.0, 0.0, -0.5 * F],
                                atol=1e-6 * F)
+    # and the nominal root stress of the 0.1 m x 0.1 m section: F L c / I = 6 F L / (b h^2),
+    # tension on the +y face (the bar bends toward -y), no axial part (at 1e-6 rad/s)
+    bending = 6.0 * F * 0.5 / (0.1 * 0.1**2)
+    assert rows["blade1"]["root_stress_tension"] == pytest.approx(bending, rel=1e-9)
+    assert rows["blade1"]["root_stress_compression"] == pytest.approx(-bending, rel=1e-9)
+    assert abs(rows["blade1"]["root_stress_axial"]) < 1e-9 * bending
 
 
 @pytest.fixture(scope="module")
