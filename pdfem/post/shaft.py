@@ -75,7 +75,8 @@ def shaft_figures(h: dict, blades: dict[str, dict]) -> dict:
         ``peak_spindle_torque``, ``peak_bending_out_of_plane``, ``peak_bending_in_plane``
         (N m, signed, largest |value| averaged over ``window``; the ice load's moments),
         ``peak_root_moment`` (N m, per component of the supports' root moment, the structure's
-        response: per step) and ``max_von_mises`` (Pa).
+        response: per step), ``root_stress`` (the nominal root stress's peaks,
+        :func:`root_stress_peaks`) and ``max_von_mises`` (Pa).
     """
     t = np.asarray(h["time"])
     q, thrust = np.asarray(h["ice_torque"]), np.asarray(h["thrust"])
@@ -107,8 +108,22 @@ def shaft_figures(h: dict, blades: dict[str, dict]) -> dict:
                           "peak_bending_in_plane": windowed_peak(g["bending_in_plane"]),
                           "peak_root_moment": [signed_peak(t, c)[0] for c in
                                                np.asarray(g["root_moment"]).T],
+                          **root_stress_peaks(t, g),
                           "max_von_mises": float(np.max(g["max_von_mises"]))}
                       for b, g in blades.items()}}
+
+
+def root_stress_peaks(t: np.ndarray, blade: dict) -> dict:
+    """``{"root_stress": {"tension": {value, time}, "compression": {value, time}}}`` (Pa, s):
+    the largest nominal root stress in tension and in compression over a blade's history
+    (per step: the structure's response; :mod:`pdfem.fem.section_stress`); empty for a blade
+    whose root is no surface group (no such history)."""
+    if "root_stress_tension" not in blade:
+        return {}
+    hi, lo = np.asarray(blade["root_stress_tension"]), np.asarray(blade["root_stress_compression"])
+    i, j = int(np.argmax(hi)), int(np.argmin(lo))
+    return {"root_stress": {"tension": {"value": float(hi[i]), "time": float(t[i])},
+                            "compression": {"value": float(lo[j]), "time": float(t[j])}}}
 
 
 def shaft_summary(results: dict) -> dict[str, dict]:
@@ -144,6 +159,12 @@ def shaft_lines(summary: dict) -> list[str]:
                          f"supports {', '.join(f'{c:.4g}' for c in g['peak_root_moment'])} "
                          f"N m; max von Mises "
                          f"{g['max_von_mises']:.4g} Pa")
+            if "root_stress" in g:
+                rs = g["root_stress"]
+                lines.append(f"    nominal root stress (beam method) {rs['tension']['value']:.4g} "
+                             f"Pa at t = {rs['tension']['time']:.4g} s, "
+                             f"{rs['compression']['value']:.4g} Pa at t = "
+                             f"{rs['compression']['time']:.4g} s")
     return lines
 
 

@@ -30,6 +30,7 @@ MODULES: tuple[str, ...] = (
     "ship",                # ship_rest.toml, ship_heave.toml, ship_pitch.toml: drift, periods
     "attached",            # ship_attached_plate*.toml: a ship carrying a plate at rest, pulled
     "spinning",            # spinning_bar*.toml: radial stress, flapwise frequency (Southwell)
+    "root_stress",         # spinning_bar_root_stress.toml, propeller_root_stress.toml: nominal root stress
     "shaft_energy",        # shaft_energy*.toml: shaft + ice work and angular impulse (explicit, implicit)
     "milling",             # propeller_milling_tiny.toml: impulse balance, torque spectrum at Z n
     "icebreaking",         # icebreaker_tiny.toml: resistance vs Lindqvist, pieces under the hull

@@ -282,7 +282,8 @@ def test_post_plots_and_spectrum_peak_at_the_blade_passing_frequency(tmp_path):
          "thrust": 0.5 * q, "max_von_mises": 1e6 + zeros, "max_von_mises_location":
          np.zeros((t.size, 3))}
     blade = {"time": t, "spindle_torque": q / 3, "bending_out_of_plane": q, "bending_in_plane": q,
-             "root_moment": np.stack([q, -q, zeros], axis=1), "max_von_mises": 1e6 + zeros}
+             "root_moment": np.stack([q, -q, zeros], axis=1), "max_von_mises": 1e6 + zeros,
+             "root_stress_tension": 1e3 * q, "root_stress_compression": -500.0 * q}
     results = {"histories": {"shaft/prop": h, **{f"shaft/prop.blade{k}": blade
                                                  for k in (1, 2, 3)}}}
     f = shaft_figures(h, {f"blade{k}": blade for k in (1, 2, 3)})
@@ -291,8 +292,11 @@ def test_post_plots_and_spectrum_peak_at_the_blade_passing_frequency(tmp_path):
     assert f["peak_ice_torque"]["value"] == pytest.approx(1300.0)
     assert f["mean_thrust"] == pytest.approx(500.0, rel=1e-2)
     assert f["blade"]["blade2"]["peak_root_moment"] == pytest.approx([1300.0, -1300.0, 0.0])
+    assert f["blade"]["blade2"]["root_stress"] == {"tension": {"value": 1.3e6, "time": 0.0},
+                                                   "compression": {"value": -6.5e5, "time": 0.0}}
     written = []
     plot_shaft(results, tmp_path, written)
     assert sorted(p.name for p in written) == ["shaft_loads.png", "shaft_spectrum.png"]
     assert all(p.stat().st_size > 10_000 for p in written)
-    assert "30 Hz" in "\n".join(shaft_lines({"shaft": {"prop": f}}))
+    text = "\n".join(shaft_lines({"shaft": {"prop": f}}))
+    assert "30 Hz" in text and "nominal root stress (beam method) 1.3e+06 Pa" in text

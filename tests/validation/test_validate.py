@@ -35,9 +35,11 @@ ELSEWHERE = {"flexural_strength_three_point", "flexural_strength_four_point",
              "floating_draught", "floating_heave_period", "step_energy_residual",
              "step_dissipation_sign", "step_load_convergence", "milling_torque_spectrum",
              "cantilever_frequency", "cantilever_frequency_implicit",
-             "cantilever_frequency_implicit_large_step"}
+             "cantilever_frequency_implicit_large_step", "bar_root_stress_tension",
+             "bar_root_stress_compression", "propeller_root_stress"}
 """Cases whose ``--quick`` run has its own test (tests/pd/test_strength.py, test_validation_plate.py,
-test_water.py, test_step_sweep.py, test_propeller.py, test_cantilever.py): run once, there, beside the others."""
+test_water.py, test_step_sweep.py, test_propeller.py, test_cantilever.py, test_root_stress.py):
+run once, there, beside the others."""
 
 
 @pytest.mark.slow
