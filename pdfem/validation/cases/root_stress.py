@@ -128,26 +128,20 @@ def bar_stress(case: Case) -> tuple[float, float]:
     return 0.5 * s.density * omega**2 * length**2, 6.0 * q * length / h
 
 
-def bar_tension(outcome: Outcome) -> float:
-    """The bar's nominal root stress in tension (Pa)."""
-    return outcome.data["blades"]["blade1"]["root_stress_tension"]
+def bar_measure(side: str):
+    """``measure(outcome)``: the bar's nominal root stress (Pa) in ``side``, ``"tension"``
+    or ``"compression"``."""
+    def measure(outcome: Outcome) -> float:
+        return outcome.data["blades"]["blade1"][f"root_stress_{side}"]
+    return measure
 
 
-def bar_compression(outcome: Outcome) -> float:
-    """The bar's nominal root stress in compression (Pa, negative)."""
-    return outcome.data["blades"]["blade1"]["root_stress_compression"]
-
-
-def bar_tension_reference(case: Case) -> float:
-    """rho omega^2 L^2 / 2 + 6 F L / (b h^2) (Pa)."""
-    axial, bending = bar_stress(case)
-    return axial + bending
-
-
-def bar_compression_reference(case: Case) -> float:
-    """rho omega^2 L^2 / 2 - 6 F L / (b h^2) (Pa)."""
-    axial, bending = bar_stress(case)
-    return axial - bending
+def bar_reference(sign: float):
+    """``reference(case)``: rho omega^2 L^2 / 2 + ``sign`` 6 F L / (b h^2) (Pa)."""
+    def reference(case: Case) -> float:
+        axial, bending = bar_stress(case)
+        return axial + sign * bending
+    return reference
 
 
 BEAM_SOURCE = ("statics of a cantilever (the root carries the centrifugal force rho A omega^2 "
@@ -156,19 +150,14 @@ BEAM_SOURCE = ("statics of a cantilever (the root carries the centrifugal force 
                "cantilever-beam method of propeller blade strength: Carlton, The strength of "
                "marine propeller blades, Lloyd's Register Technical Association 1980-81)")
 
-CASES = (
+CASES = tuple(
     ValidationCase(
-        name="bar_root_stress_tension", case_file="spinning_bar_root_stress.toml",
-        quantity="nominal root stress, tension, bar spinning with a tip load", unit="Pa",
-        measure=bar_tension, reference=bar_tension_reference, execute=steady_rows,
+        name=f"bar_root_stress_{side}", case_file="spinning_bar_root_stress.toml",
+        quantity=f"nominal root stress, {side}, bar spinning with a tip load", unit="Pa",
+        measure=bar_measure(side), reference=bar_reference(sign), execute=steady_rows,
         quick=unchanged, tolerance=0.01, source=BEAM_SOURCE,
-        quick_note="unchanged (one static solve)"),
-    ValidationCase(
-        name="bar_root_stress_compression", case_file="spinning_bar_root_stress.toml",
-        quantity="nominal root stress, compression, bar spinning with a tip load", unit="Pa",
-        measure=bar_compression, reference=bar_compression_reference, execute=steady_rows,
-        quick=unchanged, tolerance=0.01, source=BEAM_SOURCE,
-        quick_note="unchanged (one static solve)"),
+        quick_note="unchanged (one static solve)")
+    for side, sign in (("tension", 1.0), ("compression", -1.0))) + (
     ValidationCase(
         name="propeller_root_stress", case_file="propeller_root_stress.toml",
         quantity="blade 1 nominal root stress vs mesh refined 2x (rel. diff.)", unit="-",
