@@ -63,6 +63,8 @@ class Section:
         (2, 2) second moments of area ``I_ij = int eta_i eta_j dA`` about ``c`` (m^4).
     fibres
         (P, 2) section coordinates ``eta`` (m) of the section's nodes, where the stress is read.
+    flexibility
+        (2, 2) the inverse of ``inertia`` (1/m^4).
     """
 
     centroid: np.ndarray
@@ -70,6 +72,7 @@ class Section:
     area: float
     inertia: np.ndarray
     fibres: np.ndarray
+    flexibility: np.ndarray
 
 
 def section_axes(normal, first) -> np.ndarray:
@@ -125,7 +128,8 @@ def section_of(points: np.ndarray, triangles: np.ndarray, axes: np.ndarray) -> S
     depth = float(np.einsum("t,tk->", a / 3.0, p[tri] @ axes[0])) / area
     centroid = depth * axes[0] + c2[0] * axes[1] + c2[1] * axes[2]
     nodes = np.unique(tri)
-    return Section(centroid, axes, area, inertia, p[nodes] @ axes[1:].T - c2)
+    return Section(centroid, axes, area, inertia, p[nodes] @ axes[1:].T - c2,
+                   np.linalg.inv(inertia))
 
 
 def principal_axes(section: Section) -> tuple[np.ndarray, np.ndarray]:
@@ -159,5 +163,5 @@ def resultants(section: Section, positions: np.ndarray,
 def nominal_stress(section: Section, force: np.ndarray, moment: np.ndarray) -> np.ndarray:
     """(P,) normal stress (Pa, tension positive) at the section's nodes from its resultants
     (section axes, :func:`resultants`): ``F_n / A + b . eta`` with ``I b = (-M_2, M_1)``."""
-    b = np.linalg.solve(section.inertia, np.array([-moment[2], moment[1]]))
+    b = section.flexibility @ np.array([-moment[2], moment[1]])
     return force[0] / section.area + section.fibres @ b

@@ -73,7 +73,7 @@ import re
 import numpy as np
 import scipy.sparse as sp
 
-from pdfem.fem.section_stress import Section, nominal_stress, resultants, section_of
+from pdfem.fem.section_stress import Section, nominal_stress, section_of
 from pdfem.fem.stress import hooke_stress, von_mises
 from pdfem.geometry.vectors import cross
 from pdfem.motion.frame_kernels import StepVectors, support_torque_power
@@ -127,16 +127,16 @@ def spindle(axis: np.ndarray, psi: float, point: np.ndarray) -> np.ndarray:
     return best if best @ radial > np.cos(np.radians(30.0)) else radial
 
 
-def root_stress(section: Section, positions: np.ndarray, forces: np.ndarray) -> dict[str, float]:
-    """A blade's nominal root stress (Pa, :mod:`pdfem.fem.section_stress`) from the supports'
-    forces ``forces`` (N, (H, 3)) on its held root nodes at ``positions`` (m, (H, 3), the
-    section's coordinates): ``root_stress_tension`` (the largest over the section),
+def root_stress(section: Section, force: np.ndarray, moment: np.ndarray) -> dict[str, float]:
+    """A blade's nominal root stress (Pa, :mod:`pdfem.fem.section_stress`) from the force (N)
+    and the moment about the section's centroid (N m) that the blade puts on its supports,
+    frame axes: ``root_stress_tension`` (the largest over the section),
     ``root_stress_compression`` (the smallest) and ``root_stress_axial`` (``F / A``)."""
-    force, moment = resultants(section, positions, forces)
-    sigma = nominal_stress(section, force, moment)
+    f, m = section.axes @ force, section.axes @ moment
+    sigma = nominal_stress(section, f, m)
     return {"root_stress_tension": float(sigma.max()),
             "root_stress_compression": float(sigma.min()),
-            "root_stress_axial": float(force[0] / section.area)}
+            "root_stress_axial": float(f[0] / section.area)}
 
 
 def gradient_operator(basis) -> sp.csr_matrix:
@@ -361,8 +361,11 @@ class ShaftLoads:
                           "bending_in_plane": float(axes[2] @ m),
                           "root_moment": axes @ root_moment,
                           "max_von_mises": bpeak, "max_von_mises_location": bwhere}
-            if section is not None:
-                out[label].update(root_stress(section, r_held[rows], held[rows]))
+            if section is not None:   # the same resultants about the section's centroid
+                force_on_root = -held[rows].sum(axis=0)
+                out[label].update(root_stress(
+                    section, force_on_root,
+                    root_moment + cross(p - section.centroid, force_on_root)))
         self.impulse_world[:] = 0.0
         self.impulse_frame[:] = 0.0
         self.moment_frame[:] = 0.0

@@ -211,10 +211,12 @@ def rule_comparison(case: Case, data: dict, polar_class: str = "PC7") -> dict[st
     force), the UR I3 Q_max, F_b and F_f for the case's propeller at ``polar_class`` and the
     ratios; and the blades' root bending: the peak bending part of the root moment (N m, the
     ``root_moment`` of ``shaft/<structure>.blade<k>`` without the spindle component), its beam
-    stress by the rule's section modulus (Pa) and the peak von Mises of the blades (Pa), after
-    the spin-up ramp (whose angular acceleration loads the roots far more than the ice), against
-    the UR I3 blade stress at the root (hub radius) under the larger design force. Reported,
-    not asserted."""
+    stress by the rule's section modulus (Pa), the peak nominal root stress (Pa, the largest
+    magnitude of ``root_stress_tension`` and ``root_stress_compression`` over the blades: the
+    root's resultants over the model's own root section, without the rule's C1) and the peak
+    von Mises of the blades (Pa), after the spin-up ramp (whose angular acceleration loads the
+    roots far more than the ice), against the UR I3 blade stress at the root (hub radius) under
+    the larger design force. Reported, not asserted."""
     from pdfem.models import propeller_sections as sec
 
     s = case.structures[0]
@@ -239,13 +241,16 @@ def rule_comparison(case: Case, data: dict, polar_class: str = "PC7") -> dict[st
                  for b, m in zip(blades, spun))
     beam = 1.6 * moment / (0.1 * c * t**2)     # the rule's beam stress of the simulated moment
     von_mises = max(float(b["max_von_mises"][m].max()) for b, m in zip(blades, spun))
+    nominal = max(max(float(b["root_stress_tension"][m].max()),
+                      -float(b["root_stress_compression"][m].min())) for b, m in zip(blades, spun))
     return {"peak_torque": peak, "ur_i3_qmax": rule, "ratio": peak / rule,
             "peak_backward_force": backward, "ur_i3_fb": fb, "backward_ratio": backward / fb,
             "peak_forward_force": forward, "ur_i3_ff": ff, "forward_ratio": forward / ff,
             "peak_root_moment": moment, "ur_i3_root_moment": (0.75 - r / R) * R * max(fb, ff),
             "peak_root_beam_stress": beam, "peak_von_mises": von_mises,
             "ur_i3_blade_stress": stress, "stress_ratio": beam / stress,
-            "von_mises_ratio": von_mises / stress}
+            "von_mises_ratio": von_mises / stress, "peak_root_nominal_stress": nominal,
+            "nominal_stress_ratio": nominal / stress}
 
 
 def shaft_angle(case: Case, time: np.ndarray) -> np.ndarray:
