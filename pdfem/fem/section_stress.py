@@ -5,9 +5,10 @@ as a cantilever: the normal stress over the section is the axial force over the 
 bending moments about the section's principal axes over the second moments, linear across the
 section (Taylor's method; Carlton, "The strength of marine propeller blades", Lloyd's Register
 Technical Association, paper 2, 1980-81; Morgan, "An approximate method of obtaining stress in
-a propeller blade", David Taylor Model Basin report 919, 1954). It is the stress that the rules'
-blade strength checks give (the IACS UR I3 blade stress is ``C1 M / (0.1 c t^2)``, a bending
-moment over a section modulus at the root section), and, unlike the elastic stress at the
+a propeller blade", David Taylor Model Basin report 919, 1954). It is the kind of stress the
+rules' blade strength checks give (a bending moment over a section modulus at the root section;
+the ice-class rule's formula could not be checked against its text here, docs/propeller.md),
+and, unlike the elastic stress at the
 junction of a blade with a rigid hub (singular at the clamped edge), it converges under mesh
 refinement: it needs only the resultants, which equilibrium fixes, and the section's geometry.
 
