@@ -12,9 +12,10 @@ It is unconditionally stable for linear structures and has no numerical damping:
 step does not follow the elements' critical step, so a structure advanced this way takes the
 ice's coupling step without subcycling. The matrix ``A = M + dt/2 C + dt^2/4 K`` of the free DOFs
 is factorised once per step size, block by independent block (:mod:`pdfem.fem.block_factor`:
-SuperLU, minimum-degree ordering of ``A + A^T``; the blocks may be shared out over the ranks,
-:meth:`Newmark.distribute`) and each step is two matrix-vector products (``K u_p``, and ``K u_new``, kept for the supports, the strain
-energy and the shaft) and one pair of triangular solves. Accuracy: the period of a mode
+SuperLU's minimum-degree ordering of ``A + A^T``, kept as ``L D L^T``; the blocks may be
+shared out over the ranks, :meth:`Newmark.distribute`) and each step is two matrix-vector
+products (``K u_p``, and ``K u_new``, kept for the supports, the strain energy and the shaft)
+and one pair of triangular solves. Accuracy: the period of a mode
 of circular frequency omega lengthens by about ``(omega dt)^2 / 12``; 20 steps per period keep it
 within 1 % (Hughes, Table 9.1.1 and Eq. 9.1.79), so the modes the coupled step resolves (the
 step is the ice's) are integrated as accurately as by the explicit scheme.

@@ -61,7 +61,8 @@ CLEAR = 8.0
 whose coupling with it is read (module docstring)."""
 
 BATCH = 96
-"""Right-hand sides per call of the triangular solves (SuperLU solves them together)."""
+"""Right-hand sides per call of the solves (the columns of one call share one pass of the kernel
+over the blocks)."""
 
 
 def wave_speed(density: float, youngs_modulus: float, poisson_ratio: float) -> float:
@@ -146,8 +147,8 @@ def probe(solve: Callable[[np.ndarray], np.ndarray], free_index: np.ndarray,
         for j, (c, d) in enumerate(batch):
             nodes = nodes_of[c][free[nodes_of[c], d] >= 0]
             rhs[free[nodes, d], j] = 1.0
-        with threadpool_limits(limits=1, user_api="blas"):   # (SuperLU's many-column solves
-            x = solve(rhs)                                    # thrash on threaded BLAS: 14x)
+        with threadpool_limits(limits=1, user_api="blas"):   # (a solve that calls BLAS, e.g.
+            x = solve(rhs)                                    # SuperLU's, thrashes threaded: 14x)
         for j, (c, d) in enumerate(batch):
             # pairs (i, k), k of colour c: column d of C_ik, the response at i to k's load
             sel = pairs_of[c][free_k[pairs_of[c], d] >= 0]
