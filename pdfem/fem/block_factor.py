@@ -103,13 +103,13 @@ class BlockFactor:
         """``x`` with ``A x = b``; ``b`` of shape (n,) or (n, k). Collective when the blocks are
         split over ranks (every rank calls it with the same ``b``)."""
         b = np.asarray(b, dtype=np.float64)
-        cols = np.ascontiguousarray(b.reshape(self.n, -1))
-        mine = np.empty_like(cols)
+        rhs = np.ascontiguousarray(b.reshape(self.n, -1).T)     # one right-hand side a row
+        mine = np.empty_like(rhs)
         parallel = len(self._mine) > 1 and numba.get_num_threads() > 1
-        solve_blocks(parallel, self._mine, self._dof_ptr, self._order, self._col_at, self._col_ptr,
-                     self._rows, self._vals, self._diag, cols, mine)
-        x = np.empty_like(cols)
-        parts = [mine[self.blocks[k]] for k in self.dealt.mine]
+        solve_blocks(parallel, self._mine, self._dof_ptr, self._order, self._col_at,
+                     self._col_ptr, self._rows, self._vals, self._diag, rhs, mine)
+        x = np.empty((self.n, rhs.shape[0]))
+        parts = [mine[:, self.blocks[k]].T for k in self.dealt.mine]
         for k, part in self.dealt.everyone(parts):
             x[self.blocks[k]] = part
         return x.reshape(b.shape)

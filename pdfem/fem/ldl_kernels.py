@@ -20,44 +20,90 @@ number of threads. Every array is flat; block ``b`` owns ``order[dof_ptr[b]:dof_
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numba import prange
 
 from pdfem.parallel.kernels import twin
 
 
+@numba.njit(cache=True)
+def _one(rows, vals, col_ptr, cp, diag, lo, y):
+    """``y <- A^-1 y`` for one right-hand side in factor order: ``L``, ``D``, ``L^T``."""
+    n = y.shape[0]
+    for j in range(n):                               # L y = P b, unit lower, by columns
+        yj = y[j]
+        for p in range(col_ptr[cp + j], col_ptr[cp + j + 1]):
+            y[rows[p]] -= vals[p] * yj
+    for j in range(n):
+        y[j] = y[j] / diag[lo + j]
+    for j in range(n - 1, -1, -1):                   # L^T w = z: row j of L^T is column j of L
+        s = y[j]
+        for p in range(col_ptr[cp + j], col_ptr[cp + j + 1]):
+            s -= vals[p] * y[rows[p]]
+        y[j] = s
+
+
+@numba.njit(cache=True)
+def _many(rows, vals, col_ptr, cp, diag, lo, y):
+    """``y <- A^-1 y`` for the columns of ``y`` (n, m) together, each entry of ``L`` read
+    once for all, each column by the operations of :func:`_one`."""
+    n, m = y.shape
+    for j in range(n):
+        for p in range(col_ptr[cp + j], col_ptr[cp + j + 1]):
+            r = rows[p]
+            v = vals[p]
+            for c in range(m):
+                y[r, c] -= v * y[j, c]
+    for j in range(n):
+        d = diag[lo + j]
+        for c in range(m):
+            y[j, c] = y[j, c] / d
+    s = np.empty(m)
+    for j in range(n - 1, -1, -1):
+        for c in range(m):
+            s[c] = y[j, c]
+        for p in range(col_ptr[cp + j], col_ptr[cp + j + 1]):
+            r = rows[p]
+            v = vals[p]
+            for c in range(m):
+                s[c] -= v * y[r, c]
+        for c in range(m):
+            y[j, c] = s[c]
+
+
 @twin(fastmath=False)
 def solve_blocks(blocks, dof_ptr, order, col_at, col_ptr, rows, vals, diag, b, x):
-    """``x[order of block k] = A_k^-1 b[...]`` for each block ``k`` in ``blocks``, for every
-    column of ``b`` and ``x`` (shape (n, m)); a column whose right-hand side is zero on a block
-    gets zeros there (exactly the solution)."""
+    """``x[c, order of block k] = A_k^-1 b[c, ...]`` for each block ``k`` in ``blocks`` and each
+    right-hand side ``c`` (the rows of ``b`` and ``x``, shape (m, n)); several right-hand
+    sides go through a block's factor together (:func:`_many`), each by the operations it
+    would get alone (:func:`_one`). A block whose right-hand sides are all zero gets zeros
+    (exactly the solution)."""
+    m = b.shape[0]
     for q in prange(blocks.shape[0]):
         k = blocks[q]
         lo = dof_ptr[k]
         n = dof_ptr[k + 1] - lo
-        cp = col_at[k]
-        y = np.empty(n)
-        for c in range(b.shape[1]):
-            nonzero = False
+        nonzero = False
+        for c in range(m):
             for j in range(n):
-                y[j] = b[order[lo + j], c]
-                if y[j] != 0.0:
+                if b[c, order[lo + j]] != 0.0:
                     nonzero = True
-            if not nonzero:
-                for j in range(n):
-                    x[order[lo + j], c] = 0.0
-                continue
-            for j in range(n):                       # L y = P b, unit lower, by columns
-                yj = y[j]
-                if yj != 0.0:
-                    for p in range(col_ptr[cp + j], col_ptr[cp + j + 1]):
-                        y[rows[p]] -= vals[p] * yj
+        if m == 1:
+            y = np.empty(n)
             for j in range(n):
-                y[j] = y[j] / diag[lo + j]
-            for j in range(n - 1, -1, -1):           # L^T w = z: row j of L^T is column j of L
-                s = y[j]
-                for p in range(col_ptr[cp + j], col_ptr[cp + j + 1]):
-                    s -= vals[p] * y[rows[p]]
-                y[j] = s
+                y[j] = b[0, order[lo + j]]
+            if nonzero:
+                _one(rows, vals, col_ptr, col_at[k], diag, lo, y)
             for j in range(n):
-                x[order[lo + j], c] = y[j]
+                x[0, order[lo + j]] = y[j]
+        else:
+            z = np.empty((n, m))
+            for j in range(n):
+                for c in range(m):
+                    z[j, c] = b[c, order[lo + j]]
+            if nonzero:
+                _many(rows, vals, col_ptr, col_at[k], diag, lo, z)
+            for j in range(n):
+                for c in range(m):
+                    x[c, order[lo + j]] = z[j, c]
