@@ -27,7 +27,9 @@ from __future__ import annotations
 import types
 
 import numba
+from llvmlite import ir
 from numba.core.types import float64 as _f8
+from numba.core.types import int64 as _i8
 from numba.extending import intrinsic
 
 SERIAL_BELOW_PARTICLES = 20_000
@@ -44,6 +46,14 @@ def fma(typingctx, a, b, c):
     if (a, b, c) != (_f8, _f8, _f8):
         return None
     return _f8(_f8, _f8, _f8), lambda context, builder, sig, args: builder.fma(*args)
+
+
+@intrinsic
+def float_bits(typingctx, x):
+    """The 64 bits of the double ``x`` as an int64 (sign, 11 exponent bits, 52 fraction bits)."""
+    if x != _f8:
+        return None
+    return _i8(_f8), lambda context, builder, sig, args: builder.bitcast(args[0], ir.IntType(64))
 
 
 class Twin:
