@@ -275,6 +275,7 @@ class IceBody:
     @broken.setter
     def broken(self, flags: np.ndarray) -> None:
         self.ledger.forget()  # set from outside the time loop: no dissipation
+        self.workspace.lengths_current = False
         self.bonds.weight[:] = kernels.signed_weights(self.bonds.weight, flags)
         self.intact.forget()
         self.update_intact_volume()
@@ -328,6 +329,7 @@ class IceBody:
                                name or next_name(self.constraints, "prescribed"))
         self.constraints.append(c)
         c.impose(self, self.time)
+        self.workspace.lengths_current = False
 
     def fix(self, mask: np.ndarray, name: str = "") -> None:
         """Hold the particles in ``mask`` in place; ``name`` (default ``fixed<k>``) names the
@@ -392,6 +394,8 @@ class IceBody:
         self.v[rows] = 0.0
         for c in self.constraints:
             c.impose(self, t, step)
+            if c.path is not None and not step:  # positions put on the path, past the pass
+                self.workspace.lengths_current = False
 
     def start(self) -> None:
         """Compute the forces of the initial state (call once before the first step); bonds
