@@ -70,7 +70,11 @@ an owned particle i (both directions of each pair), ascending by local index, wh
 global particle order (body offset + index in the body), since the halo keeps its arrays in
 that order on every rank.
 
-Per step, one pass over the list, a ``prange`` over the owned particles: each particle sums
+Per step, a pass over the list finds the particles in contact: each pair's distance tested
+once, from its lower-numbered end, and a whole row skipped while the smallest margin
+``|p| - r_ij`` of its pairs at the build exceeds twice the largest move of any particle since
+(none of them can have closed it; a quiet sheet's rows all are). Then a ``prange`` over the
+owned particles in a contact: each particle sums
 its own force from its interacting partners in row order and skips the other candidates
 entirely. Its force is therefore a function of the current positions alone: the same bit for
 bit whenever the list was built (a list built long ago only holds more candidates, which add
@@ -106,7 +110,7 @@ from pdfem.forces.short_range_kernels import (
     gather,
 )
 from pdfem.forces.short_range_list_kernels import (add_owned, contacts_near, pair_forces,
-                                                  pair_rows, tally)
+                                                  pair_rows, row_margins, tally)
 from pdfem.geometry.cell_hash import bounding_box, counting_sort
 from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
 
@@ -120,6 +124,9 @@ _INITIAL_CAPACITY = 1024  # candidate slots per chunk before the first growth
 #: the list's skin over the halo's: a relative 1e-6 more, so that the rounding of distances
 #: cannot lose a pair that the halo's drift rule lets come into range
 _SKIN_MARGIN = 1.0 + 1e-6
+#: a row of the list is skipped while its pairs' margins at the build exceed twice the largest
+#: move since plus this fraction of the cut-off (the rounding of the distances is ~1e-16 of it)
+MARGIN_ROUNDING = 1e-9
 
 
 def short_range_constant(K: float, delta: float, factor: float = 15.0) -> float:
@@ -326,6 +333,9 @@ class ShortRangeContact(ParticleForce):
         self._split = np.empty(m + 1, dtype=np.int64)
         pair_rows(counts, self._cap, pair, val, h.owned, self._row_ptr, self._nbr, self._crit,
                   self._kvv, self._split)
+        self._margin = np.full(m, np.inf)
+        row_margins(self._rows, self._row_ptr, self._split, self._nbr, self._crit, h.y, h.owned,
+                    self._margin)
 
     def _evaluate(self) -> float:
         """The forces at the current positions (rebuilding the list when the halo was
@@ -346,8 +356,11 @@ class ShortRangeContact(ParticleForce):
         self.passes += 1
         par = rows.shape[0] >= SERIAL_BELOW_PARTICLES
         near = self._near[:h.m]
+        # rows whose pairs were all farther apart at the build than twice the largest move
+        # since are skipped (the allowance covers the round-off of the distances, ~1e-16 h)
+        reach = 2.0 * h.largest_move + MARGIN_ROUNDING * self.cell_size
         contacts_near(par, rows, self._row_ptr, self._split, self._nbr, self._crit, h.y, h.owned,
-                      near)
+                      self._margin, reach, near)
         pair_forces(par, rows, self._row_ptr, self._nbr, self._crit, self._kvv, h.y, h.vol, near,
                     self._acc, self._hit, self._n_up, self._e_up)
         n_pairs, energy = tally(rows, self._hit, self._n_up, self._e_up)

@@ -75,6 +75,9 @@ class ContactHalo:
     moved
         Whether the last call found any local position (on any rank) other than the one the
         call before left, or refreshed: False means ``y`` is what it was, bit for bit.
+    largest_move
+        The largest distance (m) any particle, on any rank, has moved since the last refresh
+        (0 right after one).
     """
 
     def __init__(self, bodies: list, offsets: np.ndarray, stiffness: list, radius: list,
@@ -94,6 +97,7 @@ class ContactHalo:
         self.neighbours: list[int] = []
         self.m = 0
         self.moved = True
+        self.largest_move = 0.0
 
     def invalidate(self) -> None:
         """Force a refresh at the next call (e.g. after particles moved between ranks)."""
@@ -162,9 +166,11 @@ class ContactHalo:
         self.moved = bool(table[:, 9].any())
         if table[:, 8].any() or table[:, 6].max() > self._limit2:
             self._refresh(self.positions(), table)
-            self.moved = True
-        elif self.moved:  # (unmoved owners: the ghosts are where they were too)
-            self._move()
+            self.moved, self.largest_move = True, 0.0
+        else:
+            self.largest_move = float(np.sqrt(table[:, 6].max()))
+            if self.moved:  # (unmoved owners: the ghosts are where they were too)
+                self._move()
 
     def _move(self) -> None:
         """Between refreshes: the ghosts' positions from their owners (point to point)."""

@@ -79,19 +79,44 @@ def pair_rows(counts, cap, pair, val, owned, row_ptr, nbr, crit, kvv, split):
     return row_ptr[m]
 
 
+@numba.njit(cache=True)
+def row_margins(rows, row_ptr, split, nbr, crit, y, owned, margin):
+    """``margin[i]`` = the smallest ``|y_j - y_i| - r_ij`` (m) over the entries of row i that
+    :func:`contacts_near` tests, at the positions ``y`` of the list's build (inf for a row
+    without such entries): none of them interacts while both ends have moved less than half of
+    it since."""
+    for t in range(rows.shape[0]):
+        i = rows[t]
+        low = math.inf
+        for s in range(split[i], row_ptr[i + 1]):
+            j = nbr[s]
+            if j < i and owned[j]:
+                continue
+            px = y[j, 0] - y[i, 0]
+            py = y[j, 1] - y[i, 1]
+            pz = y[j, 2] - y[i, 2]
+            low = min(low, math.sqrt(px * px + py * py + pz * pz) - crit[s])
+        margin[i] = low
+
+
 @twin(fastmath=False, one_thread="serial")
-def contacts_near(rows, row_ptr, split, nbr, crit, y, owned, near):
+def contacts_near(rows, row_ptr, split, nbr, crit, y, owned, margin, reach, near):
     """``near[p]`` = 1 for every local particle p of a pair that interacts at the positions
     ``y``, else 0 (``near`` (m,) over the local particles). Each pair of owned particles is
     tested once, from its lower-numbered end i (in ``rows``): row i's entries from
     ``split[i]`` on, its higher-numbered partners (and, where the row has any, the partners
     that are not ``owned``: another rank's, whose row is not here), with the test of
-    :func:`pair_forces` (d^2 < r_ij^2, the same bits from either end). Threads may mark the
-    same particle at once: every mark is a 1, so the result is the same."""
+    :func:`pair_forces` (d^2 < r_ij^2, the same bits from either end). A row whose
+    :func:`row_margins` exceeds ``reach`` (m: twice the largest move of any particle since the
+    build, and a round-off allowance) is skipped: every pair of it is still farther apart than
+    its r_ij. Threads may mark the same particle at once: every mark is a 1, so the result is
+    the same."""
     for p in prange(near.shape[0]):
         near[p] = 0
     for t in prange(rows.shape[0]):
         i = rows[t]
+        if margin[i] > reach:
+            continue
         yix = y[i, 0]
         yiy = y[i, 1]
         yiz = y[i, 2]
