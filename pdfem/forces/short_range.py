@@ -336,6 +336,7 @@ class ShortRangeContact(ParticleForce):
         self._margin = np.full(m, np.inf)
         row_margins(self._rows, self._row_ptr, self._split, self._nbr, self._crit, h.y, h.owned,
                     self._margin)
+        self._margins = np.sort(self._margin[self._rows])  # how many rows a reach tests
 
     def _evaluate(self) -> float:
         """The forces at the current positions (rebuilding the list when the halo was
@@ -354,11 +355,12 @@ class ShortRangeContact(ParticleForce):
             return self._energy
         rows = self._rows
         self.passes += 1
-        par = rows.shape[0] >= SERIAL_BELOW_PARTICLES
         near = self._near[:h.m]
         # rows whose pairs were all farther apart at the build than twice the largest move
-        # since are skipped (the allowance covers the round-off of the distances, ~1e-16 h)
+        # since are skipped (the allowance covers the round-off of the distances, ~1e-16 h);
+        # the passes thread when many rows are tested
         reach = 2.0 * h.largest_move + MARGIN_ROUNDING * self.cell_size
+        par = int(np.searchsorted(self._margins, reach, side="right")) >= SERIAL_BELOW_PARTICLES
         contacts_near(par, rows, self._row_ptr, self._split, self._nbr, self._crit, h.y, h.owned,
                       self._margin, reach, near)
         pair_forces(par, rows, self._row_ptr, self._nbr, self._crit, self._kvv, h.y, h.vol, near,

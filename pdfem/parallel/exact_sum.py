@@ -25,9 +25,10 @@ from pdfem.parallel.exact_sum_kernels import (MAX_PARTIALS, NOT_FINITE, TOO_LONG
                                               merge_expansions, round_groups,
                                               weighted_segment_expansions)
 
-THREADED_FROM_TERMS = 8_192
+THREADED_FROM_TERMS = 65_536
 """Terms (rows x columns) from which the expansions are built on the threads: a term costs
-a few ns in the bins, a parallel region about 10 us."""
+2-3 ns in the bins (the level-ice sheet's regions, 10,800 terms: 34 us on one thread, 100 us
+on two at a load of 2-3), a parallel region 10 us and more on a busy machine."""
 
 
 def _chunks(rows: int, columns: int) -> tuple[bool, int]:

@@ -51,7 +51,7 @@ from pdfem.pd.failure.crushed_shear import CrushedShear
 from pdfem.pd.failure.damaged_volume import IntactVolume
 from pdfem.pd.failure.fracture import FractureLedger
 from pdfem.pd.failure.strain_rate import RateTracker
-from pdfem.pd.integrate import verlet_kick
+from pdfem.pd.integrate import set_rows, verlet_kick
 from pdfem.pd.layout import rebalance as balance
 from pdfem.pd.layout.base import Layout, WholeLayout
 from pdfem.pd.layout.blocks import layout_workspace
@@ -61,6 +61,7 @@ from pdfem.pd.timestep import body_stable_time_step
 
 LOOPS = ("pairs", "full_family")
 """The force loops: the particle-pair loop, and the per-particle full-family reference loop."""
+_REST = np.zeros(3)  # the velocity of held particles (read-only by convention)
 
 
 class IceBody:
@@ -391,7 +392,7 @@ class IceBody:
         mask, rows = self._fixed_rows
         if mask is not self.fixed:  # a new fixed set (taken from elsewhere)
             self._fixed_rows = mask, rows = self.fixed, np.flatnonzero(self.fixed)
-        self.v[rows] = 0.0
+        set_rows(self.v, rows, _REST)
         for c in self.constraints:
             c.impose(self, t, step)
             if c.path is not None and not step:  # positions put on the path, past the pass

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pdfem.geometry.path import DisplacementPath
+from pdfem.pd.integrate import place_rows, set_rows
 
 
 @dataclass
@@ -54,11 +55,11 @@ class VelocityConstraint:
         path, their position (x0 + u(t): exact, no round-off gathered over the steps); with
         ``step`` (s), only the velocity of the drift over ``[t, t + step]``."""
         if step:
-            body.v[self.index] = self.drift(t, step)
+            set_rows(body.v, self.index, self.drift(t, step))
             return
-        body.v[self.index] = self.value(t)
+        set_rows(body.v, self.index, self.value(t))
         if self.path is not None:
-            body.y[self.index] = body.x0[self.index] + self.path.displacement(t)
+            place_rows(body.y, body.x0, self.index, self.path.displacement(t))
 
     def value(self, t: float) -> np.ndarray:
         """The prescribed velocity (m/s) at time ``t`` (s)."""
