@@ -22,7 +22,7 @@ import numba
 import numpy as np
 
 from pdfem.parallel.exact_sum_kernels import (MAX_PARTIALS, NOT_FINITE, TOO_LONG, expansions,
-                                              merge_expansions, round_groups,
+                                              merge_expansions, round_chunks, round_groups,
                                               weighted_segment_expansions)
 
 THREADED_FROM_TERMS = 65_536
@@ -54,6 +54,16 @@ def fraction_expansion(values) -> list | None:
     except OverflowError:
         return None
     return out[::-1]  # increasing magnitudes, as an expansion
+
+
+def _one_process(out: np.ndarray, count: np.ndarray, comm) -> np.ndarray | None:
+    """The totals of the groups' chunk expansions ``out`` ((G, C, M)) of lengths ``count``
+    ((G, C)) when this is the only process and every term is finite (a numba pass, the same
+    rounding as :func:`_rounded`); None otherwise (the general way)."""
+    if comm.size != 1 or (count.size and count.min() < 0):
+        return None
+    totals = np.empty(out.shape[0])
+    return totals if round_chunks(out, count, totals) else None
 
 
 def _merged(out: np.ndarray, count: np.ndarray, terms) -> tuple[np.ndarray, np.ndarray]:
@@ -97,7 +107,7 @@ def exact_sums(arrays: list, comm, rows: np.ndarray | None = None) -> list:
     """:func:`exact_sum` of each array of ``arrays`` over ``rows`` (default every row), with one
     gather of the expansions for all of them (collective under MPI)."""
     idx = np.zeros(0, dtype=np.int64) if rows is None else np.asarray(rows, dtype=np.int64)
-    columns, merged, lengths = [], [], []
+    parts = []
     for values in arrays:
         a = np.asarray(values, dtype=np.float64)
         a2 = np.ascontiguousarray(a[:, None] if a.ndim == 1 else
@@ -106,12 +116,20 @@ def exact_sums(arrays: list, comm, rows: np.ndarray | None = None) -> list:
         out = np.empty((a2.shape[1], chunks, MAX_PARTIALS))
         count = np.empty((a2.shape[1], chunks), dtype=np.int64)
         expansions(parallel, a2, idx, rows is None, out, count)
-        cols = [a2[:, c] if rows is None else a2[idx, c] for c in range(a2.shape[1])]
-        m, n = _merged(out, count, cols.__getitem__)
-        columns += cols
-        merged.append(m)
-        lengths.append(n)
-    totals = _rounded(np.concatenate(merged), np.concatenate(lengths), comm, columns.__getitem__)
+        parts.append((a2, out, count))
+    fast = [_one_process(out, count, comm) for _, out, count in parts]
+    if all(t is not None for t in fast):
+        totals = np.concatenate(fast) if fast else np.zeros(0)
+    else:
+        columns, merged, lengths = [], [], []
+        for a2, out, count in parts:
+            cols = [a2[:, c] if rows is None else a2[idx, c] for c in range(a2.shape[1])]
+            m, n = _merged(out, count, cols.__getitem__)
+            columns += cols
+            merged.append(m)
+            lengths.append(n)
+        totals = _rounded(np.concatenate(merged), np.concatenate(lengths), comm,
+                          columns.__getitem__)
     out, k = [], 0
     for values in arrays:
         shape = np.shape(values)[1:]
@@ -148,16 +166,20 @@ def exact_weighted_sums(w: np.ndarray, values: np.ndarray, segments: list, comm)
     out = np.empty((len(segments), chunks, k, MAX_PARTIALS))
     count = np.empty((len(segments), chunks, k), dtype=np.int64)
     weighted_segment_expansions(parallel, w, values, idx, ptr, out, count)
+    S = len(segments)
+    groups = np.ascontiguousarray(out.transpose(0, 2, 1, 3)).reshape(S * k, chunks,
+                                                                       MAX_PARTIALS)
+    counts = np.ascontiguousarray(count.transpose(0, 2, 1)).reshape(S * k, chunks)
+    totals = _one_process(groups, counts, comm)
+    if totals is not None:
+        return totals.reshape(S, k)
 
     def products(g):  # group g = s k + col: its terms, numpy's rounded products
         s, col = divmod(int(g), k)
         rows = idx[ptr[s]:ptr[s + 1]]
         return w[rows] if col == 0 else w[rows] * values[rows, col - 1]
 
-    S = len(segments)
-    merged, lengths = _merged(np.ascontiguousarray(out.transpose(0, 2, 1, 3)).reshape(
-        S * k, chunks, MAX_PARTIALS), np.ascontiguousarray(count.transpose(0, 2, 1)).reshape(
-        S * k, chunks), products)
+    merged, lengths = _merged(groups, counts, products)
     return _rounded(merged, lengths, comm, products).reshape(S, k)
 
 

@@ -109,11 +109,9 @@ def reaction_forces(body) -> np.ndarray:
     cs = body.constraints
     # per region sum_i V_i and sum_i V_i f_i, all in one pass and one collective
     sums = body.layout.weighted_sums(body.vol, body.f, [c.index for c in cs])
-    rho, out = body.material.density, np.zeros((len(cs), 3))
-    for k, c in enumerate(cs):
-        mass = rho * float(sums[k, 0])
-        out[k] = mass * (c.acceleration(body.time) - body.gravity) - sums[k, 1:]
-    return out
+    accelerations = np.array([c.acceleration(body.time) for c in cs]).reshape(len(cs), 3)
+    mass = body.material.density * sums[:, 0]
+    return mass[:, None] * (accelerations - body.gravity) - sums[:, 1:]
 
 
 def step_work(body, force0: np.ndarray, dt: float) -> float:

@@ -49,6 +49,8 @@ class _TwoRanks(SerialComm):
     """A serial communicator that reports this process's part twice, as two ranks holding the
     same rows would (the gathered expansions of both are rounded once)."""
 
+    size = 2
+
     def allgather(self, obj):
         return [obj, obj]
 
