@@ -22,7 +22,7 @@ import numba
 import numpy as np
 
 from pdfem.parallel.exact_sum_kernels import (MAX_PARTIALS, NOT_FINITE, TOO_LONG, expansions,
-                                              merge_expansions, round_chunks, round_groups,
+                                              merge_expansions, round_groups,
                                               weighted_segment_expansions)
 
 THREADED_FROM_TERMS = 65_536
@@ -63,7 +63,7 @@ def _one_process(out: np.ndarray, count: np.ndarray, comm) -> np.ndarray | None:
     if comm.size != 1 or (count.size and count.min() < 0):
         return None
     totals = np.empty(out.shape[0])
-    return totals if round_chunks(out, count, totals) else None
+    return totals if round_groups(out, count, totals) else None
 
 
 def _merged(out: np.ndarray, count: np.ndarray, terms) -> tuple[np.ndarray, np.ndarray]:

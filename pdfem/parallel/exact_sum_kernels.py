@@ -258,19 +258,3 @@ def round_groups(parts, counts, totals):
             finite = False
     return finite
 
-
-@numba.njit(cache=True)
-def round_chunks(out, count, totals):
-    """One process's whole sums: per group g, the correctly rounded sum of its chunks'
-    expansions ``out[g, q, :count[g, q]]`` ((G, C, M), every count >= 0) into ``totals[g]``;
-    returns whether every total is finite (else the caller takes the general way)."""
-    scratch = np.empty(out.shape[1] * out.shape[2] + 1)
-    for g in range(out.shape[0]):
-        m = 0
-        for q in range(out.shape[1]):
-            for t in range(count[g, q]):
-                m = grow(out[g, q, t], scratch, m)
-        totals[g] = round_expansion(scratch, m)
-        if not math.isfinite(totals[g]):
-            return False
-    return True
