@@ -117,14 +117,23 @@ def _stations(p: dict, z: float) -> np.ndarray:
     return np.array([-0.5 * p["length"], -0.5 * p["length"] + run, _x_bow(p, z), _x_stem(p, z)])
 
 
-def _x_integral(p: dict, z: float, f) -> float:
-    """int f(x, h(x, z)) dx over the section at z, exact for f of degree <= 3 (Simpson on the
-    linear pieces)."""
-    xs = _stations(p, z)
-    a, b = xs[:-1], xs[1:]
+def _x_integrals(p: dict, zs, f) -> np.ndarray:
+    """int f(x, h(x, z)) dx over the section at each height of ``zs`` ((n,) m), exact for f of
+    degree <= 3 (Simpson on the linear pieces): (n,), all levels in one array pass."""
+    _, run = _lengths(p)
+    z = np.asarray(zs, dtype=np.float64)[:, None]
+    xs = np.concatenate([np.full_like(z, -0.5 * p["length"]),
+                         np.full_like(z, -0.5 * p["length"] + run), _x_bow(p, z), _x_stem(p, z)],
+                        axis=1)
+    a, b = xs[:, :-1], xs[:, 1:]
     m = 0.5 * (a + b)
-    return float(np.sum((b - a) / 6 * (f(a, half_breadth(p, a, z)) + 4 * f(m, half_breadth(p, m, z))
-                                       + f(b, half_breadth(p, b, z)))))
+    return np.sum((b - a) / 6 * (f(a, half_breadth(p, a, z)) + 4 * f(m, half_breadth(p, m, z))
+                                 + f(b, half_breadth(p, b, z))), axis=1)
+
+
+def _x_integral(p: dict, z: float, f) -> float:
+    """:func:`_x_integrals` at one height z (m)."""
+    return float(_x_integrals(p, [z], f)[0])
 
 
 def hydrostatic_properties(n_z: int = 4000, **params) -> dict[str, float]:
@@ -143,11 +152,11 @@ def hydrostatic_properties(n_z: int = 4000, **params) -> dict[str, float]:
         zz = lo + (np.arange(n_z) + 0.5) * (hi - lo) / n_z
         return zz, (hi - lo) / n_z
     zz, dz = levels(-T, 0.0)
-    area = np.array([_x_integral(p, z, lambda x, h: 2 * h) for z in zz])
-    mx = np.array([_x_integral(p, z, lambda x, h: 2 * h * x) for z in zz])
+    area = _x_integrals(p, zz, lambda x, h: 2 * h)
+    mx = _x_integrals(p, zz, lambda x, h: 2 * h * x)
     volume = float(area.sum() * dz)
     za, dza = levels(0.0, D - T)
-    above = float(np.sum([_x_integral(p, z, lambda x, h: 2 * h) for z in za]) * dza)
+    above = float(np.sum(_x_integrals(p, za, lambda x, h: 2 * h)) * dza)
     awp = _x_integral(p, 0.0, lambda x, h: 2 * h)
     x_f = _x_integral(p, 0.0, lambda x, h: 2 * h * x) / awp
     return {"volume": volume, "x_b": float(mx.sum() * dz / volume),

@@ -63,7 +63,7 @@ from pdfem.coupling.facet_loads import FacetLoads, collect_facet_loads
 from pdfem.coupling.impulse_work import ImpulseWork
 from pdfem.geometry.vectors import resultant
 from pdfem.parallel.comm import SerialComm
-from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
+from pdfem.parallel.kernels import SERIAL_BELOW_STREAMING
 
 
 @dataclass
@@ -355,7 +355,7 @@ class Coupler:
                 # the particle's velocity of that instant (not the mid-step velocity of the
                 # whole step, off by O(D a)); the positions at the step's end are Verlet's.
                 # The body keeps its arrays (in place).
-                drift(len(body.y) >= SERIAL_BELOW_PARTICLES, body.y, body.v,
+                drift(len(body.y) >= SERIAL_BELOW_STREAMING, body.y, body.v,
                       body.v if kick is None else kick, (2 * j + 1) / n - 1.0, h,
                       body.y if before is None else before, u, kick is not None,
                       before is not None)

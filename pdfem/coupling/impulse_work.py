@@ -95,7 +95,10 @@ class ImpulseWork:
             self.moment[rows] += since * impulse
 
     def work(self, body) -> float:
-        """The impulses' work (J) on the owned particles, with the body at the step's end."""
+        """The impulses' work (J) on the owned particles, with the body at the step's end (0
+        without an impulse in the step: every term is 0)."""
+        if not self._touched:
+            return 0.0
         per = impulse_work_terms(body.owned, self.impulse, self.moment, self.v0, self.f0, body.f,
                                  body.material.density,
                                  np.asarray(body.gravity, dtype=np.float64), self.mass)

@@ -70,7 +70,11 @@ an owned particle i (both directions of each pair), ascending by local index, wh
 global particle order (body offset + index in the body), since the halo keeps its arrays in
 that order on every rank.
 
-Per step, one pass over the list, a ``prange`` over the owned particles: each particle sums
+Per step, a pass over the list finds the particles in contact: each pair's distance tested
+once, from its lower-numbered end, and a whole row skipped while the smallest margin
+``|p| - r_ij`` of its pairs at the build exceeds twice the largest move of any particle since
+(none of them can have closed it; a quiet sheet's rows all are). Then a ``prange`` over the
+owned particles in a contact: each particle sums
 its own force from its interacting partners in row order and skips the other candidates
 entirely. Its force is therefore a function of the current positions alone: the same bit for
 bit whenever the list was built (a list built long ago only holds more candidates, which add
@@ -78,7 +82,9 @@ nothing), for any thread count and on 1 and N ranks; so a run restarted from a c
 whose list is built afresh at its first call, continues bit for bit. Pair i-j evaluated from
 j's row gives exactly the negated force (p negated exactly, the same distance and stored
 constants). A pair's potential and count go to the rank that owns its lower-numbered
-particle, once over the ranks, summed per particle in global order.
+particle, once over the ranks, summed per particle in global order. A call that finds every
+position, on every rank, bit for bit where the last pass left it (the forces again after bonds
+broke in a step, the energy rows) takes that pass's forces and tallies instead of a new one.
 
 Units: m, m^3, Pa, N/m^3 (force density), J.
 """
@@ -103,7 +109,8 @@ from pdfem.forces.short_range_kernels import (
     find_folded,
     gather,
 )
-from pdfem.forces.short_range_list_kernels import add_owned, pair_forces, pair_rows, tally
+from pdfem.forces.short_range_list_kernels import (add_owned, contacts_near, pair_forces,
+                                                  pair_rows, row_margins, tally)
 from pdfem.geometry.cell_hash import bounding_box, counting_sort
 from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
 
@@ -117,6 +124,9 @@ _INITIAL_CAPACITY = 1024  # candidate slots per chunk before the first growth
 #: the list's skin over the halo's: a relative 1e-6 more, so that the rounding of distances
 #: cannot lose a pair that the halo's drift rule lets come into range
 _SKIN_MARGIN = 1.0 + 1e-6
+#: a row of the list is skipped while its pairs' margins at the build exceed twice the largest
+#: move since plus this fraction of the cut-off (the rounding of the distances is ~1e-16 of it)
+MARGIN_ROUNDING = 1e-9
 
 
 def short_range_constant(K: float, delta: float, factor: float = 15.0) -> float:
@@ -148,6 +158,9 @@ class ShortRangeContact(ParticleForce):
 
     Attributes
     ----------
+    passes
+        Force passes over the list so far (a call at the positions of the last pass, bit for
+        bit, takes that pass's results instead).
     n_active
         Number of interacting pairs at the last call that this process counts (those whose
         lower-numbered particle it owns; :meth:`total_pairs` sums over ranks).
@@ -202,6 +215,9 @@ class ShortRangeContact(ParticleForce):
         self._side = (self.cell_size + self.skin) * (1.0 + 1e-12)  # the list's cell side
         self.builds = 0
         self._built = -1  # the halo's refresh count at the last build
+        self._evaluated = -1  # the list (its build) of the last force pass
+        self.passes = 0  # force passes over the list so far
+        self._n_active, self._energy = 0, 0.0  # that pass's pairs and potential (J)
         self.n_active = 0
         self.dense = True
         self.n_buckets = 0
@@ -211,6 +227,7 @@ class ShortRangeContact(ParticleForce):
         # the list: owned rows, CSR of partners with the pairs' r_ij and k_ij V_i V_j
         self._rows = np.empty(0, dtype=np.int64)
         self._row_ptr = np.zeros(1, dtype=np.int64)
+        self._split = np.zeros(1, dtype=np.int64)
         self._nbr = np.empty(0, dtype=np.int32)
         self._crit = np.empty(0)
         self._kvv = np.empty(0)
@@ -238,6 +255,7 @@ class ShortRangeContact(ParticleForce):
         self._buckets = np.empty(n, dtype=np.int64)
         self._acc = np.zeros((n, 3))
         self._hit = np.zeros(n, dtype=np.uint8)
+        self._near = np.zeros(n, dtype=np.uint8)
         self._n_up = np.zeros(n, dtype=np.int64)
         self._e_up = np.zeros(n)
 
@@ -312,8 +330,13 @@ class ShortRangeContact(ParticleForce):
             self._crit = np.empty(size)
             self._kvv = np.empty(size)
         self._row_ptr = np.empty(m + 1, dtype=np.int64)
+        self._split = np.empty(m + 1, dtype=np.int64)
         pair_rows(counts, self._cap, pair, val, h.owned, self._row_ptr, self._nbr, self._crit,
-                  self._kvv)
+                  self._kvv, self._split)
+        self._margin = np.full(m, np.inf)
+        row_margins(self._rows, self._row_ptr, self._split, self._nbr, self._crit, h.y, h.owned,
+                    self._margin)
+        self._margins = np.sort(self._margin[self._rows])  # how many rows a reach tests
 
     def _evaluate(self) -> float:
         """The forces at the current positions (rebuilding the list when the halo was
@@ -325,13 +348,28 @@ class ShortRangeContact(ParticleForce):
         h.update()
         if h.refreshes != self._built:
             self._build()
+        elif not h.moved and self._evaluated == self._built:
+            # the positions of the last pass, bit for bit (a step's forces again after bonds
+            # broke, an energy row): its forces and tallies stand
+            self.n_active = self._n_active
+            return self._energy
         rows = self._rows
-        pair_forces(rows.shape[0] >= SERIAL_BELOW_PARTICLES, rows, self._row_ptr, self._nbr,
-                    self._crit, self._kvv, h.y, h.vol, self._acc, self._hit, self._n_up,
-                    self._e_up)
+        self.passes += 1
+        near = self._near[:h.m]
+        # rows whose pairs were all farther apart at the build than twice the largest move
+        # since are skipped (the allowance covers the round-off of the distances, ~1e-16 h);
+        # the passes thread when many rows are tested
+        reach = 2.0 * h.largest_move + MARGIN_ROUNDING * self.cell_size
+        par = int(np.searchsorted(self._margins, reach, side="right")) >= SERIAL_BELOW_PARTICLES
+        contacts_near(par, rows, self._row_ptr, self._split, self._nbr, self._crit, h.y, h.owned,
+                      self._margin, reach, near)
+        pair_forces(par, rows, self._row_ptr, self._nbr, self._crit, self._kvv, h.y, h.vol, near,
+                    self._acc, self._hit, self._n_up, self._e_up)
         n_pairs, energy = tally(rows, self._hit, self._n_up, self._e_up)
-        self.n_active = int(n_pairs)
-        return float(energy)
+        self.n_active = self._n_active = int(n_pairs)
+        self._energy = float(energy)
+        self._evaluated = self._built
+        return self._energy
 
     def _add_into(self, fs: list) -> None:
         """Add the last evaluation's force density of each owned particle into ``fs`` (one

@@ -72,6 +72,12 @@ class ContactHalo:
         (n_own,) local index of each owned particle (bodies in turn, each in local order).
     n_ghosts, refreshes, neighbours
         Ghosts held, refreshes so far, and the ranks ghosts are exchanged with.
+    moved
+        Whether the last call found any local position (on any rank) other than the one the
+        call before left, or refreshed: False means ``y`` is what it was, bit for bit.
+    largest_move
+        The largest distance (m) any particle, on any rank, has moved since the last refresh
+        (0 right after one).
     """
 
     def __init__(self, bodies: list, offsets: np.ndarray, stiffness: list, radius: list,
@@ -90,6 +96,8 @@ class ContactHalo:
         self.n_ghosts = 0
         self.neighbours: list[int] = []
         self.m = 0
+        self.moved = True
+        self.largest_move = 0.0
 
     def invalidate(self) -> None:
         """Force a refresh at the next call (e.g. after particles moved between ranks)."""
@@ -136,6 +144,7 @@ class ContactHalo:
             self._take_owned()
         box = np.array([[np.inf] * 3, [-np.inf] * 3])
         due = self._stale
+        moved = True
         if due:  # no local arrays for these owned particles yet
             y_own = self.positions()
             finite, drift = True, 0.0
@@ -143,20 +152,25 @@ class ContactHalo:
                 lo, hi, finite = bounding_box(y_own)
                 box = np.array([lo, hi])
         else:  # owned positions straight into the local array
-            finite, drift, k = True, 0.0, 0
+            finite, drift, k, moved = True, 0.0, 0, False
             for b, o in zip(self.bodies, self.own):
-                ok, drift = load_owned(b.y, o, self.own_pos[k:k + len(o)], self.y, self._y_ref,
-                                       box, drift)
-                finite = finite and ok
+                ok, drift, changed = load_owned(b.y, o, self.own_pos[k:k + len(o)], self.y,
+                                                self._y_ref, box, drift)
+                finite, moved = finite and ok, moved or changed
                 k += len(o)
-        row = np.concatenate([box[0], box[1], [drift, 0.0 if finite else 1.0, float(due)]])
+        row = np.concatenate([box[0], box[1], [drift, 0.0 if finite else 1.0, float(due),
+                                                float(moved)]])
         table = np.array(self.comm.allgather(row))
         if table[:, 7].any():
             raise FloatingPointError(NOT_FINITE)
+        self.moved = bool(table[:, 9].any())
         if table[:, 8].any() or table[:, 6].max() > self._limit2:
             self._refresh(self.positions(), table)
+            self.moved, self.largest_move = True, 0.0
         else:
-            self._move()
+            self.largest_move = float(np.sqrt(table[:, 6].max()))
+            if self.moved:  # (unmoved owners: the ghosts are where they were too)
+                self._move()
 
     def _move(self) -> None:
         """Between refreshes: the ghosts' positions from their owners (point to point)."""

@@ -280,15 +280,19 @@ def find_folded(table, consts, grid, found):
 @numba.njit(cache=True)
 def load_owned(y_body, idx, pos, y, y_ref, box, drift):
     """Owned positions into the local array: ``y[pos[t]] = y_body[idx[t]]`` (m), while growing
-    the box ``box`` ((2, 3): lo, hi) and returning whether they are all finite and the largest
-    squared distance (m^2) from ``y_ref[pos[t]]``, at least ``drift``."""
+    the box ``box`` ((2, 3): lo, hi) and returning whether they are all finite, the largest
+    squared distance (m^2) from ``y_ref[pos[t]]``, at least ``drift``, and whether any
+    position differs from the one ``y`` held (bit for bit)."""
     finite = True
+    moved = False
     for t in range(idx.shape[0]):
         i = idx[t]
         p = pos[t]
         d2 = 0.0
         for k in range(3):
             v = y_body[i, k]
+            if v != y[p, k]:
+                moved = True
             y[p, k] = v
             if not math.isfinite(v):
                 finite = False
@@ -300,4 +304,4 @@ def load_owned(y_body, idx, pos, y, y_ref, box, drift):
             d2 += e * e
         if d2 > drift:
             drift = d2
-    return finite, drift
+    return finite, drift, moved

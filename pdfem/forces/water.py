@@ -101,15 +101,18 @@ class Water(ParticleForce):
                 continue
             if s.y_prev is None:
                 s.y_prev = b.y.copy()
-            else:
-                if self._drags:
-                    drag_work(b.y, s.y_prev, b.vol, s.drag, s.drag_prev, s.dissipated)
+                s.drag_prev[:] = s.drag
                 if self.added_mass:
-                    drag_work(b.y, s.y_prev, b.vol, s.am, s.am_prev, s.water_kinetic)
-                s.y_prev[:] = b.y
-            s.drag_prev[:] = s.drag
+                    s.am_prev[:] = s.am
+                continue
+            # each work from y_prev; the last call moves y_prev on (and each its force)
+            if self._drags:
+                drag_work(b.y, s.y_prev, b.vol, s.drag, s.drag_prev, s.dissipated,
+                          not self.added_mass)
+            else:
+                s.drag_prev[:] = s.drag
             if self.added_mass:
-                s.am_prev[:] = s.am
+                drag_work(b.y, s.y_prev, b.vol, s.am, s.am_prev, s.water_kinetic, True)
         return None
 
     def potential_energy(self) -> float:

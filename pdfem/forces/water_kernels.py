@@ -109,15 +109,20 @@ def water_forces(y, v, side, owned, sea, rho_ice, f, drag):
 
 
 @numba.njit(cache=True)
-def drag_work(y, y_prev, vol, drag, drag_prev, dissipated):
+def drag_work(y, y_prev, vol, drag, drag_prev, dissipated, keep_position):
     """Add to ``dissipated`` ((n,) J) minus the drag's work over the last move of each particle,
     by the trapezoid rule: ``-vol (drag_prev + drag) / 2 . (y - y_prev)``, the same rule by
-    which velocity Verlet's kicks apply a force over a step."""
+    which velocity Verlet's kicks apply a force over a step; then ``drag_prev = drag`` and,
+    with ``keep_position``, ``y_prev = y`` (the next call's start)."""
     for i in range(y.shape[0]):
         w = 0.0
         for k in range(3):
             w += 0.5 * (drag_prev[i, k] + drag[i, k]) * (y[i, k] - y_prev[i, k])
         dissipated[i] -= vol[i] * w
+        for k in range(3):
+            drag_prev[i, k] = drag[i, k]
+            if keep_position:
+                y_prev[i, k] = y[i, k]
 
 
 @numba.njit(cache=True)

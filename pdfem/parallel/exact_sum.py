@@ -6,97 +6,29 @@ Here each process reduces its values to an exact expansion (Shewchuk 1997, "Adap
 precision floating-point arithmetic and fast robust geometric predicates", Discrete Comput.
 Geom. 18: the grow-expansion that Python's ``math.fsum`` uses): a few non-overlapping doubles
 whose sum is exactly the sum of the values. The expansions of all ranks are gathered and
-rounded once (:func:`math.fsum`), so the result is the correctly rounded sum of all the values:
-the same bits on 1 and N ranks, for any thread count and any order. Non-finite values fall
-back to an ordinary sum (the result is then inf or nan either way).
+rounded once, as ``math.fsum`` rounds, so the result is the correctly rounded sum of all the
+values: the same bits on 1 and N ranks, for any thread count and any order. Non-finite values
+fall back to an ordinary sum (the result is then inf or nan either way). The kernels (integer
+bins per exponent on the way into the expansions, the merge, the rounding) are in
+:mod:`pdfem.parallel.exact_sum_kernels`.
 """
 
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numba
 import numpy as np
-from numba import prange
 
-from pdfem.parallel.kernels import twin
+from pdfem.parallel.exact_sum_kernels import (MAX_PARTIALS, NOT_FINITE, TOO_LONG, expansions,
+                                              merge_expansions, round_groups,
+                                              weighted_segment_expansions)
 
-MAX_PARTIALS = 64
-"""Room for the partials of one column: an expansion of finite doubles never needs more than
-about 40 (the exponent range over the mantissa width)."""
-
-
-@numba.njit(cache=True, inline="always")
-def grow(x, partials, m):
-    """Add the finite value ``x`` to the expansion ``partials[:m]`` (Shewchuk's grow-expansion,
-    as :func:`math.fsum`); returns its new length."""
-    if x == 0.0:  # adds nothing to the exact sum
-        return m
-    i = 0
-    for q in range(m):
-        y = partials[q]
-        if abs(x) < abs(y):
-            x, y = y, x
-        hi = x + y
-        lo = y - (hi - x)
-        if lo != 0.0:
-            partials[i] = lo
-            i += 1
-        x = hi
-    partials[i] = x
-    return i + 1
-
-
-@twin(fastmath=False)
-def expansions(values, rows, every, out, count):
-    """Exact expansions of the column sums of ``values`` (n, k) over ``rows`` (indices; all
-    rows if ``every``), one per column and chunk of the rows (C chunks of about equal length,
-    C = ``out.shape[1]``, threaded over the chunks), into ``out`` (k, C, MAX_PARTIALS); their
-    lengths into ``count`` (k, C), -1 where a value of the chunk is not finite."""
-    k = values.shape[1]
-    n = values.shape[0] if every else rows.shape[0]
-    chunks = out.shape[1]
-    for c in prange(chunks):
-        for col in range(k):
-            m = 0
-            for t in range(n * c // chunks, n * (c + 1) // chunks):
-                x = values[t, col] if every else values[rows[t], col]
-                if not np.isfinite(x):
-                    m = -1
-                    break
-                m = grow(x, out[col, c], m)
-            count[col, c] = m
-
-
-@twin(fastmath=False)
-def weighted_segment_expansions(w, values, idx, ptr, out, count):
-    """Per segment s (rows ``idx[ptr[s]:ptr[s+1]]``) and chunk c of its rows (C chunks of about
-    equal length, C = ``out.shape[1]``, threaded over segments and chunks), the exact
-    expansions of ``sum w_i`` and of ``sum w_i values[i, col]`` (each product rounded once, as
-    numpy's ``w[:, None] * values``) into ``out[s, c, 0]`` and ``out[s, c, 1 + col]``
-    ((S, C, 1 + k, MAX_PARTIALS)), their lengths into ``count`` ((S, C, 1 + k); -1 where a
-    term is not finite)."""
-    k = values.shape[1]
-    chunks = out.shape[1]
-    for sc in prange((ptr.shape[0] - 1) * chunks):
-        s, c = sc // chunks, sc % chunks
-        n = ptr[s + 1] - ptr[s]
-        for col in range(k + 1):
-            partials = out[s, c, col]
-            m = 0
-            for t in range(ptr[s] + n * c // chunks, ptr[s] + n * (c + 1) // chunks):
-                i = idx[t]
-                x = w[i] if col == 0 else w[i] * values[i, col - 1]
-                if not np.isfinite(x):
-                    m = -1
-                    break
-                m = grow(x, partials, m)
-            count[s, c, col] = m
-
-
-THREADED_FROM_TERMS = 8_192
+THREADED_FROM_TERMS = 65_536
 """Terms (rows x columns) from which the expansions are built on the threads: a term costs
-5-20 ns (more as the expansion grows), a parallel region about 10 us."""
+2-3 ns in the bins (the level-ice sheet's regions, 10,800 terms: 34 us on one thread, 100 us
+on two at a load of 2-3), a parallel region 10 us and more on a busy machine."""
 
 
 def _chunks(rows: int, columns: int) -> tuple[bool, int]:
@@ -107,49 +39,103 @@ def _chunks(rows: int, columns: int) -> tuple[bool, int]:
     return parallel, numba.get_num_threads() if parallel else 1
 
 
-def local_expansion(values: np.ndarray, rows: np.ndarray | None = None) -> list:
-    """This process's part of an exact sum: per column of ``values`` ((n,) or (n, k)) over
-    ``rows`` (default all), its list of partials, or None where a value is not finite."""
-    a = np.asarray(values, dtype=np.float64)
-    a2 = a[:, None] if a.ndim == 1 else a.reshape(a.shape[0], int(np.prod(a.shape[1:])))
-    idx = np.zeros(0, dtype=np.int64) if rows is None else np.asarray(rows, dtype=np.int64)
-    parallel, chunks = _chunks(a2.shape[0] if rows is None else len(idx), a2.shape[1])
-    out = np.empty((a2.shape[1], chunks, MAX_PARTIALS))
-    count = np.empty((a2.shape[1], chunks), dtype=np.int64)
-    expansions(parallel, np.ascontiguousarray(a2), idx, rows is None, out, count)
-    return [None if (c < 0).any() else [x for q in range(chunks) for x in out[col, q, :c[q]].tolist()]
-            for col, c in enumerate(count)]
+def fraction_expansion(values) -> list | None:
+    """The exact sum of the finite doubles ``values`` as a few doubles whose sum it is exactly
+    (rational arithmetic, slow: for a sum whose expansion outgrew :data:`MAX_PARTIALS`;
+    each double takes the next 53 bits, so about 40 at most); None if that sum is beyond the
+    doubles' range."""
+    rest = sum(map(Fraction, values), Fraction(0))
+    out = []
+    try:
+        while rest:
+            x = float(rest)  # correctly rounded: what is left shrinks by 2^-53 or more
+            out.append(x)
+            rest -= Fraction(x)
+    except OverflowError:
+        return None
+    return out[::-1]  # increasing magnitudes, as an expansion
 
 
-def round_expansions(parts: list[list], plain: np.ndarray | float) -> np.ndarray:
-    """The correctly rounded totals of the per-process expansions ``parts`` (one list per
-    process, one entry per column); a column with a non-finite value anywhere takes ``plain``
-    (an ordinary sum of the same values)."""
-    plain = np.atleast_1d(np.asarray(plain, dtype=np.float64))
-    out = np.empty(len(parts[0]))
-    for col in range(len(out)):
-        cols = [p[col] for p in parts]
-        out[col] = plain[col] if any(c is None for c in cols) else math.fsum(
-            x for c in cols for x in c)
-    return out
+def _one_process(out: np.ndarray, count: np.ndarray, comm) -> np.ndarray | None:
+    """The totals of the groups' chunk expansions ``out`` ((G, C, M)) of lengths ``count``
+    ((G, C)) when this is the only process and every term is finite (a numba pass, the same
+    rounding as :func:`_rounded`); None otherwise (the general way)."""
+    if comm.size != 1 or (count.size and count.min() < 0):
+        return None
+    totals = np.empty(out.shape[0])
+    return totals if round_groups(out, count, totals) else None
+
+
+def _merged(out: np.ndarray, count: np.ndarray, terms) -> tuple[np.ndarray, np.ndarray]:
+    """This process's expansion of each group g from its chunks' ``out[g]`` ((G, C, M)) and
+    lengths ``count[g]`` ((G, C)): ``(merged (G, M), lengths (G,))``; a group TOO_LONG is
+    taken by :func:`fraction_expansion` of its terms (``terms(g)``), NOT_FINITE stays."""
+    merged = np.empty((out.shape[0], MAX_PARTIALS))
+    lengths = np.empty(out.shape[0], dtype=np.int64)
+    merge_expansions(out, count, merged, lengths)
+    for g in np.flatnonzero(lengths == TOO_LONG):
+        e = fraction_expansion(terms(g).tolist())
+        lengths[g] = NOT_FINITE if e is None else len(e)
+        if e is not None:
+            merged[g, :len(e)] = e
+    return merged, lengths
+
+
+def _rounded(merged: np.ndarray, lengths: np.ndarray, comm, terms) -> np.ndarray:
+    """The correctly rounded totals over all ranks of each group's expansion (one gather;
+    collective); a group NOT_FINITE on some rank takes the ordinary sum of its terms
+    (``terms(g)``) over the ranks."""
+    top = max(int(lengths.max(initial=0)), 0)
+    parts = comm.allgather((merged[:, :top], lengths))
+    groups, width = len(lengths), max(p.shape[1] for p, _ in parts)
+    if len(parts) == 1 and width == top:
+        stacked, counts = merged[:, None, :top], lengths[:, None]
+    else:
+        stacked = np.zeros((groups, len(parts), width))
+        for q, (p, _) in enumerate(parts):
+            stacked[:, q, :p.shape[1]] = p
+        counts = np.stack([c for _, c in parts], axis=1)
+    totals = np.empty(groups)
+    if not round_groups(np.ascontiguousarray(stacked), np.ascontiguousarray(counts), totals):
+        raise OverflowError("intermediate overflow in an exact sum")  # as math.fsum says it
+    for g in np.flatnonzero((counts < 0).any(axis=1)):
+        totals[g] = comm.allreduce_sum(float(np.sum(terms(g))))
+    return totals
 
 
 def exact_sums(arrays: list, comm, rows: np.ndarray | None = None) -> list:
     """:func:`exact_sum` of each array of ``arrays`` over ``rows`` (default every row), with one
     gather of the expansions for all of them (collective under MPI)."""
-    parts = comm.allgather([local_expansion(values, rows) for values in arrays])
-    out = []
-    for k, values in enumerate(arrays):
-        mine = [p[k] for p in parts]
-        if any(c is None for p in mine for c in p):
-            a = np.asarray(values, dtype=np.float64)
-            a = a if rows is None else a[np.asarray(rows, dtype=np.int64)]
-            plain = comm.allreduce_sum(a.sum(axis=0))
-        else:
-            plain = 0.0
-        total = round_expansions(mine, plain)
-        out.append(float(total[0]) if np.ndim(values) == 1
-                   else total.reshape(np.shape(values)[1:]))
+    idx = np.zeros(0, dtype=np.int64) if rows is None else np.asarray(rows, dtype=np.int64)
+    parts = []
+    for values in arrays:
+        a = np.asarray(values, dtype=np.float64)
+        a2 = np.ascontiguousarray(a[:, None] if a.ndim == 1 else
+                                  a.reshape(a.shape[0], int(np.prod(a.shape[1:]))))
+        parallel, chunks = _chunks(a2.shape[0] if rows is None else len(idx), a2.shape[1])
+        out = np.empty((a2.shape[1], chunks, MAX_PARTIALS))
+        count = np.empty((a2.shape[1], chunks), dtype=np.int64)
+        expansions(parallel, a2, idx, rows is None, out, count)
+        parts.append((a2, out, count))
+    fast = [_one_process(out, count, comm) for _, out, count in parts]
+    if all(t is not None for t in fast):
+        totals = np.concatenate(fast) if fast else np.zeros(0)
+    else:
+        columns, merged, lengths = [], [], []
+        for a2, out, count in parts:
+            cols = [a2[:, c] if rows is None else a2[idx, c] for c in range(a2.shape[1])]
+            m, n = _merged(out, count, cols.__getitem__)
+            columns += cols
+            merged.append(m)
+            lengths.append(n)
+        totals = _rounded(np.concatenate(merged), np.concatenate(lengths), comm,
+                          columns.__getitem__)
+    out, k = [], 0
+    for values in arrays:
+        shape = np.shape(values)[1:]
+        size = int(np.prod(shape))
+        out.append(float(totals[k]) if not shape else totals[k:k + size].reshape(shape))
+        k += size
     return out
 
 
@@ -180,22 +166,21 @@ def exact_weighted_sums(w: np.ndarray, values: np.ndarray, segments: list, comm)
     out = np.empty((len(segments), chunks, k, MAX_PARTIALS))
     count = np.empty((len(segments), chunks, k), dtype=np.int64)
     weighted_segment_expansions(parallel, w, values, idx, ptr, out, count)
-    used = out[:, :, :, :max(int(count.max(initial=0)), 0)].tolist()
-    mine = [[None if any(counts[q][col] < 0 for q in range(chunks))
-             else [x for q in range(chunks) for x in rows[q][col][:counts[q][col]]]
-             for col in range(k)] for rows, counts in zip(used, count.tolist())]
-    parts = comm.allgather(mine)
-    total = np.empty((len(segments), k))
-    for s in range(len(segments)):
-        for col in range(k):
-            terms = [p[s][col] for p in parts]
-            if any(t is None for t in terms):  # not finite somewhere: a plain sum
-                rows = idx[ptr[s]:ptr[s + 1]]
-                x = w[rows] if col == 0 else w[rows] * values[rows, col - 1]
-                total[s, col] = comm.allreduce_sum(float(x.sum()))
-            else:
-                total[s, col] = math.fsum([x for t in terms for x in t])
-    return total
+    S = len(segments)
+    groups = np.ascontiguousarray(out.transpose(0, 2, 1, 3)).reshape(S * k, chunks,
+                                                                       MAX_PARTIALS)
+    counts = np.ascontiguousarray(count.transpose(0, 2, 1)).reshape(S * k, chunks)
+    totals = _one_process(groups, counts, comm)
+    if totals is not None:
+        return totals.reshape(S, k)
+
+    def products(g):  # group g = s k + col: its terms, numpy's rounded products
+        s, col = divmod(int(g), k)
+        rows = idx[ptr[s]:ptr[s + 1]]
+        return w[rows] if col == 0 else w[rows] * values[rows, col - 1]
+
+    merged, lengths = _merged(groups, counts, products)
+    return _rounded(merged, lengths, comm, products).reshape(S, k)
 
 
 def exact_sum(values: np.ndarray, comm, rows: np.ndarray | None = None):

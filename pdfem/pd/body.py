@@ -51,7 +51,7 @@ from pdfem.pd.failure.crushed_shear import CrushedShear
 from pdfem.pd.failure.damaged_volume import IntactVolume
 from pdfem.pd.failure.fracture import FractureLedger
 from pdfem.pd.failure.strain_rate import RateTracker
-from pdfem.pd.integrate import verlet_kick
+from pdfem.pd.integrate import set_rows, verlet_kick
 from pdfem.pd.layout import rebalance as balance
 from pdfem.pd.layout.base import Layout, WholeLayout
 from pdfem.pd.layout.blocks import layout_workspace
@@ -61,6 +61,7 @@ from pdfem.pd.timestep import body_stable_time_step
 
 LOOPS = ("pairs", "full_family")
 """The force loops: the particle-pair loop, and the per-particle full-family reference loop."""
+_REST = np.zeros(3)  # the velocity of held particles (read-only by convention)
 
 
 class IceBody:
@@ -275,6 +276,7 @@ class IceBody:
     @broken.setter
     def broken(self, flags: np.ndarray) -> None:
         self.ledger.forget()  # set from outside the time loop: no dissipation
+        self.workspace.lengths_current = False
         self.bonds.weight[:] = kernels.signed_weights(self.bonds.weight, flags)
         self.intact.forget()
         self.update_intact_volume()
@@ -328,6 +330,7 @@ class IceBody:
                                name or next_name(self.constraints, "prescribed"))
         self.constraints.append(c)
         c.impose(self, self.time)
+        self.workspace.lengths_current = False
 
     def fix(self, mask: np.ndarray, name: str = "") -> None:
         """Hold the particles in ``mask`` in place; ``name`` (default ``fixed<k>``) names the
@@ -389,9 +392,11 @@ class IceBody:
         mask, rows = self._fixed_rows
         if mask is not self.fixed:  # a new fixed set (taken from elsewhere)
             self._fixed_rows = mask, rows = self.fixed, np.flatnonzero(self.fixed)
-        self.v[rows] = 0.0
+        set_rows(self.v, rows, _REST)
         for c in self.constraints:
             c.impose(self, t, step)
+            if c.path is not None and not step:  # positions put on the path, past the pass
+                self.workspace.lengths_current = False
 
     def start(self) -> None:
         """Compute the forces of the initial state (call once before the first step); bonds

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pdfem.geometry.path import DisplacementPath
+from pdfem.pd.integrate import place_rows, set_rows
 
 
 @dataclass
@@ -54,11 +55,11 @@ class VelocityConstraint:
         path, their position (x0 + u(t): exact, no round-off gathered over the steps); with
         ``step`` (s), only the velocity of the drift over ``[t, t + step]``."""
         if step:
-            body.v[self.index] = self.drift(t, step)
+            set_rows(body.v, self.index, self.drift(t, step))
             return
-        body.v[self.index] = self.value(t)
+        set_rows(body.v, self.index, self.value(t))
         if self.path is not None:
-            body.y[self.index] = body.x0[self.index] + self.path.displacement(t)
+            place_rows(body.y, body.x0, self.index, self.path.displacement(t))
 
     def value(self, t: float) -> np.ndarray:
         """The prescribed velocity (m/s) at time ``t`` (s)."""
@@ -108,11 +109,9 @@ def reaction_forces(body) -> np.ndarray:
     cs = body.constraints
     # per region sum_i V_i and sum_i V_i f_i, all in one pass and one collective
     sums = body.layout.weighted_sums(body.vol, body.f, [c.index for c in cs])
-    rho, out = body.material.density, np.zeros((len(cs), 3))
-    for k, c in enumerate(cs):
-        mass = rho * float(sums[k, 0])
-        out[k] = mass * (c.acceleration(body.time) - body.gravity) - sums[k, 1:]
-    return out
+    accelerations = np.array([c.acceleration(body.time) for c in cs]).reshape(len(cs), 3)
+    mass = body.material.density * sums[:, 0]
+    return mass[:, None] * (accelerations - body.gravity) - sums[:, 1:]
 
 
 def step_work(body, force0: np.ndarray, dt: float) -> float:

@@ -60,17 +60,22 @@ def strain_energy(body, forces_current: bool = False) -> float:
     dilatation pass: right when the last force computation was at the current positions and
     broke no bond (so after every time step, which recomputes the forces once bonds broke, and
     after a restart, which restores ``theta``); the pair loop made it with the same kernel, so
-    the same bits (the full-family reference loop sums in another order and takes its pass)."""
+    the same bits (the full-family reference loop sums in another order and takes its pass).
+    The bond lengths that step's pass kept are read too where they are still current (not
+    after a restart): again the same bits."""
     mat, b, lay = body.material, body.bonds, body.layout
+    lengths = None
     if forces_current and body.family is None:
         theta = body.theta.copy()
+        if body.workspace.lengths_current:  # the step's bond lengths, kept at these positions
+            lengths = body.workspace.bond_length
     else:
         theta = np.empty(body.n)
         kernels.dilatation(body.y, b.row_ptr, b.nbr, b.xi_len, b.weight, SIGNED, body.vol,
                            body.m, theta, body.workspace)
     lay.exchange(theta)
     W = kernels.strain_energy(body.y, b.row_ptr, b.nbr, b.xi_len, b.weight, SIGNED, body.vol,
-                              body.m, theta, mat.K, mat.mu, body.workspace)
+                              body.m, theta, mat.K, mat.mu, body.workspace, lengths)
     total = float(lay.owned_sum(W * body.vol))
     if body.rest is None:
         return total

@@ -2,16 +2,18 @@
 
 A step of the explicit time loop is ``kick(dt/2); drift(dt); forces; kick(dt/2)``. Both loops
 write only their own particle's entries, so they thread without races; below
-``SERIAL_BELOW_PARTICLES`` particles they run on one thread.
+``SERIAL_BELOW_STREAMING`` particles they run on one thread. :func:`set_rows` and
+:func:`place_rows` put prescribed velocities and positions on a region's rows.
 """
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numba import prange
 
 from pdfem.parallel.kernels import twin
-from pdfem.parallel.kernels import SERIAL_BELOW_PARTICLES
+from pdfem.parallel.kernels import SERIAL_BELOW_STREAMING
 
 @twin(fastmath=False)
 def _kick(v, f, inv_rho, half_dt, g, free):
@@ -31,6 +33,27 @@ def _drift(y, v, dt):
         y[i, 0] += dt * v[i, 0]
         y[i, 1] += dt * v[i, 1]
         y[i, 2] += dt * v[i, 2]
+
+
+@numba.njit(cache=True)
+def set_rows(a, rows, value):
+    """``a[rows] = value`` ((n, 3) array, (k,) rows, (3,) value), as numpy assigns it."""
+    for t in range(rows.shape[0]):
+        i = rows[t]
+        a[i, 0] = value[0]
+        a[i, 1] = value[1]
+        a[i, 2] = value[2]
+
+
+@numba.njit(cache=True)
+def place_rows(y, x0, rows, u):
+    """``y[rows] = x0[rows] + u`` ((n, 3) arrays, (k,) rows, (3,) displacement), as numpy
+    computes it (one rounding per entry)."""
+    for t in range(rows.shape[0]):
+        i = rows[t]
+        y[i, 0] = x0[i, 0] + u[0]
+        y[i, 1] = x0[i, 1] + u[1]
+        y[i, 2] = x0[i, 2] + u[2]
 
 
 def verlet_kick(
@@ -64,9 +87,9 @@ def verlet_kick(
         free = np.zeros(0, dtype=np.uint8)
     else:
         free = np.ascontiguousarray(free_mask).view(np.uint8)
-    _kick(v.shape[0] >= SERIAL_BELOW_PARTICLES, v, f, ir, float(half_dt), g, free)
+    _kick(v.shape[0] >= SERIAL_BELOW_STREAMING, v, f, ir, float(half_dt), g, free)
 
 
 def verlet_drift(y: np.ndarray, v: np.ndarray, dt: float) -> None:
     """Position update of velocity Verlet, in place: ``y += dt * v`` (m, m/s, s)."""
-    _drift(y.shape[0] >= SERIAL_BELOW_PARTICLES, y, v, float(dt))
+    _drift(y.shape[0] >= SERIAL_BELOW_STREAMING, y, v, float(dt))

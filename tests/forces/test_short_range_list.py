@@ -108,3 +108,33 @@ def test_list_is_rebuilt_only_when_a_particle_moved_half_the_skin():
         a.y[5] = base + move * s * np.array([0.6, 0.0, 0.8])
         contact.add_forces()
         assert contact.builds == built + rebuilt
+
+
+def test_a_call_at_the_last_pass_positions_reuses_that_pass():
+    """The forces again at positions unchanged bit for bit (the coupler's forces after bonds
+    broke, an energy row) take the last pass's forces, pair count and potential: the same
+    values and no new pass; a move of one coordinate by one ulp, or back, makes a new pass
+    whose forces are the brute-force ones there."""
+    a, b = two_body_cloud(8)
+    bodies = [a, b]
+    contact = ShortRangeContact(bodies)
+    first = contact.forces()
+    energy, n = contact.potential_energy(), contact.n_active
+    assert n > 50 and energy > 0.0
+    passes = contact.passes
+    again = contact.forces()
+    assert contact.passes == passes
+    assert all(np.array_equal(f, g) for f, g in zip(first, again))
+    assert contact.potential_energy() == energy and contact.n_active == n
+    assert contact.passes == passes
+    i = int(np.flatnonzero(np.abs(first[0]).sum(axis=1) > 0)[0])  # a particle in contact
+    for y in (np.nextafter(a.y[i, 0], np.inf), a.y[i, 0] - 0.0):
+        a.y[i, 0] = y
+        moved = contact.forces()
+        passes += 1
+        assert contact.passes == passes
+        ref, U, n_ref = brute_force(bodies)
+        assert contact.n_active == n_ref
+        scale = max(np.abs(r).max() for r in ref)
+        for f, r in zip(moved, ref):
+            np.testing.assert_allclose(f, r, rtol=0, atol=1e-12 * scale)

@@ -49,6 +49,8 @@ class _TwoRanks(SerialComm):
     """A serial communicator that reports this process's part twice, as two ranks holding the
     same rows would (the gathered expansions of both are rounded once)."""
 
+    size = 2
+
     def allgather(self, obj):
         return [obj, obj]
 
@@ -103,3 +105,33 @@ def test_threaded_chunks_give_the_same_correctly_rounded_sums():
         assert got[s, 1:].tolist() == [math.fsum(prod[:, c]) for c in range(3)]
     values[n - 3, 2] = np.inf
     assert math.isinf(exact_sum(values, SerialComm())[2])
+
+
+def test_terms_over_the_whole_exponent_range_in_the_bins_and_beyond():
+    """The integer bins per exponent take any finite double exactly: thousands of terms (many
+    bin flushes) from subnormals to 1e300, mixed signs, the largest doubles (past the bins,
+    grown directly), and a spread so wide that a chunk's expansion outgrows its room (then
+    taken by exact rational arithmetic): every sum is math.fsum's, bit for bit, threaded or
+    not, plain and weighted."""
+    from pdfem.parallel.exact_sum_kernels import FLUSH_EVERY, MAX_PARTIALS, TOO_LONG, expansions
+
+    rng = np.random.default_rng(30)
+    n = 5 * FLUSH_EVERY + 3
+    cases = {
+        "subnormal": rng.normal(size=n) * 5e-324 * rng.integers(1, 2 ** 52, n),
+        "decades": rng.normal(size=n) * 10.0 ** rng.integers(-300, 300, n),
+        "largest": rng.choice([-1.0, 1.0], n) * 2.0 ** rng.integers(1013, 1020, n) / 64,
+        "one": rng.choice([-1.0, 1.0], n) * (1.0 - 2.0 ** -53),
+    }
+    for name, v in cases.items():
+        for threads in (False, True):
+            rows = np.arange(0, n, 1 if threads else 2)
+            assert exact_sum(v, SerialComm(), rows) == math.fsum(v[rows]), name
+        w = rng.uniform(0.5, 2.0, n)
+        got = exact_weighted_sums(w, np.stack([v, -v], axis=1), [np.arange(n)], SerialComm())
+        assert got[0].tolist() == [math.fsum(w), math.fsum(w * v), math.fsum(w * -v)], name
+    # the decades spread outgrows MAX_PARTIALS in one chunk: the kernel says so, the sum holds
+    out = np.empty((1, 1, MAX_PARTIALS))
+    count = np.empty((1, 1), dtype=np.int64)
+    expansions(False, cases["decades"][:, None], np.zeros(0, dtype=np.int64), True, out, count)
+    assert count[0, 0] == TOO_LONG

@@ -251,3 +251,48 @@ def test_strain_energy_from_the_step_s_dilatation_is_the_recomputed_one(loop):
     c.restore_state({k: np.array(v) if isinstance(v, np.ndarray) else v
                      for k, v in b.checkpoint_state().items()})
     assert c.strain_energy(forces_current=True) == b.strain_energy()
+
+
+@pytest.mark.parametrize("on_path", [False, True])
+def test_strain_energy_reads_the_step_s_bond_lengths_only_where_current(on_path):
+    """The energy rows read the bond lengths the step's dilatation pass kept
+    (``workspace.lengths_current``) instead of taking them from the positions: the torn bar's
+    strain energy so is the one with its lengths taken from the positions, bit for bit, after
+    every step. Ends that follow a displacement path are put back on it after the pass
+    (``end_step``), which moves them by round-off: there the kept lengths are not current
+    (unless bonds broke and the forces were taken again at those positions). A restored body
+    has no current lengths."""
+    from pdfem.geometry.path import DisplacementPath
+
+    b = IceBody.from_shape("bar", Box((0, 0, 0), (24 * DX, 8 * DX, 6 * DX)), MAT, DX,
+                           3.015 * DX)
+    b.cut_crack((12 * DX, 0, 0), (1, 0, 0), (11 * DX, -1, -1), (13 * DX, 1, 2 * DX))
+    x = b.x0[:, 0]
+    for mask, sign in ((x < 2 * DX, -1.0), (x > 22 * DX, 1.0)):
+        if on_path:
+            b.add_velocity_constraint(mask, path=DisplacementPath(
+                [[0.0, 0, 0, 0], [1e-4, sign * 3e-5, 0, 0], [1.0, sign * 0.5, 0, 0]]))
+        else:
+            b.add_velocity_constraint(mask, (sign * 0.5, 0, 0), ramp_time=2e-5)
+    dt = 0.8 * b.stable_time_step()
+    b.start()
+    used = broke = 0
+    for _ in range(150):
+        n = b.step(dt)
+        broke += n > 0
+        used += b.workspace.lengths_current
+        assert b.workspace.lengths_current == (not on_path or n > 0)
+        kept = b.strain_energy(forces_current=True)
+        current, b.workspace.lengths_current = b.workspace.lengths_current, False
+        assert kept == b.strain_energy(forces_current=True)  # lengths from the positions
+        b.workspace.lengths_current = current
+        if current:  # the forces were taken at these positions: a fresh pass agrees too
+            assert kept == b.strain_energy()
+    assert broke > 20 and used == (broke if on_path else 150)
+    c = IceBody.from_shape("bar", Box((0, 0, 0), (24 * DX, 8 * DX, 6 * DX)), MAT, DX,
+                           3.015 * DX)
+    c.compute_forces()
+    c.restore_state({k: np.array(v) if isinstance(v, np.ndarray) else v
+                     for k, v in b.checkpoint_state().items()})
+    assert not c.workspace.lengths_current
+    assert c.strain_energy(forces_current=True) == b.strain_energy()

@@ -367,7 +367,8 @@ def dilatation_and_forces(
     Bit-identical to the two calls, but faster: the dilatation pass stores every unbroken
     bond's current length in the workspace (``ws.bond_length``, float64 (P,), allocated on first
     use: 8 bytes per pair) and the force pass reads it instead of taking a second square root
-    (about 30 % of the force pass). A workspace built with ``keep_bond_length=False`` skips that
+    (about 30 % of the force pass); so can the strain energy at the same positions
+    (``ws.lengths_current``). A workspace built with ``keep_bond_length=False`` skips that
     buffer (for the largest bodies, where memory counts more) and takes the square root twice.
 
     Parameters are those of :func:`dilatation` and :func:`forces`; ``theta_out`` (N,) and
@@ -395,4 +396,5 @@ def dilatation_and_forces(
                        K, mu, UNIT_STRENGTH if strength is None else strength, ws.coef, ws.aux)
     nb = _force_pass(ws, bonds, P, s0, rbuf, keep, rest, granular, crush_yield, owned, shear)
     ws.crush_dissipated = float(np.sum(ws.crush)) if granular else 0.0
+    ws.lengths_current = keep
     return nb

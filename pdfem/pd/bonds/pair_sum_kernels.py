@@ -63,8 +63,11 @@ def family_sum_pairs(bonds, vol, mode, B, out):
 
 
 @twin()
-def energy_pairs(bonds, P, K, mu, B, W):
-    """W_i = K theta_i^2 / 2 + (15 mu / (2 m_i)) sum_j omega e_d^2 V_j over unbroken bonds."""
+def energy_pairs(bonds, P, K, mu, B, W, rbuf, use_r):
+    """W_i = K theta_i^2 / 2 + (15 mu / (2 m_i)) sum_j omega e_d^2 V_j over unbroken bonds;
+    with ``use_r`` their current lengths are read from ``rbuf`` (kept by the step's
+    dilatation pass at these positions: the same bits as taking them again) instead of
+    taken from the positions."""
     row_ptr, nbr, xi_len, wt, broken = bonds.row_ptr, bonds.nbr, bonds.xi_len, bonds.weight, \
         bonds.broken
     signed = broken.shape[0] == 0
@@ -89,10 +92,10 @@ def energy_pairs(bonds, P, K, mu, B, W):
                     continue
                 j = U64(nbr[k])
                 l = xi_len[k]
-                d0 = y[j, 0] - y[i, 0]
-                d1 = y[j, 1] - y[i, 1]
-                d2 = y[j, 2] - y[i, 2]
-                e = bond_length(d0, d1, d2) - l
+                if use_r:
+                    e = rbuf[k] - l
+                else:
+                    e = bond_length(y[j, 0] - y[i, 0], y[j, 1] - y[i, 1], y[j, 2] - y[i, 2]) - l
                 edi = deviatoric_extension(e, ti, l)
                 edj = deviatoric_extension(e, theta[j] / 3.0, l)
                 acc += edi * edi * b * vol[j]

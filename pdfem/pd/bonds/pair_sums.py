@@ -36,10 +36,13 @@ def strain_energy(
     K: float,
     mu: float,
     ws: PairWorkspace | None = None,
+    lengths: np.ndarray | None = None,
 ) -> np.ndarray:
     """Strain energy density W_i = K theta_i^2 / 2 + (15 mu / (2 m_i)) sum_j omega e_d^2 V_j.
 
-    Parameters are as in :func:`forces` (``theta`` from :func:`dilatation` for the same ``y``).
+    Parameters are as in :func:`forces` (``theta`` from :func:`dilatation` for the same ``y``);
+    ``lengths`` (P,), if given, holds every unbroken bond's current length |y_j - y_i| (m), as
+    the fused step keeps it (``ws.bond_length``): read instead of taken again, the same bits.
 
     Returns
     -------
@@ -49,7 +52,8 @@ def strain_energy(
     ws = workspace_for(ws, row_ptr, nbr)
     W = np.empty(ws.n)
     energy_pairs(ws.parallel, bond_tuple(row_ptr, nbr, xi_len, weight, broken),
-                 particle_tuple(y, vol, m, theta), float(K), float(mu), ws.blocks, W)
+                 particle_tuple(y, vol, m, theta), float(K), float(mu), ws.blocks, W,
+                 _NO_LENGTHS if lengths is None else lengths, lengths is not None)
     return W
 
 

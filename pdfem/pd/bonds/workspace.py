@@ -98,6 +98,9 @@ class PairWorkspace:
         float64 (P,) current bond lengths kept by
         :func:`pdfem.pd.bonds.pair_loop.dilatation_and_forces` (None until that is first called,
         and always None without ``keep_bond_length``).
+    lengths_current
+        Whether ``bond_length`` holds the lengths of the last fused step's pass (set there;
+        whoever puts other positions or bonds in place without a step clears it).
     """
 
     def __init__(self, row_ptr: np.ndarray, nbr: np.ndarray, n_chunks: int | None = None,
@@ -150,6 +153,7 @@ class PairWorkspace:
         self.parallel_particles = self.parallel and n >= SERIAL_BELOW_PARTICLES
         self.bond_length: np.ndarray | None = None
         self.keep_bond_length = bool(keep_bond_length)
+        self.lengths_current = False
 
     def bond_length_buffer(self) -> np.ndarray:
         """The (P,) float64 bond-length scratch of the fused step (allocated on first use)."""

@@ -62,6 +62,7 @@ def restore_state(body, state: dict) -> None:
             body.broken = value.astype(np.uint8)  # kept in the signed weights
         else:
             target[...] = value
+    body.workspace.lengths_current = False  # other positions and bonds than its last pass
     for k in STATE_SCALARS:
         setattr(body, _LOCAL[k], float(state[k]))
     if body.rest is not None:
