@@ -99,6 +99,11 @@ class BlockFactor:
         self._rows = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int32)
         self._vals = np.concatenate(vals) if vals else np.zeros(0)
 
+    @property
+    def nbytes(self) -> int:
+        """Bytes of this rank's factors: ``L``'s values, row indices and column pointers, ``D``."""
+        return self._vals.nbytes + self._rows.nbytes + self._col_ptr.nbytes + self._diag.nbytes
+
     def solve(self, b: np.ndarray) -> np.ndarray:
         """``x`` with ``A x = b``; ``b`` of shape (n,) or (n, k). Collective when the blocks are
         split over ranks (every rank calls it with the same ``b``)."""
