@@ -300,3 +300,24 @@ def test_post_plots_and_spectrum_peak_at_the_blade_passing_frequency(tmp_path):
     assert all(p.stat().st_size > 10_000 for p in written)
     text = "\n".join(shaft_lines({"shaft": {"prop": f}}))
     assert "30 Hz" in text and "nominal root stress (beam method) 1.3e+06 Pa" in text
+
+
+def test_row_stress_peaks_are_the_element_stresses_largest(two_blades):
+    """Reference: :meth:`pdfem.fem.structure.ElasticStructure.von_mises` (numpy: the stress
+    basis' gradients, Hooke's law, the deviator) of the same state. The history row's one-pass
+    von Mises agrees to round-off, and each blade's ``max_von_mises`` is the largest over its
+    own volume group (blade 1 loaded at its tip, blade 2 nearly unstressed), the shaft's the
+    largest of all."""
+    s = _propeller(two_blades, omega=1e-6)
+    forces = np.zeros((s.n_nodes, 3))
+    forces[_node(s, (0.5, 0.05, 0.05)), 2] = 1.0e3
+    _static(s, forces)
+    reference = s.von_mises()
+    np.testing.assert_allclose(s.shaft.von_mises(), reference, rtol=1e-12,
+                               atol=1e-12 * reference.max())
+    rows = s.shaft.rows()
+    for label in ("blade1", "blade2"):
+        own = s.mesh.element_sets[label]
+        assert rows[label]["max_von_mises"] == pytest.approx(reference[own].max(), rel=1e-12)
+    assert rows["blade1"]["max_von_mises"] > 100.0 * rows["blade2"]["max_von_mises"]
+    assert rows[""]["max_von_mises"] == pytest.approx(reference.max(), rel=1e-12)
