@@ -91,10 +91,24 @@ class FrameStructure(ElasticStructure):
         self._f_inertial = self._inertial_dofs(0.0)
         self.solver.initialize(f_ext=self.external_force_dofs(0.0) + self._f_inertial)
         self.shaft = None
-        if np.any(frame.angular_velocity) and frame.speed_factor(0.0)[0] > 0.0:
+        self.starts_steady = bool(np.any(frame.angular_velocity)
+                                  and frame.speed_factor(0.0)[0] > 0.0)
+        if self.starts_steady:
             # turning at full speed from t = 0 (no ramp): start in the steady state
             self.set_state(displacement=self.steady_displacement())
         self.shaft = ShaftLoads(self) if np.any(frame.angular_velocity) else None
+
+    def add_surface_load(self, group: str, traction=(0.0, 0.0, 0.0), pressure: float = 0.0,
+                         history=None) -> None:
+        """As :meth:`pdfem.fem.loads.AppliedLoads.add_surface_load`; a structure that starts in
+        steady rotation (:meth:`steady_displacement`) and has not stepped yet starts in the
+        steady state with the load (its value at t = 0), not without it: the load does not set
+        off a ringing of its own, and the shaft's sums start there."""
+        super().add_surface_load(group, traction, pressure, history)
+        if self.starts_steady and self.solver.time == 0.0:
+            self.set_state(displacement=self.steady_displacement())
+            if self.shaft is not None:
+                self.shaft = ShaftLoads(self)
 
     # ------------------------------------------------------------------ frame kinematics
     def relative_motion(self) -> tuple[np.ndarray, np.ndarray]:
