@@ -48,7 +48,7 @@ class BlockFactor:
     ----------
     a
         The square sparse symmetric matrix, positive definite (factorised without pivoting;
-        an unsymmetric one raises ``ValueError``).
+        an unsymmetric one, or one with a pivot that is not positive, raises ``ValueError``).
     comm
         The ranks that share the solves (:mod:`pdfem.parallel.comm`); default one process.
     """
@@ -85,7 +85,13 @@ class BlockFactor:
             lo = self._dof_ptr[k]
             # DOF idx[i] sits at the factor's position perm_c[i] (Pr A Pc = L U, Pr = Pc^T)
             self._order[lo:lo + len(idx)] = idx[np.argsort(lu.perm_c)]
-            self._diag[lo:lo + len(idx)] = lu.U.diagonal()
+            d = lu.U.diagonal()
+            if not np.all(d > 0.0):
+                raise ValueError("BlockFactor: the matrix is not positive definite (a pivot "
+                                 f"of {d.min():.3g}); an implicit step's matrix M + dt^2/4 K "
+                                 "is, unless a spinning structure's spin softening outweighs "
+                                 "its mass at that step (omega dt / 2 near 1 or more)")
+            self._diag[lo:lo + len(idx)] = d
             low = sp.tril(lu.L, k=-1).tocsc()
             low.sort_indices()
             self._col_at[k] = at

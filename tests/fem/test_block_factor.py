@@ -147,3 +147,14 @@ def test_many_right_hand_sides_together_give_each_one_s_bits_alone():
     for c in range(b.shape[1]):
         assert np.array_equal(together[:, c], f.solve(b[:, c]))
     assert not np.any(together[:, 2])
+
+
+def test_a_matrix_that_is_not_positive_definite_is_refused():
+    """Without pivoting, only a positive definite matrix is factorised: a symmetric one with a
+    negative eigenvalue (here a negative diagonal block) raises instead of solving silently."""
+    a, dofs = blocky_spd()
+    a = a.tolil()
+    for i in dofs[1]:
+        a[i, i] = -a[i, i]
+    with pytest.raises(ValueError, match="not positive definite"):
+        BlockFactor(a.tocsr())
