@@ -22,9 +22,9 @@ contact impulse on one blade amends only that blade's step).
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import scipy.sparse as sp
-import numba
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
 

@@ -7,9 +7,8 @@ Both structures turn at full speed from t = 0 under a held surface load and are 
 their steady state, the static equilibrium of the rotating frame with the load
 (:meth:`pdfem.motion.frame_structure.FrameStructure.steady_displacement`, stress stiffening and
 spin softening included), through the rows the run writes (:meth:`ShaftLoads.rows
-<pdfem.motion.shaft_loads.ShaftLoads.rows>`). (A run builds the structure's steady state before
-the case's loads are added, so it would start from the unloaded state; the executor here puts
-the structure in the loaded one.)
+<pdfem.motion.shaft_loads.ShaftLoads.rows>`); a run's structure starts there, its loads
+included (:meth:`pdfem.motion.frame_structure.FrameStructure.add_surface_load`).
 
 * ``bar_root_stress_tension`` and ``_compression``: the 0.5 m x 0.1 m x 0.1 m steel bar of the
   spinning cases at omega = 100 rad/s about z through its root face's centre, and a traction
@@ -57,11 +56,10 @@ STRESSES = ("root_stress_tension", "root_stress_compression", "root_stress_axial
 
 
 def steady_rows(case: Case, directory: Path) -> dict:
-    """The first structure of ``case`` built as a run builds it, put in its steady state with
-    its loads: ``{blade: {row: Pa}}`` of the nominal root stresses, and ``nodes``."""
+    """The first structure of ``case`` built as a run builds it, in its steady state with its
+    loads: ``{blade: {row: Pa}}`` of the nominal root stresses, and ``nodes``."""
     cfg = case.structures[0]
     s = build_structure(cfg, directory, case.file)
-    s.set_state(displacement=s.steady_displacement())
     rows = s.shaft.rows()
     return {"blades": {b: {k: rows[b][k] for k in STRESSES} for b in rows if b},
             "nodes": s.n_nodes, "element_size": float(cfg.params.get("element_size", np.nan))}
