@@ -110,17 +110,21 @@ class BlockFactor:
         """Bytes of this rank's factors: ``L``'s values, row indices and column pointers, ``D``."""
         return self._vals.nbytes + self._rows.nbytes + self._col_ptr.nbytes + self._diag.nbytes
 
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        """``x`` with ``A x = b``; ``b`` of shape (n,) or (n, k). Collective when the blocks are
-        split over ranks (every rank calls it with the same ``b``)."""
+    def solve(self, b: np.ndarray, blocks: np.ndarray | None = None) -> np.ndarray:
+        """``x`` with ``A x = b``; ``b`` of shape (n,) or (n, k). ``blocks``: the blocks
+        (ascending) outside which ``b`` is zero, when known (their solution is zero there;
+        default: any). Collective when the blocks are split over ranks (every rank calls it
+        with the same ``b`` and ``blocks``); each rank needs ``b`` on its own blocks only."""
         b = np.asarray(b, dtype=np.float64)
         rhs = np.ascontiguousarray(b.reshape(self.n, -1).T)     # one right-hand side a row
+        mine_k = self.dealt.mine_of(blocks)
+        todo = self._mine if blocks is None else np.array(mine_k, dtype=np.int64)
         mine = np.empty_like(rhs)
-        parallel = len(self._mine) > 1 and numba.get_num_threads() > 1
-        solve_blocks(parallel, self._mine, self._dof_ptr, self._order, self._col_at,
+        parallel = len(todo) > 1 and numba.get_num_threads() > 1
+        solve_blocks(parallel, todo, self._dof_ptr, self._order, self._col_at,
                      self._col_ptr, self._rows, self._vals, self._diag, rhs, mine)
-        x = np.empty((self.n, rhs.shape[0]))
-        parts = [mine[:, self.blocks[k]].T for k in self.dealt.mine]
-        for k, part in self.dealt.everyone(parts):
+        x = (np.empty if blocks is None else np.zeros)((self.n, rhs.shape[0]))
+        parts = [mine[:, self.blocks[k]].T for k in mine_k]
+        for k, part in self.dealt.everyone(parts, blocks):
             x[self.blocks[k]] = part
         return x.reshape(b.shape)

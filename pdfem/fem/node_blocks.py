@@ -139,6 +139,22 @@ def block_matvec_serial(bptr, bcols, bdata, x, out):
         _node_rows(bptr, bcols, bdata, x, out, i)
 
 
+@numba.njit(cache=True)
+def block_matvec_rows(bptr, bcols, bdata, nodes, x, out):
+    """The rows of the nodes ``nodes`` of ``out = K x`` (the other rows of ``out`` are left as
+    they are), each with the bits of :func:`block_matvec`."""
+    for q in range(nodes.shape[0]):
+        _node_rows(bptr, bcols, bdata, x, out, nodes[q])
+
+
+@numba.njit(cache=True)
+def block_matvec_pair_rows(bptr, bcols, bdata, cdata, nodes, x, out, out2):
+    """The rows of the nodes ``nodes`` of :func:`block_matvec_pair` (the others left as they
+    are)."""
+    for q in range(nodes.shape[0]):
+        _node_rows_pair(bptr, bcols, bdata, cdata, x, out, out2, nodes[q])
+
+
 PARALLEL_BLOCKS = 50_000
 """Node blocks from which the product runs on numba's threads (below, the threads' start-up
 per call costs more than they save: a propeller blade's few hundred nodes)."""
@@ -178,6 +194,15 @@ class NodeBlockOperator:
         self._kernel(*self.blocks, np.ascontiguousarray(x, dtype=np.float64), out)
         return out
 
+    def rows(self, x: np.ndarray, nodes: np.ndarray, out: np.ndarray) -> None:
+        """The rows of the nodes ``nodes`` (int64, DOFs ``3 i .. 3 i + 2``) of ``K x`` into
+        ``out`` (n,), with the bits of ``self @ x``; the other rows of ``out`` stay as they
+        are (a matrix without node blocks: every row)."""
+        if self.blocks is None:
+            out[:] = self.matrix @ x
+            return
+        block_matvec_rows(*self.blocks, nodes, np.ascontiguousarray(x, dtype=np.float64), out)
+
 
 class NodeBlockPair:
     """Two operators applied to one vector together: ``pair @ x`` is ``(a @ x, b @ x)`` with
@@ -208,3 +233,14 @@ class NodeBlockPair:
         self._kernel(bptr, bcols, bdata, self.b.blocks[2],
                      np.ascontiguousarray(x, dtype=np.float64), out, out2)
         return out, out2
+
+    def rows(self, x: np.ndarray, nodes: np.ndarray, out: np.ndarray, out2: np.ndarray) -> None:
+        """The rows of the nodes ``nodes`` of ``(a @ x, b @ x)`` into ``out`` and ``out2``, with
+        the bits of ``self @ x`` (:meth:`NodeBlockOperator.rows`)."""
+        if not self.fused:
+            self.a.rows(x, nodes, out)
+            self.b.rows(x, nodes, out2)
+            return
+        bptr, bcols, bdata = self.a.blocks
+        block_matvec_pair_rows(bptr, bcols, bdata, self.b.blocks[2], nodes,
+                               np.ascontiguousarray(x, dtype=np.float64), out, out2)

@@ -52,6 +52,7 @@ from pdfem.motion.frame_kernels import inertial_loads, surface_world
 from pdfem.motion.moving_frame import MovingFrame
 from pdfem.motion.shaft_loads import ShaftLoads
 from pdfem.motion.stress_stiffening import centrifugal_stiffness
+from pdfem.parallel.comm import SerialComm
 
 
 _NONE = np.zeros(0)
@@ -96,7 +97,16 @@ class FrameStructure(ElasticStructure):
         if self.starts_steady:
             # turning at full speed from t = 0 (no ramp): start in the steady state
             self.set_state(displacement=self.steady_displacement())
+        self._comm = SerialComm()
         self.shaft = ShaftLoads(self) if np.any(frame.angular_velocity) else None
+
+    def distribute(self, comm) -> None:
+        """As :meth:`pdfem.fem.structure.ElasticStructure.distribute`, and the shaft's blade
+        stresses (:meth:`pdfem.motion.shaft_loads.ShaftLoads.distribute`)."""
+        super().distribute(comm)
+        self._comm = comm
+        if self.shaft is not None:
+            self.shaft.distribute(comm)
 
     def add_surface_load(self, group: str, traction=(0.0, 0.0, 0.0), pressure: float = 0.0,
                          history=None) -> None:
@@ -108,7 +118,7 @@ class FrameStructure(ElasticStructure):
         if self.starts_steady and self.solver.time == 0.0:
             self.set_state(displacement=self.steady_displacement())
             if self.shaft is not None:
-                self.shaft = ShaftLoads(self)
+                self.shaft = ShaftLoads(self, self._comm)
 
     # ------------------------------------------------------------------ frame kinematics
     def relative_motion(self) -> tuple[np.ndarray, np.ndarray]:

@@ -74,9 +74,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from pdfem.fem.section_stress import Section, nominal_stress, section_of
-from pdfem.fem.stress import hooke_stress, von_mises
 from pdfem.geometry.vectors import cross
 from pdfem.motion.frame_kernels import StepVectors, support_torque_power
+from pdfem.motion.stress_peaks import StressPeaks
+from pdfem.parallel.comm import SerialComm
 
 BLADE_SURFACE = re.compile(r"blade(\d+)_surface\Z")
 """Name of blade k's surface group (its faces but the root)."""
@@ -165,9 +166,12 @@ class ShaftLoads:
     structure
         A :class:`pdfem.motion.frame_structure.FrameStructure` whose frame turns (non-zero
         ``angular_velocity``).
+    comm
+        The ranks that share the blades' stresses (:class:`pdfem.motion.stress_peaks.StressPeaks`);
+        default one process.
     """
 
-    def __init__(self, structure) -> None:
+    def __init__(self, structure, comm=SerialComm()) -> None:
         self.structure = structure
         frame = structure.frame
         self.axis = _unit(np.asarray(frame.angular_velocity, dtype=np.float64))
@@ -198,7 +202,10 @@ class ShaftLoads:
         self._held_comp = comp[self._held]
         self._all_nodes = np.arange(structure.n_nodes)
         self._cells = structure.cells                             # (Ne, k) FE nodes
-        self._grad = gradient_operator(structure.stress_basis)  # u -> du_i/dx_j at centres
+        # the peak element stresses, overall and per blade (u -> du_i/dx_j at the centres)
+        self._peaks = StressPeaks(gradient_operator(structure.stress_basis), structure.material,
+                                  [structure.mesh.element_sets.get(b[0]) for b in self.blades],
+                                  comm)
         self._root_rows = [np.flatnonzero(np.isin(self._held_nodes, root)) for root in self._roots]
         self._r0 = r0                                             # m, X - c0
         n = len(structure.surface_nodes)
@@ -218,6 +225,11 @@ class ShaftLoads:
         self.shaft_angular_impulse = 0.0         # N m s
         self.energy0 = self.kinetic_energy() + self.strain_energy()        # J, at the start
         self.angular_momentum0 = self.angular_momentum()                   # kg m^2/s
+
+    def distribute(self, comm) -> None:
+        """Share the blades' element stresses over the ranks of ``comm``
+        (:meth:`pdfem.motion.stress_peaks.StressPeaks.distribute`)."""
+        self._peaks.distribute(comm)
 
     # ------------------------------------------------------------------ hooks
     def add_impulse(self, impulse: np.ndarray, rotation: np.ndarray, r: np.ndarray,
@@ -298,25 +310,14 @@ class ShaftLoads:
         _, w = self._world_motion() if motion is None else motion
         return 0.5 * float(np.sum(self.structure.node_mass[:, None] * w * w))
 
-    def von_mises(self) -> np.ndarray:
-        """(Ne,) von Mises stress (Pa) at the element centres, as
-        :meth:`pdfem.fem.structure.ElasticStructure.von_mises` (one sparse product)."""
-        s = self.structure
-        grad = (self._grad @ s.solver.u).reshape(3, 3, -1)
-        return von_mises(hooke_stress(grad, s.material).transpose(2, 0, 1))
-
     def strain_energy(self) -> float:
         """Strain energy ``1/2 u . K u`` (J), with the integrator's ``K u`` (no product)."""
         sol = self.structure.solver
         return 0.5 * float(np.einsum("i,i", sol.u, sol.stiffness_force()))  # not BLAS
 
-    def _stress_peak(self, vm: np.ndarray, elements: np.ndarray | None
-                     ) -> tuple[float, np.ndarray]:
-        """Largest element von Mises stress (Pa) among ``elements`` (all: None) and its
-        element's centre (m, reference, frame axes at t = 0)."""
-        sel = np.arange(len(vm)) if elements is None else elements
-        i = sel[int(np.argmax(vm[sel]))]
-        return float(vm[i]), self.structure.points[self._cells[i]].mean(axis=0)
+    def _centre(self, element: int) -> np.ndarray:
+        """The centre (m, reference, frame axes at t = 0) of ``element``."""
+        return self.structure.points[self._cells[element]].mean(axis=0)
 
     def rows(self) -> dict[str, dict[str, float | np.ndarray]]:
         """The rows of the coupling step ending now (forces are the step's impulses over its
@@ -326,9 +327,8 @@ class ShaftLoads:
         scale = 1.0 / step if step > 0.0 else 0.0
         force = self.impulse_world.sum(axis=0) * scale
         moment = self.moment_frame.sum(axis=0) * scale
-        vm = self.von_mises()
+        (peak, element), blade_peaks = self._peaks.peaks(s.solver.u)
         motion = self._world_motion()
-        peak, where = self._stress_peak(vm, None)
         out = {"": {"frame_angle": s.frame.angle(s.solver.time),
                     "ice_torque": -float(moment @ self.axis), "thrust": float(force @ self.axis),
                     "ice_force": force, "shaft_torque": self.shaft_torque,
@@ -340,18 +340,18 @@ class ShaftLoads:
                     "energy_change": self.kinetic_energy(motion) + self.strain_energy()
                     - self.energy0,
                     "damping_dissipated": s.solver.damping_dissipated,
-                    "max_von_mises": peak, "max_von_mises_location": where}}
+                    "max_von_mises": peak,
+                    "max_von_mises_location": self._centre(element)}}
         held = self.held_reactions()
         r_held = self._r0[self._held_nodes] + s.dofmap.to_nodal(s.solver.u)[self._held_nodes]
         on_blade = self._on_blade
         j_world, j_frame = on_blade @ self.impulse_world, on_blade @ self.impulse_frame
         m_frame = on_blade @ self.moment_frame
-        for b, ((label, mask, p, axes), rows, section) in enumerate(
-                zip(self.blades, self._root_rows, self._sections)):
+        for b, ((label, mask, p, axes), rows, section, (bpeak, belement)) in enumerate(
+                zip(self.blades, self._root_rows, self._sections, blade_peaks)):
             root_moment = -cross(r_held[rows] - p, held[rows]).sum(axis=0)
             jf = j_frame[b] * scale
             m = (m_frame[b] - cross(p, j_frame[b])) * scale
-            bpeak, bwhere = self._stress_peak(vm, s.mesh.element_sets.get(label))
             out[label] = {"force": j_world[b] * scale,
                           "force_blade": axes @ jf,
                           "ice_torque": -float(m_frame[b] @ self.axis) * scale,
@@ -360,7 +360,8 @@ class ShaftLoads:
                           "bending_out_of_plane": float(axes[1] @ m),
                           "bending_in_plane": float(axes[2] @ m),
                           "root_moment": axes @ root_moment,
-                          "max_von_mises": bpeak, "max_von_mises_location": bwhere}
+                          "max_von_mises": bpeak,
+                          "max_von_mises_location": self._centre(belement)}
             if section is not None:   # the same resultants about the section's centroid
                 force_on_root = -held[rows].sum(axis=0)
                 out[label].update(root_stress(

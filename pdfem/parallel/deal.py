@@ -48,10 +48,28 @@ class Dealt:
                       else np.full(len(work), comm.rank, dtype=np.int64))
         self.mine = [int(k) for k in np.flatnonzero(self.owner == comm.rank)]
 
-    def everyone(self, parts: list) -> list[tuple[int, object]]:
-        """``(piece, result)`` of every piece, from each rank's ``parts`` (the results of its
-        :attr:`mine`, in that order). Collective when pieces are dealt out."""
+    @property
+    def shared(self) -> bool:
+        """Whether the pieces are dealt out (several ranks and pieces), so that each rank does
+        only its own."""
+        return self._shared
+
+    def everyone(self, parts: list, pieces: Sequence[int] | None = None
+                 ) -> list[tuple[int, object]]:
+        """``(piece, result)`` of every piece of ``pieces`` (ascending; default all), from each
+        rank's ``parts`` (the results of its pieces among them, :meth:`mine_of`, in that
+        order). Collective when pieces are dealt out (every rank passes the same ``pieces``)."""
         if not self._shared:
-            return list(zip(self.mine, parts))
+            return list(zip(self.mine_of(pieces), parts))
+        every = (np.arange(len(self.owner)) if pieces is None
+                 else np.asarray(pieces, dtype=np.int64))
         return [(int(k), part) for rank, rank_parts in enumerate(self.comm.allgather(parts))
-                for k, part in zip(np.flatnonzero(self.owner == rank), rank_parts)]
+                for k, part in zip(every[self.owner[every] == rank], rank_parts)]
+
+    def mine_of(self, pieces: Sequence[int] | None = None) -> list[int]:
+        """This rank's pieces among ``pieces`` (ascending; default all): :attr:`mine` there."""
+        if pieces is None:
+            return self.mine
+        if not self._shared:
+            return [int(k) for k in pieces]
+        return [int(k) for k in pieces if self.owner[k] == self.comm.rank]

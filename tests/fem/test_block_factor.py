@@ -64,6 +64,11 @@ def test_a_zero_right_hand_side_block_is_exactly_zero():
     x = BlockFactor(a).solve(b)
     assert not np.any(x[dofs[0]]) and not np.any(x[dofs[2]])
     assert np.allclose(x, spla.spsolve(a.tocsc(), b), rtol=1e-12, atol=1e-14)
+    # told where b is non-zero (the factor's block of dofs[1]), only that block is solved:
+    # the same bits
+    f = BlockFactor(a)
+    k = [i for i, idx in enumerate(f.blocks) if np.array_equal(idx, dofs[1])]
+    assert np.array_equal(f.solve(b, np.array(k)), x)
 
 
 def test_largest_block_first_to_the_least_loaded_rank():
@@ -89,6 +94,9 @@ SCRIPT = textwrap.dedent('''
     assert split._vals.size < serial._vals.size, "each rank factorises only its own blocks"
     for rhs in (b, bb):
         assert np.array_equal(split.solve(rhs), serial.solve(rhs)), "not the serial bits"
+    on_two = np.zeros_like(b)   # non-zero on the factor's blocks 0 and 1 (one on each rank)
+    on_two[split.blocks[0]], on_two[split.blocks[1]] = b[split.blocks[0]], b[split.blocks[1]]
+    assert np.array_equal(split.solve(on_two, np.array([0, 1])), serial.solve(on_two))
     one = BlockFactor(a[dofs[0]][:, dofs[0]], comm)   # one block: solved on every rank
     assert one.dealt.owner.tolist() == [comm.rank] and np.array_equal(one.solve(b[dofs[0]]),
                                             BlockFactor(a[dofs[0]][:, dofs[0]]).solve(b[dofs[0]]))
