@@ -115,16 +115,24 @@ class BlockFactor:
         (ascending) outside which ``b`` is zero, when known (their solution is zero there;
         default: any). Collective when the blocks are split over ranks (every rank calls it
         with the same ``b`` and ``blocks``); each rank needs ``b`` on its own blocks only."""
+        x, mine = self.solve_mine(b, blocks)
+        if not self.dealt.shared:
+            return x
+        flat = x.reshape(self.n, -1)
+        for k, part in self.dealt.everyone([flat[self.blocks[k]] for k in mine], blocks):
+            flat[self.blocks[k]] = part
+        return x
+
+    def solve_mine(self, b: np.ndarray, blocks: np.ndarray | None = None
+                   ) -> tuple[np.ndarray, list[int]]:
+        """:meth:`solve` on this rank's blocks (of ``blocks``) only, without sharing: ``x``
+        (zero on the other blocks) and the blocks solved."""
         b = np.asarray(b, dtype=np.float64)
         rhs = np.ascontiguousarray(b.reshape(self.n, -1).T)     # one right-hand side a row
-        mine_k = self.dealt.mine_of(blocks)
-        todo = self._mine if blocks is None else np.array(mine_k, dtype=np.int64)
-        mine = np.empty_like(rhs)
+        mine = self.dealt.mine_of(blocks)
+        todo = self._mine if blocks is None else np.array(mine, dtype=np.int64)
+        x = np.zeros(rhs.shape)
         parallel = len(todo) > 1 and numba.get_num_threads() > 1
         solve_blocks(parallel, todo, self._dof_ptr, self._order, self._col_at,
-                     self._col_ptr, self._rows, self._vals, self._diag, rhs, mine)
-        x = (np.empty if blocks is None else np.zeros)((self.n, rhs.shape[0]))
-        parts = [mine[:, self.blocks[k]].T for k in mine_k]
-        for k, part in self.dealt.everyone(parts, blocks):
-            x[self.blocks[k]] = part
-        return x.reshape(b.shape)
+                     self._col_ptr, self._rows, self._vals, self._diag, rhs, x)
+        return np.ascontiguousarray(x.T).reshape(b.shape), mine

@@ -16,8 +16,9 @@ SuperLU's minimum-degree ordering of ``A + A^T``, kept as ``L D L^T``) and each 
 matrix-vector products (``K u_p``, and ``K u_new``, kept for the supports, the strain energy
 and the shaft) and one pair of triangular solves. The blocks may be shared out over the ranks
 (:meth:`Newmark.distribute`): each rank then solves its own blocks and computes their rows of
-the two products (the rows of the held nodes, which meet every block, on every rank), and the
-ranks share the results, so that every rank holds the whole state, the serial bits. Accuracy: the period of a mode
+the two products, the ranks share both in one exchange a step, and every rank computes the
+rows of the held nodes (which meet every block): every rank holds the whole state, the serial
+bits. Accuracy: the period of a mode
 of circular frequency omega lengthens by about ``(omega dt)^2 / 12``; 20 steps per period keep it
 within 1 % (Hughes, Table 9.1.1 and Eq. 9.1.79), so the modes the coupled step resolves (the
 step is the ice's) are integrated as accurately as by the explicit scheme.
@@ -164,31 +165,45 @@ class Newmark(CentralDifference):
         self.k_op.rows(x, self._my_nodes, out)
         return out
 
-    def _products_of(self, u: np.ndarray, blocks: np.ndarray | None = None,
-                     old: tuple | None = None) -> tuple[np.ndarray, np.ndarray | None]:
-        """``K u`` and the companion's product, every row on every rank: the rows of the
-        blocks (all, or ``blocks`` where ``u`` changed since the products ``old``; the other
-        rows are kept) and of the held nodes, each block's rows by its rank and shared (the
-        bits of a whole product)."""
-        if blocks is None and not self._lu.dealt.shared:
-            return self._products(u)
+    def _solved(self, r: np.ndarray, x: np.ndarray, state, blocks: np.ndarray | None = None,
+                old: tuple | None = None) -> tuple[np.ndarray, np.ndarray, tuple]:
+        """Solve ``A y = r`` (free DOFs) into the free DOFs of ``x`` (n,), and the products
+        ``K u``, ``K_sigma u`` of the displacement ``u = state(x)`` (element by element), on
+        every rank: each rank solves its blocks (all, or those of ``blocks``, outside which
+        ``r`` is zero and ``u`` has not changed since the products ``old``, whose other rows
+        are kept) and computes their rows, the ranks share them in one exchange, then the held
+        nodes' rows (they meet every block). Returns ``x``, ``u`` and the products: the bits
+        of a whole solve and whole products."""
+        lu = self._lu
+        if blocks is None and not lu.dealt.shared:
+            x[self._free_idx] = lu.solve(r)
+            u = state(x)
+            return x, u, self._products(u)
+        y, mine = lu.solve_mine(r, blocks)
+        x[self._free_idx] = y
+        u = state(x)
         if old is None:
             ku, cu = np.empty(self.n), None if self._pair is None else np.empty(self.n)
         else:
             ku, cu = old[0].copy(), None if old[1] is None else old[1].copy()
-        mine = self._lu.dealt.mine_of(blocks)
-        nodes = self._nodes_of(mine)
+        self._rows(u, self._nodes_of(mine, held=False), ku, cu)
+        dofs = self._block_dofs
+        parts = [(y[lu.blocks[k]], ku[dofs[k]], None if cu is None else cu[dofs[k]])
+                 for k in mine]
+        for k, (yk, kk, ck) in lu.dealt.everyone(parts, blocks):
+            x[dofs[k]], ku[dofs[k]] = yk, kk
+            if cu is not None:
+                cu[dofs[k]] = ck
+        u = state(x)
+        self._rows(u, self._held_nodes, ku, cu)
+        return x, u, (ku, cu)
+
+    def _rows(self, u: np.ndarray, nodes: np.ndarray, ku: np.ndarray, cu) -> None:
+        """The rows of ``nodes`` of ``K u`` into ``ku`` (and of the companion's into ``cu``)."""
         if cu is None:
             self.k_op.rows(u, nodes, ku)
         else:
             self._pair.rows(u, nodes, ku, cu)
-        parts = [(ku[self._block_dofs[k]], None if cu is None else cu[self._block_dofs[k]])
-                 for k in mine]
-        for k, (kp, cp) in self._lu.dealt.everyone(parts, blocks):
-            ku[self._block_dofs[k]] = kp
-            if cu is not None:
-                cu[self._block_dofs[k]] = cp
-        return ku, cu
 
     def step(self, dt: float, f_ext: np.ndarray | None = None) -> None:
         """Advance the state by ``dt`` (s) with the external force ``f_ext`` (N) at the new time.
@@ -212,26 +227,27 @@ class Newmark(CentralDifference):
         if self.alpha:
             rhs -= self.alpha * self.m * v_p
         a_new = np.empty(self.n)
+        r = rhs[self._free_idx]
         if self.fixed.size:
             g = self._dirichlet(t_new)
             a_c = (g - u_p[self.fixed]) / q
             a_new[self.fixed] = a_c
-            r = rhs[self._free_idx]
             if np.any(a_c):
                 r = r - self._a_fc @ a_c
-            a_new[self._free_idx] = self._lu.solve(r)
-        else:
-            a_new[:] = self._lu.solve(rhs)
-        u_new = u_p + q * a_new
+
+        def displacement(a: np.ndarray) -> np.ndarray:
+            u = u_p + q * a
+            if self.fixed.size:
+                u[self.fixed] = g  # exactly, not to round-off
+            return u
+
+        a_new, u_new, (ku, cu) = self._solved(r, a_new, displacement)
         v_new = v_p + 0.5 * dt * a_new
-        if self.fixed.size:
-            u_new[self.fixed] = g  # exactly, not to round-off
         f_damp_old = self.f_damp
         self.f_damp = self._damping_force(v_new)
         self._last = (self.u, self.f_ext, f_damp_old, self._reaction,
                       (self.work_external, self.work_supports, self.damping_dissipated))
         self._step_impulse, self._step_contact_work = None, 0.0
-        ku, cu = self._products_of(u_new)   # K u (and the companion's) of the new state, kept
         self._book_work(u_new - self.u, f, f_damp_old, ku if self._supports_move else None,
                         a_new)
         self._advance(dt, u_new, v_new, a_new, v_new, f)   # no mid-step velocity: v_half = v
@@ -267,9 +283,10 @@ class Newmark(CentralDifference):
         force = (2.0 / dt) * j
         touched = np.unique(self._dof_block[np.flatnonzero(j)])   # the blocks it moves
         touched = touched[touched >= 0]
-        da = np.zeros(self.n)
-        da[self._free_idx] = self._lu.solve(force[self._free_idx], touched)
-        self.u = self.u + 0.25 * dt * dt * da
+        u_old_end = self.u
+        da, self.u, (self._ku, self._cu) = self._solved(
+            force[self._free_idx], np.zeros(self.n), lambda d: u_old_end + 0.25 * dt * dt * d,
+            touched, (self._ku, self._cu))
         self.v = self.v + 0.5 * dt * da
         self.v_half = self.v
         self.a = self.a + da - force / self.m
@@ -277,7 +294,6 @@ class Newmark(CentralDifference):
         self.f_ext, self._reaction = f_old, reaction_old
         self.work_external, self.work_supports, self.damping_dissipated = works
         self.f_damp = self._damping_force(self.v)
-        self._ku, self._cu = self._products_of(self.u, touched, (self._ku, self._cu))
         self._book_work(self.u - u_old, f_new, f_damp_old,
                         self._ku if self._supports_move else None, self.a)
         self.f_ext = f_new
