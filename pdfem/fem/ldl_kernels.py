@@ -16,6 +16,12 @@ per thread, each in the same order of operations whatever the thread: the same b
 number of threads. Every array is flat; block ``b`` owns ``order[dof_ptr[b]:dof_ptr[b + 1]]``
 (the DOF at each factor position) and the ``n_b + 1`` column pointers from ``col_at[b]`` on in
 ``col_ptr``, whose values index the concatenated ``rows`` and ``vals``.
+
+The forward pass skips a column whose entry is zero (it would subtract zeros): a right-hand
+side that is zero but at a few DOFs (a contact impulse on a blade, a probe of the compliance)
+touches only the columns it reaches in ``L``'s elimination tree, the backward pass every
+column. The results are the bits of the full pass (the skipped updates add exact zeros; an
+entry never reached stays +0).
 """
 
 from __future__ import annotations
@@ -33,6 +39,8 @@ def _one(rows, vals, col_ptr, cp, diag, lo, y):
     n = y.shape[0]
     for j in range(n):                               # L y = P b, unit lower, by columns
         yj = y[j]
+        if yj == 0.0:                                # nothing to subtract (a sparse b)
+            continue
         for p in range(col_ptr[cp + j], col_ptr[cp + j + 1]):
             y[rows[p]] -= vals[p] * yj
     for j in range(n):
@@ -50,6 +58,12 @@ def _many(rows, vals, col_ptr, cp, diag, lo, y):
     once for all, each column by the operations of :func:`_one`."""
     n, m = y.shape
     for j in range(n):
+        zero = True
+        for c in range(m):
+            if y[j, c] != 0.0:
+                zero = False
+        if zero:                                     # nothing to subtract (sparse b)
+            continue
         for p in range(col_ptr[cp + j], col_ptr[cp + j + 1]):
             r = rows[p]
             v = vals[p]

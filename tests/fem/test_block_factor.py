@@ -166,3 +166,40 @@ def test_a_matrix_that_is_not_positive_definite_is_refused():
         a[i, i] = -a[i, i]
     with pytest.raises(ValueError, match="not positive definite"):
         BlockFactor(a.tocsr())
+
+
+def _full_pass(f: BlockFactor, b: np.ndarray) -> np.ndarray:
+    """The three passes of :mod:`pdfem.fem.ldl_kernels` in Python, every column of the forward
+    pass taken (no skipping of zero entries): the reference bits."""
+    x = np.zeros_like(b)
+    for k in range(len(f.blocks)):
+        lo, hi = f._dof_ptr[k], f._dof_ptr[k + 1]
+        order, cp = f._order[lo:hi], f._col_at[k]
+        y = b[order].copy()
+        for j in range(hi - lo):
+            for p in range(f._col_ptr[cp + j], f._col_ptr[cp + j + 1]):
+                y[f._rows[p]] -= f._vals[p] * y[j]
+        y = y / f._diag[lo:hi]
+        for j in range(hi - lo - 1, -1, -1):
+            s = y[j]
+            for p in range(f._col_ptr[cp + j], f._col_ptr[cp + j + 1]):
+                s -= f._vals[p] * y[f._rows[p]]
+            y[j] = s
+        x[order] = y
+    return x
+
+
+def test_a_sparse_right_hand_side_skips_columns_and_keeps_the_full_pass_bits():
+    """The forward pass skips the columns whose entry is zero (a contact impulse at a few
+    DOFs); reference: the same passes with every column taken (:func:`_full_pass`)."""
+    a, dofs = blocky_spd(sizes=(30, 25), seed=4)
+    f = BlockFactor(a)
+    b = np.zeros(a.shape[0])
+    b[dofs[0][[3, 17]]] = [1.5, -0.25]
+    x = f.solve(b)
+    assert np.count_nonzero(x[dofs[0]]) == len(dofs[0]) and not np.any(x[dofs[1]])
+    assert np.array_equal(x, _full_pass(f, b))
+    bb = np.zeros((a.shape[0], 2))
+    bb[dofs[0][5], 0] = bb[dofs[1][2], 1] = 1.0
+    assert np.array_equal(f.solve(bb), np.column_stack([_full_pass(f, bb[:, 0]),
+                                                        _full_pass(f, bb[:, 1])]))
