@@ -66,32 +66,39 @@ class FacetGrid:
         return bool(moved_beyond(np.ascontiguousarray(points, dtype=np.float64),
                                  self.built_points, self.margin))
 
-    def build(self, points: np.ndarray) -> None:
-        """(Re)build the hash for node positions ``points`` ((Ns, 3), m)."""
+    def build(self, points: np.ndarray, facets: np.ndarray | None = None) -> None:
+        """(Re)build the hash for node positions ``points`` ((Ns, 3), m), of the facets
+        ``facets`` (ascending int32 facet numbers; default all): the cells list facet numbers
+        of the whole surface. Without facets the grid is one empty cell."""
         points = np.ascontiguousarray(points, dtype=np.float64)
+        facets = (np.arange(len(self.triangles), dtype=np.int32) if facets is None
+                  else np.ascontiguousarray(facets, dtype=np.int32))
+        triangles = self.triangles[facets]
         grow = self.reach + self.margin
         h = self._cell_size
         if h is None:
-            x = points[self.triangles]
+            x = points[triangles]
             edges = np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2)
-            h = max(2.0 * grow, float(np.median(edges)))
-        lo_box = points.min(axis=0) - grow
-        hi_box = points.max(axis=0) + grow
+            h = max(2.0 * grow, float(np.median(edges)) if len(facets) else 0.0)
+        nodes = points[triangles].reshape(-1, 3) if len(facets) else points[:1]
+        lo_box = nodes.min(axis=0) - grow
+        hi_box = nodes.max(axis=0) + grow
         dims = np.maximum(1, np.ceil((hi_box - lo_box) / h).astype(np.int64))
-        while np.prod(dims) > 8 * len(self.triangles) + 1000:  # keep the table small
+        while np.prod(dims) > 8 * len(facets) + 1000:  # keep the table small
             h *= 1.5
             dims = np.maximum(1, np.ceil((hi_box - lo_box) / h).astype(np.int64))
         self.origin = lo_box
         self.inv_h = 1.0 / h
         self.dims = dims
-        nt = len(self.triangles)
+        nt = len(facets)
         lo = np.empty((nt, 3), dtype=np.int64)
         hi = np.empty((nt, 3), dtype=np.int64)
-        _cell_ranges(points, self.triangles, grow, self.origin, self.inv_h, self.dims, lo, hi)
+        _cell_ranges(points, triangles, grow, self.origin, self.inv_h, self.dims, lo, hi)
         count = int(np.prod(hi - lo + 1, axis=1).sum())
         self.cell_start = np.zeros(int(np.prod(dims)) + 1, dtype=np.int64)
-        self.cell_facets = np.empty(count, dtype=np.int32)
-        bin_boxes(lo, hi, self.dims, self.cell_start, self.cell_facets)
+        local = np.empty(count, dtype=np.int32)
+        bin_boxes(lo, hi, self.dims, self.cell_start, local)
+        self.cell_facets = facets[local]
         self.built_points = points.copy()
         self.builds += 1
 
