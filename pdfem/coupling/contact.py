@@ -47,6 +47,14 @@ the side correctly at edges and vertices. On an open surface (e.g. the outer fac
 panel) particles whose closest point is on the surface's rim are not in contact: they are
 beside the surface, not behind it.
 
+What a surface needs as it moves, its pseudo-normals and the grid of its facets, is made for
+the part of it the particles can reach (:meth:`SurfaceContact.near_surface`,
+:mod:`pdfem.coupling.near_facets`): the facets near the particles, kept until the surface or
+the particles have moved a skin, and, for the normals of their edges and vertices, every facet
+around them. A milling propeller's ice touches one blade; a hull's, a strip of it. The normals
+of that part are the whole surface's, bit for bit, so the contacts are those of the whole
+surface.
+
 Units: m, s, kg, N s (impulses), J.
 """
 

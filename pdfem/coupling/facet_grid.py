@@ -4,8 +4,11 @@ Every facet is entered in each cell that its bounding box, grown by a reach, ove
 then needs to look at the facets of its own cell only: any facet within ``reach`` of the point
 is listed there. The hash is rebuilt when the surface has moved by more than the margin that
 was added to the reach (:meth:`FacetGrid.needs_rebuild`), so a moving or deforming structure
-is rebuilt every few steps, not every step. The cells and the cell -> facets CSR are
-:mod:`pdfem.geometry.cell_hash`'s (:func:`~pdfem.geometry.cell_hash.bin_boxes`). Lengths in m.
+is rebuilt every few steps, not every step. A grid may hold a part of the facets (the contact
+keeps one of the facets near the ice, :mod:`pdfem.coupling.near_facets`, built again with that
+part); its cells list the facets' numbers in the whole surface. The cells and the cell ->
+facets CSR are :mod:`pdfem.geometry.cell_hash`'s (:func:`~pdfem.geometry.cell_hash.bin_boxes`).
+Lengths in m.
 """
 
 from __future__ import annotations

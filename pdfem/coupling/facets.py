@@ -10,7 +10,9 @@ for any closed, consistently oriented surface.
 Features are numbered per triangle (a, b, c): 0 the face, 1..3 the vertices a, b, c, 4..6 the
 edges ab, bc, ca. :class:`FacetTopology` is the fixed part (edges, which features lie on the
 boundary of an open surface); :func:`pseudo_normals` the part that changes as the surface
-moves. All lengths in m.
+moves, and :func:`pseudo_normals_of` the same for a part of the surface (the facets near the
+ice and those around them, :mod:`pdfem.coupling.near_facets`: the contact takes them every
+coupling step). All lengths in m.
 """
 
 from __future__ import annotations
