@@ -543,7 +543,8 @@ class SurfaceContact:
         return self.records.take_facets()
 
     def inside(self, y: np.ndarray) -> np.ndarray:
-        """(N,) bool: particles behind the surface within the search radius (no changes made)."""
+        """(N,) bool: particles behind the surface within the search radius (no particle or
+        impulse changed; the part of the surface near ``y`` is made ready for them)."""
         n = len(y)
         y = np.ascontiguousarray(y, dtype=np.float64)
         self.near_surface(y)
