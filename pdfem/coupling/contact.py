@@ -451,6 +451,13 @@ class SurfaceContact:
             self._normals = tuple(np.ascontiguousarray(n @ turn.T) for n in self._ref_normals)
             self._normals_rotation = rotation.copy()
 
+    @property
+    def pseudo_normals(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The (face, edge, vertex) pseudo-normals in use ((T, 3), (E, 3), (Ns, 3)): current
+        in the rows of the near part (:attr:`near`) after :meth:`near_surface`, the rows
+        elsewhere left from earlier steps."""
+        return self._normals
+
     def _grid_arrays(self) -> GridArrays:
         g = self.grid
         return GridArrays(g.cell_start, g.cell_facets, g.origin, g.inv_h, g.dims)

@@ -180,3 +180,59 @@ def test_a_lone_particle_far_from_the_ice_finds_its_facet_after_small_and_large_
     assert contact.near.builds > builds
     assert -reach < y[lone, 2] - sheet.z < 0.0
     assert rows.tolist() == [lone]
+
+
+class _WavySheet:
+    """The wavy sheet of :func:`_sheet` as a contact surface whose nodes the test moves."""
+
+    def __init__(self) -> None:
+        self.points, self.surface_triangles = _sheet(30, 3.0, 0.1, seed=4)
+
+    def surface_points(self):
+        return self.points.copy()
+
+    def surface_velocities(self):
+        return np.zeros_like(self.points)
+
+    def surface_compliance(self):
+        return LumpedCompliance(np.zeros_like(self.points))
+
+    def surface_rotation(self):
+        return None
+
+
+def test_the_contacts_normals_of_the_near_part_are_the_whole_surfaces_as_it_moves():
+    """A contact over a deforming sheet: after each substep the pseudo-normals it uses on the
+    near part (near facets, their edges and vertices) are the whole surface's, bit for bit, at
+    the positions of the last update with normals; also when the sheet moves three skins
+    within a coupling step (``normals=False``: the normals of the step's start) and the
+    selection is made again."""
+    sheet = _WavySheet()
+    topo = FacetTopology.from_triangles(sheet.surface_triangles, len(sheet.points))
+    rng = np.random.default_rng(11)
+    y = np.column_stack([rng.uniform(1.0, 1.5, 400), rng.uniform(1.2, 1.6, 400),
+                         rng.uniform(0.12, 0.4, 400)])
+    contact = SurfaceContact(sheet, search_radius=0.03)
+    v = np.zeros_like(y)
+
+    def near_rows_equal(points):
+        whole = pseudo_normals(points, topo)
+        f = contact.near.facets
+        rows = (f, np.unique(topo.tri_edges[f]), np.unique(sheet.surface_triangles[f]))
+        return all(np.array_equal(contact.pseudo_normals[k][r], whole[k][r])
+                   for k, r in enumerate(rows))
+
+    for step in range(4):
+        sheet.points = sheet.points + rng.normal(0.0, 2e-3, sheet.points.shape)
+        start = sheet.surface_points()
+        contact.set_surface(start, sheet.surface_velocities())
+        contact.resolve(y, y.copy(), v, np.ones(len(y)), 1e-3)
+        assert 0 < len(contact.near.facets) < 0.2 * len(sheet.surface_triangles)
+        assert near_rows_equal(start)
+        builds, facets = contact.near.builds, contact.near.facets
+        sheet.points = sheet.points + [0.09, 0.0, 0.0] + rng.normal(0.0, 2e-3, start.shape)
+        contact.set_surface(sheet.surface_points(), sheet.surface_velocities(), normals=False)
+        contact.resolve(y, y.copy(), v, np.ones(len(y)), 1e-3)
+        assert contact.near.builds > builds and not np.array_equal(contact.near.facets, facets)
+        assert near_rows_equal(start)
+        assert not near_rows_equal(sheet.surface_points())      # (those of its start)
