@@ -48,7 +48,9 @@ class FacetGrid:
         Extra reach (m); the grid stays valid until some node has moved this far since the
         last build. Default: ``reach``.
     cell_size
-        Cell edge (m). Default: the larger of 2 (reach + margin) and the median facet edge.
+        Cell edge (m). Default: the larger of 2 (reach + margin) and the median facet edge
+        of the whole surface (at the first build; a grid of a part of the facets keeps the
+        cells the whole surface's would have).
     """
 
     def __init__(self, triangles: np.ndarray, reach: float, margin: float | None = None,
@@ -59,6 +61,7 @@ class FacetGrid:
         self.reach = float(reach)
         self.margin = float(reach if margin is None else margin)
         self._cell_size = cell_size
+        self._median_edge: float | None = None
         self.built_points: np.ndarray | None = None
         self.builds = 0
 
@@ -80,14 +83,16 @@ class FacetGrid:
         grow = self.reach + self.margin
         h = self._cell_size
         if h is None:
-            x = points[triangles]
-            edges = np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2)
-            h = max(2.0 * grow, float(np.median(edges)) if len(facets) else 0.0)
+            if self._median_edge is None:
+                x = points[self.triangles]
+                edges = np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2)
+                self._median_edge = float(np.median(edges))
+            h = max(2.0 * grow, self._median_edge)
         nodes = points[triangles].reshape(-1, 3) if len(facets) else points[:1]
         lo_box = nodes.min(axis=0) - grow
         hi_box = nodes.max(axis=0) + grow
         dims = np.maximum(1, np.ceil((hi_box - lo_box) / h).astype(np.int64))
-        while np.prod(dims) > 8 * len(facets) + 1000:  # keep the table small
+        while np.prod(dims) > 8 * len(self.triangles) + 1000:  # the whole surface's bound
             h *= 1.5
             dims = np.maximum(1, np.ceil((hi_box - lo_box) / h).astype(np.int64))
         self.origin = lo_box

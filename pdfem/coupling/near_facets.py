@@ -96,6 +96,13 @@ def _near(points, triangles, grow, lo, inv_h, dims, table, near):
 
 
 @numba.njit(cache=True)
+def _either_moved(points, points0, y, y0, skin):
+    """Whether a node of ``points`` or a particle of ``y`` lies more than ``skin`` (m) from
+    its position in ``points0``, ``y0`` (one call for both: this runs every substep)."""
+    return moved_beyond(points, points0, skin) or moved_beyond(y, y0, skin)
+
+
+@numba.njit(cache=True)
 def _around(near, triangles, node_start, node_facets, part):
     """``part[f]``: whether facet f is near or shares a node with a near facet."""
     for f in range(triangles.shape[0]):
@@ -156,8 +163,7 @@ class NearFacets:
         ``y`` ((N, 3), m): made, for as many particles, and neither has moved more than the
         skin since."""
         return not (self._points is None or self._y.shape != y.shape
-                    or moved_beyond(points, self._points, self.skin)
-                    or moved_beyond(y, self._y, self.skin))
+                    or _either_moved(points, self._points, y, self._y, self.skin))
 
     def build(self, points: np.ndarray, y: np.ndarray) -> None:
         """Select the facets near the particles ``y`` ((N, 3), m) for nodes at ``points``
