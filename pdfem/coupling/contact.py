@@ -47,6 +47,14 @@ the side correctly at edges and vertices. On an open surface (e.g. the outer fac
 panel) particles whose closest point is on the surface's rim are not in contact: they are
 beside the surface, not behind it.
 
+What a surface needs as it moves, its pseudo-normals and the grid of its facets, is made for
+the part of it the particles can reach (:meth:`SurfaceContact.near_surface`,
+:mod:`pdfem.coupling.near_facets`): the facets near the particles, kept until the surface or
+the particles have moved a skin, and, for the normals of their edges and vertices, every facet
+around them. A milling propeller's ice touches one blade; a hull's, a strip of it. The normals
+of that part are the whole surface's, bit for bit, so the contacts are those of the whole
+surface.
+
 Units: m, s, kg, N s (impulses), J.
 """
 
@@ -62,7 +70,9 @@ from numba import prange
 
 from pdfem.coupling.broad_phase import Candidates
 from pdfem.coupling.facet_grid import FacetGrid
-from pdfem.coupling.facets import FACE, FacetTopology, closest_point_on_triangle, pseudo_normals
+from pdfem.coupling.facets import (FACE, FacetTopology, closest_point_on_triangle,
+                                   pseudo_normals, pseudo_normals_of)
+from pdfem.coupling.near_facets import NearFacets
 from pdfem.coupling.nodal_impulse import ContactRecords
 from pdfem.parallel.kernels import twin
 
@@ -367,20 +377,26 @@ class SurfaceContact:
         self.search_radius = float(search_radius)
         self.friction = float(friction)
         self.reduce = reduce
-        points = surface.surface_points()
+        points = np.ascontiguousarray(surface.surface_points(), dtype=np.float64)
         self.topology = FacetTopology.from_triangles(surface.surface_triangles, len(points))
+        # the facets near the particles, the grid of those and the particles near the grid,
+        # each kept with a skin of the search radius
+        self.near = NearFacets(self.topology, len(points), self.search_radius,
+                               self.search_radius)
         self.grid = FacetGrid(self.topology.triangles, self.search_radius)
         self.candidates = Candidates(self.search_radius)
         self.records = ContactRecords(len(points), self.topology.triangles)
         self.total_impulse = np.zeros(3)
         self._points = self._velocities = self._start = None
-        self._normals = None
+        # the whole surface's normals once (a facet of zero area is refused here); then only
+        # the near part's rows are kept current (near_surface)
+        self._normals = pseudo_normals(points, self.topology)
+        self._normal_points = points       # the positions the normals are taken at
+        self._normals_current = False      # whether the near part's rows are of those
         # a surface that moves rigidly: its normals are the reference normals rotated
         self._rotation0 = surface.surface_rotation()
         self._normals_rotation = None
-        self._ref_normals = (None if self._rotation0 is None
-                             else pseudo_normals(np.ascontiguousarray(points, dtype=np.float64),
-                                                 self.topology))
+        self._ref_normals = None if self._rotation0 is None else self._normals
         self._facet = self._weight = self._normal = None
         self.set_surface(points, surface.surface_velocities())
 
@@ -390,28 +406,57 @@ class SurfaceContact:
         structure's state interpolated to the ice substep's time). ``normals=False`` keeps the
         pseudo-normals of the last call (they only decide which side a particle is on; within
         a coupling step the surface turns by a negligible angle). ``start``: the node positions
-        at the start of the particles' drift (default ``points``: a surface at rest)."""
+        at the start of the particles' drift (default ``points``: a surface at rest).
+
+        The arrays are kept, not copied: the caller leaves them as they are (the coupler
+        passes new ones every substep). The pseudo-normals of a deforming surface are taken at
+        these positions by :meth:`near_surface`, for the facets near the particles only; those
+        of a surface that moves rigidly are its reference normals turned, here."""
         self._points = np.ascontiguousarray(points, dtype=np.float64)
         self._velocities = np.ascontiguousarray(velocities, dtype=np.float64)
         self._start = (self._points if start is None
                        else np.ascontiguousarray(start, dtype=np.float64))
         self.compliance = self.surface.surface_compliance()
-        if normals or self._normals is None:
-            self._update_normals()
-        self.grid.update(self._points)
-
-    def _update_normals(self) -> None:
-        """The pseudo-normals of the surface now: recomputed from the node positions, or, for
-        a surface that moves rigidly, the reference normals turned by the rotation since the
-        start (once per change of rotation: a surface that only translates keeps them)."""
-        if self._rotation0 is None:
-            self._normals = pseudo_normals(self._points, self.topology)
+        if not normals:
             return
+        if self._rotation0 is None:
+            self._normal_points = self._points
+            self._normals_current = False
+        else:
+            self._turn_normals()
+
+    def near_surface(self, y: np.ndarray) -> None:
+        """Make the part of the surface near the particles ``y`` ((N, 3), m, float64,
+        C-contiguous) ready for their contacts: the facets a particle can reach and their
+        grid, chosen again when the surface or the particles have moved more than the skin
+        since (:class:`pdfem.coupling.near_facets.NearFacets`), and the pseudo-normals of
+        those facets, their edges and vertices at the positions of the last
+        :meth:`set_surface` with ``normals`` (the whole surface's numbers, bit for bit)."""
+        if not self.near.valid(self._points, y):
+            self.near.build(self._points, y)
+            self.grid.build(self._points, self.near.facets)
+            self._normals_current = False
+        if not self._normals_current and self._rotation0 is None:
+            pseudo_normals_of(self._normal_points, self.topology, self.near.part,
+                              self._normals)
+        self._normals_current = True
+
+    def _turn_normals(self) -> None:
+        """The pseudo-normals of a surface that moves rigidly: the reference normals turned by
+        the rotation since the start (once per change of rotation: a surface that only
+        translates keeps them)."""
         rotation = self.surface.surface_rotation()
         if self._normals_rotation is None or not np.array_equal(rotation, self._normals_rotation):
             turn = rotation @ self._rotation0.T
             self._normals = tuple(np.ascontiguousarray(n @ turn.T) for n in self._ref_normals)
             self._normals_rotation = rotation.copy()
+
+    @property
+    def pseudo_normals(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The (face, edge, vertex) pseudo-normals in use ((T, 3), (E, 3), (Ns, 3)): current
+        in the rows of the near part (:attr:`near`) after :meth:`near_surface`, the rows
+        elsewhere left from earlier steps."""
+        return self._normals
 
     def _grid_arrays(self) -> GridArrays:
         g = self.grid
@@ -461,6 +506,7 @@ class SurfaceContact:
             active = np.ones(n, dtype=np.bool_)
         if ids is None:
             ids = np.arange(n)
+        self.near_surface(y)
         g = self.grid
         rows = self.candidates.update(y, g.origin, g.origin + g.dims / g.inv_h, g.builds)
         self._buffers(len(rows))
@@ -504,10 +550,13 @@ class SurfaceContact:
         return self.records.take_facets()
 
     def inside(self, y: np.ndarray) -> np.ndarray:
-        """(N,) bool: particles behind the surface within the search radius (no changes made)."""
+        """(N,) bool: particles behind the surface within the search radius (no particle or
+        impulse changed; the part of the surface near ``y`` is made ready for them)."""
         n = len(y)
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        self.near_surface(y)
         self._buffers(n)
-        _detect(n >= PARALLEL_CANDIDATES, np.ascontiguousarray(y, dtype=np.float64),
+        _detect(n >= PARALLEL_CANDIDATES, y,
                 np.arange(n), np.ones(n, dtype=np.bool_), self._grid_arrays(),
                 self._surface_arrays(), self.search_radius, self._facet, self._weight,
                 self._normal)

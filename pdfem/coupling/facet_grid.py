@@ -4,8 +4,11 @@ Every facet is entered in each cell that its bounding box, grown by a reach, ove
 then needs to look at the facets of its own cell only: any facet within ``reach`` of the point
 is listed there. The hash is rebuilt when the surface has moved by more than the margin that
 was added to the reach (:meth:`FacetGrid.needs_rebuild`), so a moving or deforming structure
-is rebuilt every few steps, not every step. The cells and the cell -> facets CSR are
-:mod:`pdfem.geometry.cell_hash`'s (:func:`~pdfem.geometry.cell_hash.bin_boxes`). Lengths in m.
+is rebuilt every few steps, not every step. A grid may hold a part of the facets (the contact
+keeps one of the facets near the ice, :mod:`pdfem.coupling.near_facets`, built again with that
+part); its cells list the facets' numbers in the whole surface. The cells and the cell ->
+facets CSR are :mod:`pdfem.geometry.cell_hash`'s (:func:`~pdfem.geometry.cell_hash.bin_boxes`).
+Lengths in m.
 """
 
 from __future__ import annotations
@@ -45,7 +48,9 @@ class FacetGrid:
         Extra reach (m); the grid stays valid until some node has moved this far since the
         last build. Default: ``reach``.
     cell_size
-        Cell edge (m). Default: the larger of 2 (reach + margin) and the median facet edge.
+        Cell edge (m). Default: the larger of 2 (reach + margin) and the median facet edge
+        of the whole surface (at the first build; a grid of a part of the facets keeps the
+        cells the whole surface's would have).
     """
 
     def __init__(self, triangles: np.ndarray, reach: float, margin: float | None = None,
@@ -56,6 +61,7 @@ class FacetGrid:
         self.reach = float(reach)
         self.margin = float(reach if margin is None else margin)
         self._cell_size = cell_size
+        self._median_edge: float | None = None
         self.built_points: np.ndarray | None = None
         self.builds = 0
 
@@ -66,32 +72,41 @@ class FacetGrid:
         return bool(moved_beyond(np.ascontiguousarray(points, dtype=np.float64),
                                  self.built_points, self.margin))
 
-    def build(self, points: np.ndarray) -> None:
-        """(Re)build the hash for node positions ``points`` ((Ns, 3), m)."""
+    def build(self, points: np.ndarray, facets: np.ndarray | None = None) -> None:
+        """(Re)build the hash for node positions ``points`` ((Ns, 3), m), of the facets
+        ``facets`` (ascending int32 facet numbers; default all): the cells list facet numbers
+        of the whole surface. Without facets the grid is one empty cell."""
         points = np.ascontiguousarray(points, dtype=np.float64)
+        facets = (np.arange(len(self.triangles), dtype=np.int32) if facets is None
+                  else np.ascontiguousarray(facets, dtype=np.int32))
+        triangles = self.triangles[facets]
         grow = self.reach + self.margin
         h = self._cell_size
         if h is None:
-            x = points[self.triangles]
-            edges = np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2)
-            h = max(2.0 * grow, float(np.median(edges)))
-        lo_box = points.min(axis=0) - grow
-        hi_box = points.max(axis=0) + grow
+            if self._median_edge is None:
+                x = points[self.triangles]
+                edges = np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2)
+                self._median_edge = float(np.median(edges))
+            h = max(2.0 * grow, self._median_edge)
+        nodes = points[triangles].reshape(-1, 3) if len(facets) else points[:1]
+        lo_box = nodes.min(axis=0) - grow
+        hi_box = nodes.max(axis=0) + grow
         dims = np.maximum(1, np.ceil((hi_box - lo_box) / h).astype(np.int64))
-        while np.prod(dims) > 8 * len(self.triangles) + 1000:  # keep the table small
+        while np.prod(dims) > 8 * len(self.triangles) + 1000:  # the whole surface's bound
             h *= 1.5
             dims = np.maximum(1, np.ceil((hi_box - lo_box) / h).astype(np.int64))
         self.origin = lo_box
         self.inv_h = 1.0 / h
         self.dims = dims
-        nt = len(self.triangles)
+        nt = len(facets)
         lo = np.empty((nt, 3), dtype=np.int64)
         hi = np.empty((nt, 3), dtype=np.int64)
-        _cell_ranges(points, self.triangles, grow, self.origin, self.inv_h, self.dims, lo, hi)
+        _cell_ranges(points, triangles, grow, self.origin, self.inv_h, self.dims, lo, hi)
         count = int(np.prod(hi - lo + 1, axis=1).sum())
         self.cell_start = np.zeros(int(np.prod(dims)) + 1, dtype=np.int64)
-        self.cell_facets = np.empty(count, dtype=np.int32)
-        bin_boxes(lo, hi, self.dims, self.cell_start, self.cell_facets)
+        local = np.empty(count, dtype=np.int32)
+        bin_boxes(lo, hi, self.dims, self.cell_start, local)
+        self.cell_facets = facets[local]
         self.built_points = points.copy()
         self.builds += 1
 

@@ -10,12 +10,15 @@ for any closed, consistently oriented surface.
 Features are numbered per triangle (a, b, c): 0 the face, 1..3 the vertices a, b, c, 4..6 the
 edges ab, bc, ca. :class:`FacetTopology` is the fixed part (edges, which features lie on the
 boundary of an open surface); :func:`pseudo_normals` the part that changes as the surface
-moves. All lengths in m.
+moves, and :func:`pseudo_normals_of` the same for a part of the surface (the facets near the
+ice and those around them, :mod:`pdfem.coupling.near_facets`: the contact takes them every
+coupling step). All lengths in m.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -87,22 +90,70 @@ def pseudo_normals(points: np.ndarray, topo: FacetTopology):
         If a facet has zero area.
     """
     pts = np.ascontiguousarray(points, dtype=np.float64)
-    face = np.empty((len(topo.triangles), 3))
-    edge = np.zeros((topo.n_edges, 3))
-    vertex = np.zeros((len(pts), 3))
-    degenerate = _pseudo_normals(pts, topo.triangles, topo.tri_edges, face, edge, vertex)
+    normals = (np.empty((len(topo.triangles), 3)), np.empty((topo.n_edges, 3)),
+               np.empty((len(pts), 3)))
+    whole = FacetPart(np.arange(len(topo.triangles), dtype=np.int32),
+                      np.arange(topo.n_edges, dtype=np.int32), np.arange(len(pts), dtype=np.int32))
+    pseudo_normals_of(pts, topo, whole, normals)
+    return normals
+
+
+class FacetPart(NamedTuple):
+    """A part of a surface whose pseudo-normals are computed: its triangles (ascending), and
+    the edges and nodes of those triangles (int32 index arrays)."""
+
+    triangles: np.ndarray
+    edges: np.ndarray
+    nodes: np.ndarray
+
+
+def pseudo_normals_of(points: np.ndarray, topo: FacetTopology, part: FacetPart,
+                      normals: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
+    """The pseudo-normals of a part of the surface, written into the rows of ``normals``
+    (``(face, edge, vertex)``, the whole surface's arrays, as :func:`pseudo_normals` returns)
+    of its triangles, edges and nodes; the other rows are left alone.
+
+    An edge's or a vertex's normal is the whole surface's, bit for bit, when ``part`` holds
+    every triangle around it: the sums run over the part's triangles in ascending order, the
+    order of the whole surface's pass.
+
+    Parameters
+    ----------
+    points
+        (Ns, 3) current node positions (m), float64, C-contiguous.
+    topo
+        The surface's :class:`FacetTopology`.
+    part
+        The triangles, edges and nodes to compute (:class:`FacetPart`).
+    normals
+        ``(face, edge, vertex)``: (T, 3), (E, 3), (Ns, 3) float64 arrays, written in place.
+
+    Raises
+    ------
+    ValueError
+        If a facet of the part has zero area.
+    """
+    face, edge, vertex = normals
+    degenerate = _pseudo_normals(points, topo.triangles, topo.tri_edges, part, face, edge,
+                                 vertex)
     if degenerate:
         raise ValueError(f"{degenerate} contact facets have zero area")
-    return face, edge, vertex
 
 
 @numba.njit(cache=True)
-def _pseudo_normals(pts, tri, tri_edges, face, edge, vertex):
-    """Fill ``face``, ``edge`` (zeroed) and ``vertex`` (zeroed) as :func:`pseudo_normals`
-    describes; returns the number of zero-area facets (their normals are left zero). Runs
-    every coupling step on every contact surface, so it is one pass without temporaries."""
+def _pseudo_normals(pts, tri, tri_edges, part, face, edge, vertex):
+    """Fill the rows of ``face``, ``edge`` and ``vertex`` of ``part``'s triangles, edges and
+    nodes as :func:`pseudo_normals` describes (the part's edge and vertex rows zeroed first);
+    returns the number of zero-area facets (their normals are left zero). Runs every coupling
+    step on every contact surface, so it is one pass without temporaries."""
+    tris, edges, nodes = part.triangles, part.edges, part.nodes
+    for i in range(edges.shape[0]):
+        edge[edges[i], :] = 0.0
+    for i in range(nodes.shape[0]):
+        vertex[nodes[i], :] = 0.0
     degenerate = 0
-    for t in range(tri.shape[0]):
+    for i in range(tris.shape[0]):
+        t = tris[i]
         a, b, c = tri[t, 0], tri[t, 1], tri[t, 2]
         u0, u1, u2 = pts[b, 0] - pts[a, 0], pts[b, 1] - pts[a, 1], pts[b, 2] - pts[a, 2]
         w0, w1, w2 = pts[c, 0] - pts[a, 0], pts[c, 1] - pts[a, 1], pts[c, 2] - pts[a, 2]
@@ -130,14 +181,21 @@ def _pseudo_normals(pts, tri, tri_edges, face, edge, vertex):
             vertex[node, 0] += angle * face[t, 0]
             vertex[node, 1] += angle * face[t, 1]
             vertex[node, 2] += angle * face[t, 2]
-    for rows in (edge, vertex):
-        for i in range(rows.shape[0]):
-            norm = np.sqrt(rows[i, 0] ** 2 + rows[i, 1] ** 2 + rows[i, 2] ** 2)
-            if norm > 0.0:
-                rows[i, 0] /= norm
-                rows[i, 1] /= norm
-                rows[i, 2] /= norm
+    _normalise(edge, edges)
+    _normalise(vertex, nodes)
     return degenerate
+
+
+@numba.njit(cache=True, inline="always")
+def _normalise(rows, which):
+    """Scale the rows ``which`` of ``rows`` to unit length (zero rows stay zero)."""
+    for j in range(which.shape[0]):
+        i = which[j]
+        norm = np.sqrt(rows[i, 0] ** 2 + rows[i, 1] ** 2 + rows[i, 2] ** 2)
+        if norm > 0.0:
+            rows[i, 0] /= norm
+            rows[i, 1] /= norm
+            rows[i, 2] /= norm
 
 
 @numba.njit(cache=True, inline="always")

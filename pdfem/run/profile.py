@@ -9,7 +9,8 @@ and adds up the wall time spent in them, by component:
   ``gravity``);
 - ``surface contact``: detection and resolution of the particles against the structures'
   contact surfaces (``SurfaceContact.resolve``); ``contact surfaces``: their update to the
-  structures' new positions (pseudo-normals, facet grid);
+  structures' new positions (``set_surface``) and the part of each surface near the ice made
+  ready (``near_surface``: the near facets, their grid and pseudo-normals);
 - ``structures``: the structures' own steps and their surface motion (the surface motion's
   ``over``, ``after``, ``begin``, ``sample``, ``respond``, ``drive_work``);
 - ``coupling (rest)``: what the coupling step does besides (the ice's integration, the hand-over
@@ -76,6 +77,7 @@ class Profile:
         for pair in setup.coupler.pairs:
             self.wrap(pair.contact, "resolve", "surface contact")
             self.wrap(pair.contact, "set_surface", "contact surfaces")
+            self.wrap(pair.contact, "near_surface", "contact surfaces")
         for record in setup.coupler.records:
             for method in MOTION_METHODS:
                 self.wrap(record.motion, method, "structures")
