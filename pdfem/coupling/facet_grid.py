@@ -2,11 +2,10 @@
 
 Every facet is entered in each cell that its bounding box, grown by a reach, overlaps. A point
 then needs to look at the facets of its own cell only: any facet within ``reach`` of the point
-is listed there. The hash is rebuilt when the surface has moved by more than the margin that
-was added to the reach (:meth:`FacetGrid.needs_rebuild`), so a moving or deforming structure
-is rebuilt every few steps, not every step. A grid may hold a part of the facets (the contact
-keeps one of the facets near the ice, :mod:`pdfem.coupling.near_facets`, built again with that
-part); its cells list the facets' numbers in the whole surface. The cells and the cell ->
+is listed there, while no node has moved more than the margin added to the reach since the
+build. A grid may hold a part of the facets: the contact keeps one of the facets near the ice
+and builds it again with that part, when the surface or the particles have moved the margin
+(:mod:`pdfem.coupling.near_facets`); its cells list the facets' numbers in the whole surface. The cells and the cell ->
 facets CSR are :mod:`pdfem.geometry.cell_hash`'s (:func:`~pdfem.geometry.cell_hash.bin_boxes`).
 Lengths in m.
 """
@@ -16,7 +15,6 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from pdfem.coupling.broad_phase import moved_beyond
 from pdfem.geometry.cell_hash import bin_boxes, cell_floor
 
 
@@ -62,15 +60,7 @@ class FacetGrid:
         self.margin = float(reach if margin is None else margin)
         self._cell_size = cell_size
         self._median_edge: float | None = None
-        self.built_points: np.ndarray | None = None
         self.builds = 0
-
-    def needs_rebuild(self, points: np.ndarray) -> bool:
-        """True if a node has moved more than ``margin`` since the last build."""
-        if self.built_points is None:
-            return True
-        return bool(moved_beyond(np.ascontiguousarray(points, dtype=np.float64),
-                                 self.built_points, self.margin))
 
     def build(self, points: np.ndarray, facets: np.ndarray | None = None) -> None:
         """(Re)build the hash for node positions ``points`` ((Ns, 3), m), of the facets
@@ -107,10 +97,4 @@ class FacetGrid:
         local = np.empty(count, dtype=np.int32)
         bin_boxes(lo, hi, self.dims, self.cell_start, local)
         self.cell_facets = facets[local]
-        self.built_points = points.copy()
         self.builds += 1
-
-    def update(self, points: np.ndarray) -> None:
-        """Rebuild if the surface has moved past the margin."""
-        if self.needs_rebuild(points):
-            self.build(points)

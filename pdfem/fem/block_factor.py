@@ -62,7 +62,6 @@ class BlockFactor:
         self.blocks = independent_blocks(a)
         nnz = [a[idx].nnz for idx in self.blocks]
         self.dealt = Dealt(nnz, comm)
-        self._mine = np.array(self.dealt.mine, dtype=np.int64)
         self._factor(a)
 
     def _factor(self, a: sp.csr_matrix) -> None:
@@ -130,7 +129,7 @@ class BlockFactor:
         b = np.asarray(b, dtype=np.float64)
         rhs = np.ascontiguousarray(b.reshape(self.n, -1).T)     # one right-hand side a row
         mine = self.dealt.mine_of(blocks)
-        todo = self._mine if blocks is None else np.array(mine, dtype=np.int64)
+        todo = np.array(mine, dtype=np.int64)
         x = np.zeros(rhs.shape)
         parallel = len(todo) > 1 and numba.get_num_threads() > 1
         solve_blocks(parallel, todo, self._dof_ptr, self._order, self._col_at,

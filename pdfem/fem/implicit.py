@@ -139,22 +139,22 @@ class Newmark(CentralDifference):
         self._block_rows()
 
     def _block_rows(self) -> None:
-        """Where each block of ``A`` sits: its DOFs, the block of each DOF (-1: held), the nodes
-        whose rows of ``K`` a rank computes for its blocks (with and without the held nodes,
-        whose rows meet every block)."""
+        """Where each block of ``A`` sits: its DOFs and nodes, the block of each DOF (-1: held),
+        the nodes of this rank's blocks and the held nodes (whose rows of ``K`` meet every
+        block)."""
         self._block_dofs = [self._free_idx[idx] for idx in self._lu.blocks]
+        self._block_nodes = [np.unique(dofs // 3).astype(np.int64) for dofs in self._block_dofs]
         self._dof_block = np.full(self.n, -1, dtype=np.int64)
         for k, dofs in enumerate(self._block_dofs):
             self._dof_block[dofs] = k
-        self._held_nodes = np.unique(self.fixed // 3)
-        self._my_nodes = self._nodes_of(self._lu.dealt.mine, held=False)
+        self._held_nodes = np.unique(self.fixed // 3).astype(np.int64)
+        self._my_nodes = self._nodes_of(self._lu.dealt.mine)
 
-    def _nodes_of(self, blocks, held: bool = True) -> np.ndarray:
-        """The nodes (int64, ascending) of the DOFs of ``blocks``, and the held nodes."""
-        parts = [self._block_dofs[k] // 3 for k in blocks]
-        if held:
-            parts.append(self._held_nodes)
-        return np.unique(np.concatenate(parts or [np.zeros(0, dtype=np.int64)])).astype(np.int64)
+    def _nodes_of(self, blocks) -> np.ndarray:
+        """The nodes (int64) of the DOFs of ``blocks`` (a node whose DOFs lie in two blocks is
+        listed twice: its rows are computed twice, to the same bits)."""
+        return np.concatenate([self._block_nodes[k] for k in blocks]
+                              or [np.zeros(0, dtype=np.int64)])
 
     def _rhs_product(self, x: np.ndarray) -> np.ndarray:
         """``K x`` on the rows of this rank's blocks (the others zero: their solves are other
@@ -186,7 +186,7 @@ class Newmark(CentralDifference):
             ku, cu = np.empty(self.n), None if self._pair is None else np.empty(self.n)
         else:
             ku, cu = old[0].copy(), None if old[1] is None else old[1].copy()
-        self._rows(u, self._nodes_of(mine, held=False), ku, cu)
+        self._rows(u, self._my_nodes if blocks is None else self._nodes_of(mine), ku, cu)
         dofs = self._block_dofs
         parts = [(y[lu.blocks[k]], ku[dofs[k]], None if cu is None else cu[dofs[k]])
                  for k in mine]

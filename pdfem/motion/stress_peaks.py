@@ -66,8 +66,7 @@ class StressPeaks:
     def __init__(self, grad: sp.csr_matrix, material, parts: Sequence[np.ndarray | None],
                  comm=SerialComm()) -> None:
         self.material = material
-        self._grad = grad
-        self._n_el = n_el = grad.shape[0] // 9
+        n_el = grad.shape[0] // 9
         self._whole = any(p is None for p in parts)
         self.parts = [np.arange(n_el) if p is None else np.asarray(p, dtype=np.int64)
                       for p in parts]
@@ -75,6 +74,8 @@ class StressPeaks:
         for p in self.parts:
             covered[p] = True
         self.rest = np.flatnonzero(~covered)
+        # each part's rows of the operator, and those of the elements in no part
+        self._grads = [sp.csr_matrix(grad[_rows_of(p, n_el)]) for p in self.parts]
         self._rest_grad = sp.csr_matrix(grad[_rows_of(self.rest, n_el)])
         self.distribute(comm)
 
@@ -83,8 +84,6 @@ class StressPeaks:
         dealt: then every rank evaluates all). Collective from then on."""
         self.dealt = Dealt([len(p) for p in self.parts],
                            SerialComm() if self._whole else comm)
-        self._grads = {k: sp.csr_matrix(self._grad[_rows_of(self.parts[k], self._n_el)])
-                       for k in self.dealt.mine}
 
     def _von_mises(self, grad: sp.csr_matrix, u: np.ndarray) -> np.ndarray:
         g = (grad @ u).reshape(3, 3, -1)

@@ -70,6 +70,4 @@ class Dealt:
         """This rank's pieces among ``pieces`` (ascending; default all): :attr:`mine` there."""
         if pieces is None:
             return self.mine
-        if not self._shared:
-            return [int(k) for k in pieces]
         return [int(k) for k in pieces if self.owner[k] == self.comm.rank]

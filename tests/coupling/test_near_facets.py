@@ -104,26 +104,31 @@ def test_near_facets_hold_every_facet_within_reach_and_two_skins():
     assert len(near.facets) < 0.2 * len(tri)
 
 
-class _MovingSheet:
-    """A flat n x n sheet on [0, 2] x [0, 2] at height ``z`` (m), normal +z, at rest (a
-    ContactSurface)."""
+class _Sheet:
+    """A sheet of nodes ``points`` and ``surface_triangles`` (m), lifted by ``z`` (m), at rest
+    (a ContactSurface); the tests move it by ``z`` or by its ``points``."""
 
-    def __init__(self, n: int = 20) -> None:
-        points, self.surface_triangles = _sheet(n, 2.0, 0.0)
-        self._points0 = points * [1.0, 1.0, 0.0]
+    def __init__(self, points: np.ndarray, triangles: np.ndarray) -> None:
+        self.points, self.surface_triangles = points, triangles
         self.z = 0.0
 
     def surface_points(self):
-        return self._points0 + [0.0, 0.0, self.z]
+        return self.points + [0.0, 0.0, self.z]
 
     def surface_velocities(self):
-        return np.zeros_like(self._points0)
+        return np.zeros_like(self.points)
 
     def surface_compliance(self):
-        return LumpedCompliance(np.zeros_like(self._points0))
+        return LumpedCompliance(np.zeros_like(self.points))
 
     def surface_rotation(self):
         return None
+
+
+def _flat_sheet(n: int = 20) -> _Sheet:
+    """A flat n x n sheet on [0, 2] x [0, 2] at height 0, normal +z."""
+    points, triangles = _sheet(n, 2.0, 0.0)
+    return _Sheet(points * [1.0, 1.0, 0.0], triangles)
 
 
 def _resolve(contact, sheet, y):
@@ -139,7 +144,7 @@ def _lone_case(anchor: float):
     the particles start) and a lone particle under the opposite corner, out of reach by 1.9
     skins: (sheet, contact, particles, reach = skin)."""
     reach = 0.02
-    sheet = _MovingSheet()
+    sheet = _flat_sheet()
     rng = np.random.default_rng(7)
     ice = np.column_stack([rng.uniform(0.1, 0.4, 200), rng.uniform(0.1, 0.4, 200),
                            rng.uniform(0.05, 0.3, 200)])
@@ -182,32 +187,13 @@ def test_a_lone_particle_far_from_the_ice_finds_its_facet_after_small_and_large_
     assert rows.tolist() == [lone]
 
 
-class _WavySheet:
-    """The wavy sheet of :func:`_sheet` as a contact surface whose nodes the test moves."""
-
-    def __init__(self) -> None:
-        self.points, self.surface_triangles = _sheet(30, 3.0, 0.1, seed=4)
-
-    def surface_points(self):
-        return self.points.copy()
-
-    def surface_velocities(self):
-        return np.zeros_like(self.points)
-
-    def surface_compliance(self):
-        return LumpedCompliance(np.zeros_like(self.points))
-
-    def surface_rotation(self):
-        return None
-
-
 def test_the_contacts_normals_of_the_near_part_are_the_whole_surfaces_as_it_moves():
     """A contact over a deforming sheet: after each substep the pseudo-normals it uses on the
     near part (near facets, their edges and vertices) are the whole surface's, bit for bit, at
     the positions of the last update with normals; also when the sheet moves three skins
     within a coupling step (``normals=False``: the normals of the step's start) and the
     selection is made again."""
-    sheet = _WavySheet()
+    sheet = _Sheet(*_sheet(30, 3.0, 0.1, seed=4))   # wavy
     topo = FacetTopology.from_triangles(sheet.surface_triangles, len(sheet.points))
     rng = np.random.default_rng(11)
     y = np.column_stack([rng.uniform(1.0, 1.5, 400), rng.uniform(1.2, 1.6, 400),

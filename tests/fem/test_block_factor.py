@@ -100,7 +100,7 @@ SCRIPT = textwrap.dedent('''
     one = BlockFactor(a[dofs[0]][:, dofs[0]], comm)   # one block: solved on every rank
     assert one.dealt.owner.tolist() == [comm.rank] and np.array_equal(one.solve(b[dofs[0]]),
                                             BlockFactor(a[dofs[0]][:, dofs[0]]).solve(b[dofs[0]]))
-    owned = comm.gather(sorted(split._mine.tolist()))
+    owned = comm.gather(split.dealt.mine)
     if comm.rank == 0:
         print("ok", owned)
 ''')
