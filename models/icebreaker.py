@@ -110,21 +110,20 @@ def half_breadth(p: dict, x, z):
     return np.maximum(h, 0.0)
 
 
-def _stations(p: dict, z: float) -> np.ndarray:
-    """Break points in x of the section at height z: stern, aft and fore ends of the parallel
-    body, stem (m)."""
+def _stations(p: dict, z) -> np.ndarray:
+    """Break points in x of the section at height z (m; or an array of heights): stern, aft
+    and fore ends of the parallel body, stem (m), along the last axis ((..., 4))."""
     _, run = _lengths(p)
-    return np.array([-0.5 * p["length"], -0.5 * p["length"] + run, _x_bow(p, z), _x_stem(p, z)])
+    z = np.asarray(z, dtype=np.float64)
+    return np.stack(np.broadcast_arrays(-0.5 * p["length"], -0.5 * p["length"] + run,
+                                        _x_bow(p, z), _x_stem(p, z)), axis=-1)
 
 
 def _x_integrals(p: dict, zs, f) -> np.ndarray:
     """int f(x, h(x, z)) dx over the section at each height of ``zs`` ((n,) m), exact for f of
     degree <= 3 (Simpson on the linear pieces): (n,), all levels in one array pass."""
-    _, run = _lengths(p)
     z = np.asarray(zs, dtype=np.float64)[:, None]
-    xs = np.concatenate([np.full_like(z, -0.5 * p["length"]),
-                         np.full_like(z, -0.5 * p["length"] + run), _x_bow(p, z), _x_stem(p, z)],
-                        axis=1)
+    xs = _stations(p, z[:, 0])
     a, b = xs[:, :-1], xs[:, 1:]
     m = 0.5 * (a + b)
     return np.sum((b - a) / 6 * (f(a, half_breadth(p, a, z)) + 4 * f(m, half_breadth(p, m, z))

@@ -8,8 +8,9 @@ by local index, with the pair's critical distance r_ij and constant k_ij V_i V_j
 force from its interacting partners in row order and skipping the others, so its force depends
 only on the positions and not on when the list was built, on the thread count or on the rank
 layout; it walks only the rows of the particles that :func:`contacts_near` (each pair's
-distance tested once, from its lower-numbered end) found in a contact; :func:`tally` counts the interacting pairs and their potential, and :func:`add_owned`
-adds the force densities into the bodies' force arrays.
+distance tested once, from its lower-numbered end) found in a contact; :func:`tally` counts
+the interacting pairs and their potential, and :func:`add_owned` adds the force densities
+into the bodies' force arrays.
 """
 
 from __future__ import annotations

@@ -106,11 +106,9 @@ class Water(ParticleForce):
                     s.am_prev[:] = s.am
                 continue
             # each work from y_prev; the last call moves y_prev on (and each its force)
-            if self._drags:
+            if self._drags:   # (drag_prev is read only here)
                 drag_work(b.y, s.y_prev, b.vol, s.drag, s.drag_prev, s.dissipated,
                           not self.added_mass)
-            else:
-                s.drag_prev[:] = s.drag
             if self.added_mass:
                 drag_work(b.y, s.y_prev, b.vol, s.am, s.am_prev, s.water_kinetic, True)
         return None

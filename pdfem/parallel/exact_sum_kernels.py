@@ -36,8 +36,14 @@ NOT_FINITE, TOO_LONG = -1, -2
 """The lengths of an expansion with a non-finite term, and of one that outgrew its room."""
 
 MAX_PARTIALS = 64
-"""Room for the partials of one column: an expansion of finite doubles never needs more than
-about 40 (the exponent range over the mantissa width)."""
+"""Room for the partials of one column. The partials of an expansion do not overlap, but its
+length is not bounded by the exponent range over the mantissa width: terms spread over
+hundreds of decades can outgrow the room, and the expansion is then TOO_LONG (taken by exact
+rationals, :mod:`pdfem.parallel.exact_sum`)."""
+
+BIN_NOT_FINITE, BIN_ABOVE = -1, -2
+""":func:`to_bin`'s answers for a term that is not finite and for one above :data:`TOP_BIN`
+(added to the expansion directly)."""
 
 BINS = 2048
 """One integer bin per biased exponent of a double (0-2047)."""
@@ -75,14 +81,15 @@ def grow(x, partials, m):
 @numba.njit(cache=True, inline="always")
 def to_bin(x, bins):
     """Add the double ``x`` to its exponent's bin of ``bins`` (BINS,) int64, exactly; returns
-    the bin (0: ``x`` is zero and added nothing), -1 if ``x`` is not finite, -2 if it is too
-    large for the bins (:data:`TOP_BIN`: the caller grows the expansion with it)."""
+    the bin (0: ``x`` is zero and added nothing), :data:`BIN_NOT_FINITE` if ``x`` is not
+    finite, :data:`BIN_ABOVE` if it is too large for the bins (:data:`TOP_BIN`: the caller
+    grows the expansion with it)."""
     b = float_bits(x)
     e = (b >> 52) & 0x7FF
     if e == 0x7FF:
-        return -1
+        return BIN_NOT_FINITE
     if e >= TOP_BIN:
-        return -2
+        return BIN_ABOVE
     mant = b & 0xFFFFFFFFFFFFF
     if e == 0:  # subnormal (or zero): the same scale as e = 1, no implicit bit
         if mant == 0:
@@ -138,9 +145,9 @@ def column_expansion(values, rows, every, w, weighted, col, t0, t1, bins, partia
             if added == FLUSH_EVERY:
                 m = flush_bins(bins, lo, hi, partials, m)
                 lo, hi, added = BINS, 0, 0
-        elif e == -2:
+        elif e == BIN_ABOVE:
             m = grow_room(x, partials, m)
-        elif e == -1:  # not finite: empty the bins and stop
+        elif e == BIN_NOT_FINITE:  # not finite: empty the bins and stop
             for b in range(lo, hi + 1):
                 bins[b] = 0
             return NOT_FINITE

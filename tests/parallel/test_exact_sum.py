@@ -107,7 +107,7 @@ def test_threaded_chunks_give_the_same_correctly_rounded_sums():
     assert math.isinf(exact_sum(values, SerialComm())[2])
 
 
-def test_terms_over_the_whole_exponent_range_in_the_bins_and_beyond():
+def test_terms_over_the_whole_exponent_range_in_the_bins_and_beyond(monkeypatch):
     """The integer bins per exponent take any finite double exactly: thousands of terms (many
     bin flushes) from subnormals to 1e300, mixed signs, the largest doubles (past the bins,
     grown directly), and a spread so wide that a chunk's expansion outgrows its room (then
@@ -123,8 +123,12 @@ def test_terms_over_the_whole_exponent_range_in_the_bins_and_beyond():
         "largest": rng.choice([-1.0, 1.0], n) * 2.0 ** rng.integers(1013, 1020, n) / 64,
         "one": rng.choice([-1.0, 1.0], n) * (1.0 - 2.0 ** -53),
     }
+    import pdfem.parallel.exact_sum as exact_sum_module
+
     for name, v in cases.items():
         for threads in (False, True):
+            # threaded (in chunks, one per thread) from this many terms: every sum here or none
+            monkeypatch.setattr(exact_sum_module, "THREADED_FROM_TERMS", 1 if threads else 10 ** 9)
             rows = np.arange(0, n, 1 if threads else 2)
             assert exact_sum(v, SerialComm(), rows) == math.fsum(v[rows]), name
         w = rng.uniform(0.5, 2.0, n)
