@@ -49,8 +49,8 @@ import skfem
 
 from pdfem.fem.elasticity import ElasticMaterial
 from pdfem.fem.probe import make_probe, probe_values
-from pdfem.fem.section_stress import (nominal_stress, principal_axes, resultants, section_axes,
-                                      section_of)
+from pdfem.fem.section_stress import (principal_axes, resultants, section_axes, section_of,
+                                      stress_range)
 from pdfem.fem.static import static_displacement
 from pdfem.fem.stress import hooke_stress, von_mises
 from pdfem.fem.structure import ElasticStructure
@@ -135,9 +135,9 @@ def root_nominal_stress(s: ElasticStructure, u: np.ndarray, f: np.ndarray) -> di
     nodes = s.group_nodes("blade1_root")
     reaction = s.dofmap.to_nodal(s.K @ s.dofmap.to_dofs(u) - f)[nodes]
     force, moment = resultants(section, s.node_points[nodes], reaction)
-    sigma = nominal_stress(section, force, moment)
-    return {"nominal_tension": float(sigma.max()), "nominal_compression": float(sigma.min()),
-            "nominal_axial": float(force[0] / section.area), "root_force": force.tolist(),
+    tension, compression, axial = stress_range(section, force, moment)
+    return {"nominal_tension": tension, "nominal_compression": compression,
+            "nominal_axial": axial, "root_force": force.tolist(),
             "root_moment": moment.tolist(), "section_area": section.area,
             "section_inertia": principal_axes(section)[0].tolist()}
 
@@ -156,8 +156,7 @@ def root_stress(size: float, order: int, pressure: float, radii: tuple[float, ..
         u = static_displacement(s, f)
         s.set_state(u)
         for r in radii:
-            out[f"points_{r:g}"] = section_points(r)
-            sigma = point_stress(s, out[f"points_{r:g}"])
+            sigma = point_stress(s, section_points(r))
             out[f"{label}_r{r:g}"] = von_mises(sigma)      # NaN where a point is outside
         for d in hot:
             pts = section_points(rh + d)
@@ -170,8 +169,8 @@ def root_stress(size: float, order: int, pressure: float, radii: tuple[float, ..
     return out
 
 
-def _largest_inside(rows: list[dict], key: str, values: list[np.ndarray]) -> list[float]:
-    """The largest of each row's ``values`` over the points where every row has a value."""
+def _largest_inside(values: list[np.ndarray]) -> list[float]:
+    """The largest of each mesh's ``values`` over the points where every mesh has a value."""
     inside = np.all([np.isfinite(v) for v in values], axis=0)
     return [float(np.max(np.where(inside, v, -np.inf))) for v in values]
 
@@ -184,14 +183,14 @@ def summarise(rows: list[dict], radii) -> list[dict]:
     for label in ("spin_and_pressure", "pressure"):
         for r in radii:
             key = f"{label}_r{r:g}"
-            for out, value in zip(table, _largest_inside(rows, key, [row[key] for row in rows])):
+            for out, value in zip(table, _largest_inside([row[key] for row in rows])):
                 out[key] = value
         for a, b in HOT_SPOT:
             near = [row[f"{label}_radial_{a * t_root:.6f}"] for row in rows]
             far = [row[f"{label}_radial_{b * t_root:.6f}"] for row in rows]
             extrapolated = [(b * n - a * f) / (b - a) for n, f in zip(near, far)]
             key = f"{label}_hot_spot_{a:g}_{b:g}"
-            for out, value in zip(table, _largest_inside(rows, key, extrapolated)):
+            for out, value in zip(table, _largest_inside(extrapolated)):
                 out[key] = value
     return table
 

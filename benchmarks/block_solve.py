@@ -27,7 +27,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from threadpoolctl import threadpool_limits
 
-from pdfem.fem.block_factor import BlockFactor, independent_blocks
+from pdfem.fem.block_factor import BlockFactor
 
 DT = 13.8e-6   # s
 
@@ -58,8 +58,8 @@ def median_time(solve, b, repeats: int, rounds: int = 5) -> float:
 
 def main() -> int:
     a = blades_matrix()
-    blocks = independent_blocks(a)
     ldl = BlockFactor(a)
+    blocks = ldl.blocks
     lus = [spla.splu(a[idx][:, idx].tocsc(), permc_spec="MMD_AT_PLUS_A",
                      options={"SymmetricMode": True}) for idx in blocks]
 

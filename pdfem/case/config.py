@@ -180,7 +180,7 @@ class ContactConfig:
 @dataclass(frozen=True)
 class MonitorConfig:
     """A probe on a structure: displacement of the node nearest ``point`` and von Mises stress
-    of the element containing it, recorded at every coupling step."""
+    of the element whose centre is nearest, recorded at every coupling step."""
 
     name: str
     structure: str

@@ -37,4 +37,4 @@ class MonitorSection(Section):
     structure: Name = Field(description="Name of the (elastic) structure. Required.")
     point: Annotated[Vec3, Vector("m")] = Field(
         description="Probe point (m): displacement of the nearest node and von Mises stress of "
-                    "the element containing it. Required.")
+                    "the element whose centre is nearest. Required.")

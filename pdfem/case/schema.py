@@ -66,7 +66,7 @@ Shape of a case file::
     [[monitor]]                # a probe recorded at every coupling step
     name = "mid"
     structure = "panel"
-    point = [1.0, 0.6, 0.0]    # m; the nearest node (u) and the element containing it (von_mises)
+    point = [1.0, 0.6, 0.0]    # m; the nearest node (u) and element centre (von_mises)
 
 Checkpoints hold the whole state (ice, structures, contact, clock, output counters); continue
 a run with ``pdfem run CASE --restart <out>/checkpoint.h5``, which appends to the same results

@@ -3,9 +3,13 @@
 The cantilever-beam method of propeller blade strength treats the blade outboard of a section
 as a cantilever: the normal stress over the section is the axial force over the area plus the
 bending moments about the section's principal axes over the second moments, linear across the
-section (Taylor's method; Carlton, "The strength of marine propeller blades", Lloyd's Register
-Technical Association, paper 2, 1980-81; Morgan, "An approximate method of obtaining stress in
-a propeller blade", David Taylor Model Basin report 919, 1954). It is the kind of stress the
+section: the flexure formula of beam theory for unsymmetric bending (checked here against
+the rectangle's ``6 F L / (b h^2)``, tests/fem/test_section_stress.py). For propellers it is
+Taylor's method (Carlton, "The strength of
+marine propeller blades", Lloyd's Register Technical Association, paper 2, 1980-81; Morgan,
+"An approximate method of obtaining stress in a propeller blade", David Taylor Model Basin
+report 919, 1954; of both only the title pages and summaries could be reached here, so no
+acceptance rests on them). It is the kind of stress the
 rules' blade strength checks give (a bending moment over a section modulus at the root section;
 the ice-class rule's formula could not be checked against its text here, docs/propeller.md),
 and, unlike the elastic stress at the
@@ -166,3 +170,12 @@ def nominal_stress(section: Section, force: np.ndarray, moment: np.ndarray) -> n
     (section axes, :func:`resultants`): ``F_n / A + b . eta`` with ``I b = (-M_2, M_1)``."""
     b = section.flexibility @ np.array([-moment[2], moment[1]])
     return force[0] / section.area + section.fibres @ b
+
+
+def stress_range(section: Section, force: np.ndarray, moment: np.ndarray
+                 ) -> tuple[float, float, float]:
+    """The largest and the smallest normal stress over the section and the axial part
+    ``F_n / A`` (Pa) of the resultants ``force`` (N) and ``moment`` (N m, about the centroid),
+    section axes (:func:`nominal_stress`)."""
+    sigma = nominal_stress(section, force, moment)
+    return float(sigma.max()), float(sigma.min()), float(force[0] / section.area)

@@ -73,7 +73,7 @@ import re
 import numpy as np
 import scipy.sparse as sp
 
-from pdfem.fem.section_stress import Section, nominal_stress, section_of
+from pdfem.fem.section_stress import Section, section_of, stress_range
 from pdfem.geometry.vectors import cross
 from pdfem.motion.frame_kernels import StepVectors, support_torque_power
 from pdfem.motion.stress_peaks import StressPeaks
@@ -92,7 +92,9 @@ def blade_groups(structure) -> list[tuple[str, np.ndarray, np.ndarray, np.ndarra
     ``structure``: ``blade{k}`` from the groups ``blade{k}_surface`` and ``blade{k}_root`` of
     its mesh (the root falls back on the clamped groups), in k order; else one ``blade1``, the
     whole contact surface with the clamped groups as its root. The root faces are the (F, 3 or
-    4) corner nodes of the root's mesh faces (none when the root is no surface group)."""
+    4) corner nodes of the root's mesh faces: none when the root is no surface group, and none
+    for a blade of several without a root group of its own (the clamped faces of every blade
+    are no section of one)."""
     found = sorted((int(m.group(1)), g) for g in structure.mesh.facet_sets
                    if (m := BLADE_SURFACE.match(g)))
     held = np.unique(np.concatenate([structure.group_nodes(g) for g in structure.fixed_groups]
@@ -107,8 +109,9 @@ def blade_groups(structure) -> list[tuple[str, np.ndarray, np.ndarray, np.ndarra
         mask = np.isin(structure.surface_nodes, structure.group_nodes(g))
         root = f"blade{k}_root"
         own = root in structure.mesh.facet_sets
-        out.append((f"blade{k}", mask, structure.group_nodes(root) if own else held,
-                    structure.mesh.group_facets(root) if own else held_faces))
+        faces = (structure.mesh.group_facets(root) if own
+                 else held_faces if len(found) == 1 else np.zeros((0, 3), np.int32))
+        out.append((f"blade{k}", mask, structure.group_nodes(root) if own else held, faces))
     return out
 
 
@@ -133,11 +136,10 @@ def root_stress(section: Section, force: np.ndarray, moment: np.ndarray) -> dict
     and the moment about the section's centroid (N m) that the blade puts on its supports,
     frame axes: ``root_stress_tension`` (the largest over the section),
     ``root_stress_compression`` (the smallest) and ``root_stress_axial`` (``F / A``)."""
-    f, m = section.axes @ force, section.axes @ moment
-    sigma = nominal_stress(section, f, m)
-    return {"root_stress_tension": float(sigma.max()),
-            "root_stress_compression": float(sigma.min()),
-            "root_stress_axial": float(f[0] / section.area)}
+    tension, compression, axial = stress_range(section, section.axes @ force,
+                                               section.axes @ moment)
+    return {"root_stress_tension": tension, "root_stress_compression": compression,
+            "root_stress_axial": axial}
 
 
 def gradient_operator(basis) -> sp.csr_matrix:

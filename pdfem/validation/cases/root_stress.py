@@ -92,7 +92,7 @@ def single_blade(case: Case) -> Case:
     """The ``--quick`` variant: the single blade of ``models/propeller_blade.py`` (hub radius
     0.3 m, tip 1 m, root thickness 70 mm, chord 0.349 m at the hub; 10-node tetrahedra of the
     case's element size), its root clamped, at the case's speed, under its centrifugal load
-    alone (its skew bends it: two thirds of the root stress is bending). A surface load on
+    alone (its skew bends it: about three quarters of the root stress is bending). A surface load on
     this blade's surface group ``contact`` cannot be built (scikit-fem's inverse isoparametric
     mapping does not converge on some of its curved faces)."""
     s = case.structures[0]
