@@ -61,8 +61,10 @@ def strain_energy(body, forces_current: bool = False) -> float:
     broke no bond (so after every time step, which recomputes the forces once bonds broke, and
     after a restart, which restores ``theta``); the pair loop made it with the same kernel, so
     the same bits (the full-family reference loop sums in another order and takes its pass).
-    The bond lengths that step's pass kept are read too where they are still current (not
-    after a restart): again the same bits."""
+    Not quite with a path constraint: it puts its particles back on the path after the pass,
+    so ``theta`` near them is that of positions off by round-off (the bond lengths, below, are
+    then taken afresh). The bond lengths that step's pass kept are read too where they are
+    still current (not after a restart or a path constraint's move): again the same bits."""
     mat, b, lay = body.material, body.bonds, body.layout
     lengths = None
     if forces_current and body.family is None:
