@@ -121,15 +121,17 @@ def exact_sums(arrays: list, comm, rows: np.ndarray | None = None) -> list:
     if all(t is not None for t in fast):
         totals = np.concatenate(fast) if fast else np.zeros(0)
     else:
+        def column(a2, c):   # a column's terms, made only when a group needs them
+            return a2[:, c] if rows is None else a2[idx, c]
+
         columns, merged, lengths = [], [], []
         for a2, out, count in parts:
-            cols = [a2[:, c] if rows is None else a2[idx, c] for c in range(a2.shape[1])]
-            m, n = _merged(out, count, cols.__getitem__)
-            columns += cols
+            m, n = _merged(out, count, lambda c, a2=a2: column(a2, c))
+            columns += [(a2, c) for c in range(a2.shape[1])]
             merged.append(m)
             lengths.append(n)
         totals = _rounded(np.concatenate(merged), np.concatenate(lengths), comm,
-                          columns.__getitem__)
+                          lambda g: column(*columns[g]))
     out, k = [], 0
     for values in arrays:
         shape = np.shape(values)[1:]
