@@ -3,10 +3,12 @@
 A symmetric matrix factorised by SuperLU with the same permutation of rows and columns and no
 pivoting (``diag_pivot_thresh = 0``, the diagonal always taken: sound for a positive definite
 matrix, Golub & Van Loan, *Matrix Computations*, 4th ed., Sec. 4.2) has ``U = D L^T`` with
-``D = diag(U)``. Keeping only ``L`` (strictly lower part, compressed columns, 32-bit row indices)
-and ``D`` halves the bytes a solve reads against SuperLU's ``L`` and ``U``: the four blades of the
-milling propeller (10-node tetrahedra of 0.1 m, 14,031 free DOFs) hold 17 MB instead of 34 MB,
-which fits the last-level cache of a common processor (32 MB here), and a solve is three passes:
+``D = diag(U)``. Keeping only ``L`` (strictly lower part, compressed columns, block-local row
+indices of 16 or 32 bits, :data:`pdfem.fem.block_factor.ROWS_16_BITS`) and ``D`` halves the
+bytes a solve reads against SuperLU's ``L`` and ``U``: the four blades of the milling propeller
+(10-node tetrahedra of 0.1 m, 14,031 free DOFs) hold 17 MB with 32-bit row indices (14 MB with
+16-bit ones) instead of 34 MB, which fits the last-level cache of a common processor (32 MB
+here), and a solve is three passes:
 
     L y = P b  (by columns),   z = y / d,   L^T w = z  (by the columns of L, as rows of L^T),
     x = P^T w.

@@ -2,8 +2,9 @@
 
 References: ``scipy.sparse.linalg.spsolve`` of the whole matrix (to round-off); the serial
 solve of the same blocks (bit for bit, on 2 ranks, where each rank solves its own blocks and
-the parts are shared); a zero right-hand side of a block gives exactly zero there; the
-longest-first dealing of blocks to ranks (Graham's LPT rule) by hand.
+the parts are shared); 16-bit row indices against 32-bit ones (bit for bit); a zero
+right-hand side of a block gives exactly zero there; the longest-first dealing of blocks to
+ranks (Graham's LPT rule) by hand.
 """
 
 from __future__ import annotations
@@ -135,6 +136,21 @@ def test_the_factors_solve_on_one_and_on_two_threads_to_the_same_bits():
     assert np.array_equal(f.solve(b), one)
     assert np.allclose(one, spla.spsolve(a.tocsc(), b), rtol=1e-12, atol=1e-14)
     assert np.abs(a @ one - b).max() < 1e-12 * np.abs(b).max()
+
+
+def test_16_bit_row_indices_solve_to_the_bits_of_32_bit_ones(monkeypatch):
+    """Blocks that fit keep their factor's row indices in 16 bits: the same solution bit for
+    bit as 32-bit indices (a block above the limit, forced here, keeps 32)."""
+    import pdfem.fem.block_factor as block_factor
+    a, _ = blocky_spd(sizes=(40, 35, 50, 45), seed=5)
+    b = np.random.default_rng(6).standard_normal((a.shape[0], 3))
+    short = BlockFactor(a)
+    monkeypatch.setattr(block_factor, "ROWS_16_BITS", 49)
+    wide = BlockFactor(a)
+    assert short._rows.dtype == np.uint16 and wide._rows.dtype == np.int32
+    assert short.nbytes < wide.nbytes
+    assert np.array_equal(short.solve(b), wide.solve(b))
+    assert np.array_equal(short.solve(b[:, 0]), wide.solve(b[:, 0]))
 
 
 def test_an_unsymmetric_matrix_is_refused():
