@@ -16,9 +16,9 @@ SuperLU's minimum-degree ordering of ``A + A^T``, kept as ``L D L^T``) and each 
 matrix-vector products (``K u_p``, and ``K u_new``, kept for the supports, the strain energy
 and the shaft) and one pair of triangular solves. The blocks may be shared out over the ranks
 (:meth:`Newmark.distribute`): each rank then solves its own blocks and computes their rows of
-the two products, the ranks share both in one exchange a step, and every rank computes the
-rows of the held nodes (which meet every block): every rank holds the whole state, the serial
-bits. Accuracy: the period of a mode
+the two products, with the rows of the held nodes that meet only that block (a blade's clamped
+root), the ranks share them in one exchange a step, and every rank computes the rows of the
+held nodes that meet several blocks: every rank holds the whole state, the serial bits. Accuracy: the period of a mode
 of circular frequency omega lengthens by about ``(omega dt)^2 / 12``; 20 steps per period keep it
 within 1 % (Hughes, Table 9.1.1 and Eq. 9.1.79), so the modes the coupled step resolves (the
 step is the ice's) are integrated as accurately as by the explicit scheme.
@@ -44,7 +44,7 @@ response to that end force, ``A a' = 2 J / dt``::
 and the force is then taken out of the end acceleration (``a_new -= 2 J / (dt m)`` on the free
 DOFs), so the next step starts from ``M a + C v + K u = f`` without it and the impulse acts
 once. Only the blocks the impulses touch move: only their solves and their rows of ``K u``
-(with the held nodes') are done again (an ice contact on one blade amends that blade). Its work is the trapezoidal work of that force, ``J . (u_new - u) / dt``, with the
+(with the rows of their held nodes, and of those that meet several blocks) are done again (an ice contact on one blade amends that blade). Its work is the trapezoidal work of that force, ``J . (u_new - u) / dt``, with the
 amended ``u_new``: the energy identity above then holds with it, to round-off. The mean
 displacement of the step per unit impulse, ``(dt/2) A^-1 / dt = A^-1 / 2``, is the structure's
 compliance for the contact (:mod:`pdfem.fem.step_compliance`); as ``dt -> 0`` it is half the
@@ -140,21 +140,56 @@ class Newmark(CentralDifference):
 
     def _block_rows(self) -> None:
         """Where each block of ``A`` sits: its DOFs and nodes, the block of each DOF (-1: held),
-        the nodes of this rank's blocks and the held nodes (whose rows of ``K`` meet every
-        block)."""
+        the nodes whose rows of the products a block's rank computes (its own, and the held
+        nodes whose rows meet that block only) and their DOFs, the held nodes whose rows meet
+        several blocks (or none: every rank computes them), and this rank's blocks' nodes."""
         self._block_dofs = [self._free_idx[idx] for idx in self._lu.blocks]
         self._block_nodes = [np.unique(dofs // 3).astype(np.int64) for dofs in self._block_dofs]
         self._dof_block = np.full(self.n, -1, dtype=np.int64)
         for k, dofs in enumerate(self._block_dofs):
             self._dof_block[dofs] = k
-        self._held_nodes = np.unique(self.fixed // 3).astype(np.int64)
-        self._my_nodes = self._nodes_of(self._lu.dealt.mine)
+        held = np.unique(self.fixed // 3).astype(np.int64)
+        met = self._block_met(held)
+        self._row_nodes = [np.union1d(nodes, held[met == k])
+                           for k, nodes in enumerate(self._block_nodes)]
+        self._row_dofs = [self._dofs_of(nodes) for nodes in self._row_nodes]
+        self._held_nodes = held[met < 0]
+        self._my_nodes = self._nodes_of(self._block_nodes, self._lu.dealt.mine)
 
-    def _nodes_of(self, blocks) -> np.ndarray:
-        """The nodes (int64) of the DOFs of ``blocks`` (a node whose DOFs lie in two blocks is
-        listed twice: its rows are computed twice, to the same bits)."""
-        return np.concatenate([self._block_nodes[k] for k in blocks]
-                              or [np.zeros(0, dtype=np.int64)])
+    def _block_met(self, nodes: np.ndarray) -> np.ndarray:
+        """(N,) the one block that the rows of ``nodes`` in ``K`` (and in the companion) meet,
+        -1 where they meet several or none."""
+        dofs = self._dofs_of(nodes)
+        of = np.repeat(np.arange(len(nodes)), 3)[:len(dofs)]
+        lo = np.full(len(nodes), len(self._block_dofs), dtype=np.int64)
+        hi = np.full(len(nodes), -1, dtype=np.int64)
+        for mat in [self.k_op.matrix] + ([] if self._pair is None else [self._pair.b.matrix]):
+            sub = mat[dofs].tocoo()
+            block = self._dof_block[sub.col]
+            node = of[sub.row][block >= 0]
+            np.minimum.at(lo, node, block[block >= 0])
+            np.maximum.at(hi, node, block[block >= 0])
+        return np.where(lo == hi, hi, -1)
+
+    def _dofs_of(self, nodes: np.ndarray) -> np.ndarray:
+        """The DOFs ``3 i .. 3 i + 2`` of the ascending ``nodes``, those below ``n`` (a DOF
+        count that is not a multiple of 3 has no node blocks: its rows are computed whole)."""
+        dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
+        return dofs[dofs < self.n]
+
+    def add_companion(self, op) -> None:
+        """:meth:`pdfem.fem.explicit.CentralDifference.add_companion`; the held nodes' blocks
+        are found again with its pattern."""
+        super().add_companion(op)
+        if self._lu is not None:
+            self._block_rows()
+
+    @staticmethod
+    def _nodes_of(lists: list, blocks) -> np.ndarray:
+        """The nodes (int64) of ``lists`` (one per block) of ``blocks``, one after the other (a
+        node in two lists, its DOFs in two blocks, is listed twice: its rows are computed
+        twice, to the same bits)."""
+        return np.concatenate([lists[k] for k in blocks] or [np.zeros(0, dtype=np.int64)])
 
     def _rhs_product(self, x: np.ndarray) -> np.ndarray:
         """``K x`` on the rows of this rank's blocks (the others zero: their solves are other
@@ -171,8 +206,9 @@ class Newmark(CentralDifference):
         ``K u``, ``K_sigma u`` of the displacement ``u = state(x)`` (element by element), on
         every rank: each rank solves its blocks (all, or those of ``blocks``, outside which
         ``r`` is zero and ``u`` has not changed since the products ``old``, whose other rows
-        are kept) and computes their rows, the ranks share them in one exchange, then the held
-        nodes' rows (they meet every block). Returns ``x``, ``u`` and the products: the bits
+        are kept) and computes their rows (with those of the held nodes that meet only them), the
+        ranks share them in one exchange, then the rows of the held nodes that meet several
+        blocks. Returns ``x``, ``u`` and the products: the bits
         of a whole solve and whole products."""
         lu = self._lu
         if blocks is None and not lu.dealt.shared:
@@ -186,16 +222,17 @@ class Newmark(CentralDifference):
             ku, cu = np.empty(self.n), None if self._pair is None else np.empty(self.n)
         else:
             ku, cu = old[0].copy(), None if old[1] is None else old[1].copy()
-        self._rows(u, self._my_nodes if blocks is None else self._nodes_of(mine), ku, cu)
-        dofs = self._block_dofs
-        parts = [(y[lu.blocks[k]], ku[dofs[k]], None if cu is None else cu[dofs[k]])
+        self._rows(u, self._nodes_of(self._row_nodes, mine), ku, cu)
+        dofs, rows = self._block_dofs, self._row_dofs
+        parts = [(y[lu.blocks[k]], ku[rows[k]], None if cu is None else cu[rows[k]])
                  for k in mine]
         for k, (yk, kk, ck) in lu.dealt.everyone(parts, blocks):
-            x[dofs[k]], ku[dofs[k]] = yk, kk
+            x[dofs[k]], ku[rows[k]] = yk, kk
             if cu is not None:
-                cu[dofs[k]] = ck
+                cu[rows[k]] = ck
         u = state(x)
-        self._rows(u, self._held_nodes, ku, cu)
+        if self._held_nodes.size:
+            self._rows(u, self._held_nodes, ku, cu)
         return x, u, (ku, cu)
 
     def _rows(self, u: np.ndarray, nodes: np.ndarray, ku: np.ndarray, cu) -> None:

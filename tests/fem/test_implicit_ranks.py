@@ -6,8 +6,9 @@ Reference: the same :class:`pdfem.fem.implicit.Newmark` on one process, with the
 and impulses: displacement, velocity, acceleration, ``K u``, the companion's ``K_sigma u`` and
 the works, compared with ``numpy.array_equal`` (docs/parallel.md: 1 and N ranks agree; here
 exactly, since every row and every block is the same arithmetic wherever it is done). An
-amendment by an impulse on one part recomputes only that part's rows and solve (and the held
-node's), which the serial reference checks too, against a whole product.
+amendment by an impulse on one part recomputes only that part's rows and solve (with its held
+root's, shipped with the part's rows, and the hub's, which meets every part), which the serial
+reference checks too, against a whole product.
 """
 
 from __future__ import annotations
@@ -30,18 +31,25 @@ from test_block_factor import blocky_spd  # noqa: E402
 
 def hub_and_blades() -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray, np.ndarray]:
     """Stiffness and companion (3 x 3 node blocks) of four parts (7, 5, 9, 6 nodes) that meet
-    only at one held node (27), lumped masses, and the held DOFs."""
+    only at one held node (27, the hub), each also held at a root node of its own (28-31),
+    lumped masses, and the held DOFs."""
     a, dofs = blocky_spd(sizes=(7, 5, 9, 6))
-    s = np.zeros((28, 28))
+    s = np.zeros((NODES, NODES))
     s[:27, :27] = a.toarray()
-    for d in dofs:
+    for p, d in enumerate(dofs):
         s[27, d[0]] = s[d[0], 27] = -0.5
+        s[28 + p, d[-1]] = s[d[-1], 28 + p] = -0.25
+        s[28 + p, 28 + p] = 5.0
     s[27, 27] = 10.0
     node = np.array([[2.0, 0.5, 0.1], [0.5, 2.0, 0.3], [0.1, 0.3, 2.0]])
     k = sp.csr_matrix(sp.kron(sp.csr_matrix(s), node) * 1e3)
     companion = sp.csr_matrix(sp.kron(sp.csr_matrix(s), np.eye(3) + 0.1) * -1e2)
-    mass = 1.0 + np.arange(84) / 84.0
-    return k, companion, mass, np.array([81, 82, 83])
+    mass = 1.0 + np.arange(N) / N
+    return k, companion, mass, np.arange(81, N)
+
+
+NODES = 32
+N = 3 * NODES
 
 
 def history(comm) -> list[np.ndarray]:
@@ -52,10 +60,10 @@ def history(comm) -> list[np.ndarray]:
     sol.add_companion(NodeBlockOperator(companion))
     sol.distribute(comm)
     rng = np.random.default_rng(3)
-    sol.initialize(u=np.where(sol.free, rng.standard_normal(84) * 1e-3, 0.0))
+    sol.initialize(u=np.where(sol.free, rng.standard_normal(N) * 1e-3, 0.0))
     out = []
     for i in range(6):
-        sol.step(1e-3, rng.standard_normal(84))
+        sol.step(1e-3, rng.standard_normal(N))
         if i in (2, 3):
             dofs = np.array([3 * 8, 3 * 8 + 2, 3 * 10 + 1, 82])   # part 1, and the held node
             out.append(np.array([sol.end_impulse(dofs, rng.standard_normal(4) * 1e-3)]))
@@ -66,15 +74,16 @@ def history(comm) -> list[np.ndarray]:
 
 def test_an_amendment_on_one_part_keeps_the_whole_product_s_bits():
     """Serial: after the amendments, ``K u`` and ``K_sigma u`` (only the amended part's rows
-    and the held node's recomputed) are the whole products of the state."""
+    and the held nodes' recomputed) are the whole products of the state."""
     from pdfem.parallel.comm import SerialComm
     k, companion, mass, fixed = hub_and_blades()
     sol = Newmark(k, mass, fixed_dofs=fixed)
     sol.add_companion(NodeBlockOperator(companion))
     sol.distribute(SerialComm())
     sol.initialize()
-    sol.step(1e-3, np.ones(84))
+    sol.step(1e-3, np.ones(N))
     sol.end_impulse(np.array([3 * 8]), np.array([1e-3]))
+    assert list(sol._held_nodes) == [27]      # the roots' rows go with their parts' rows
     assert np.array_equal(sol.stiffness_force(), k @ sol.u)
     assert np.array_equal(sol.companion_force(), companion @ sol.u)
     assert np.any(sol.u[3 * 7:3 * 12] != 0.0)
