@@ -345,7 +345,23 @@ class Newmark(CentralDifference):
         """The blocks (1/kg) of ``A^-1`` for the step ``dt`` (s) between the nodes whose x, y,
         z DOFs are the rows of ``node_dofs`` (m apart at ``points``), within a few decay
         lengths ``length`` (m) (zero rows and columns on Dirichlet DOFs), by probing
-        (:func:`pdfem.fem.step_compliance.probe`)."""
+        (:func:`pdfem.fem.step_compliance.probe`); with the blocks shared over ranks, each
+        rank solves its own blocks' probes and reads their rows, which go to every rank."""
         if dt != self._lu_dt:
             self._factorize(dt)
-        return probe(self._lu.solve, self._free_index, node_dofs, points, length)
+        lu = self._lu
+        if not lu.dealt.shared:
+            return probe(lu.solve, self._free_index, node_dofs, points, length)
+        block_of = np.empty(lu.n, dtype=np.int64)      # the block of each free DOF
+        for k, idx in enumerate(lu.blocks):
+            block_of[idx] = k
+
+        def complete(blocks: np.ndarray, rows: np.ndarray) -> None:
+            """Each rank solved its own blocks: the rows read there go to every rank."""
+            block = np.where(rows >= 0, block_of[np.maximum(rows, 0)], -1)
+            parts = [blocks[block == k] for k in lu.dealt.mine]
+            for k, part in lu.dealt.everyone(parts):
+                blocks[block == k] = part
+
+        return probe(lambda b: lu.solve_mine(b)[0], self._free_index, node_dofs, points,
+                     length, complete)

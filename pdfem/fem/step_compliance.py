@@ -35,7 +35,10 @@ component of every node of the colour, gives each of them its column of blocks o
 near it, up to the responses to the colour's other nodes, ``radius - reach`` or more away.
 ``radius`` = ``REACH`` + 8 decay lengths: the diagonal blocks are within 1e-3 of the exact
 ones at 8 l (largest relative Frobenius error of 60 sampled blocks: 6e-5 on the milling
-blades, 1e-3 on the demo panel). The blocks are symmetrised, ``C_ik = C_ki^T``.
+blades, 1e-3 on the demo panel). The blocks are symmetrised, ``C_ik = C_ki^T``. A solve
+shared over ranks (blocks of ``A`` dealt out, :mod:`pdfem.fem.block_factor`) gives each rank the
+rows of its own blocks; the rows read there go to every rank before the symmetrising, so that
+every rank has the blocks of one rank's probing, bit for bit.
 
 Units: kg (``A``), 1/kg (its inverse), m, s.
 """
@@ -90,12 +93,26 @@ class Coupling(NamedTuple):
 def colours(points: np.ndarray, radius: float) -> np.ndarray:
     """(N,) colour of each point: greedy in point order, the smallest colour that no earlier
     point within ``radius`` (m) has (deterministic)."""
-    near = cKDTree(points).query_ball_point(points, radius)
-    out = np.full(len(points), -1, dtype=np.int64)
-    for i, group in enumerate(near):
-        used = set(out[group][out[group] >= 0].tolist())
+    if len(points) == 0:
+        return np.zeros(0, dtype=np.int64)
+    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")   # (m, 2), i < j
+    later = pairs[np.lexsort((pairs[:, 0], pairs[:, 1]))]                # by the later point
+    start = np.searchsorted(later[:, 1], np.arange(len(points) + 1))
+    return _greedy_colours(start, later[:, 0].astype(np.int64))
+
+
+@numba.njit(cache=True)
+def _greedy_colours(start, earlier):
+    """Point ``i`` takes the smallest colour that none of ``earlier[start[i]:start[i + 1]]``
+    (its neighbours before it) has."""
+    n = start.shape[0] - 1
+    out = np.full(n, -1, dtype=np.int64)
+    seen = np.full(n + 1, -1, dtype=np.int64)     # seen[c] == i: colour c is taken near i
+    for i in range(n):
+        for p in range(start[i], start[i + 1]):
+            seen[out[earlier[p]]] = i
         c = 0
-        while c in used:
+        while seen[c] == i:
             c += 1
         out[i] = c
     return out
@@ -112,14 +129,16 @@ def _pairs(points: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def probe(solve: Callable[[np.ndarray], np.ndarray], free_index: np.ndarray,
-          node_dofs: np.ndarray, points: np.ndarray, length: float) -> Coupling:
+          node_dofs: np.ndarray, points: np.ndarray, length: float,
+          complete: Callable[[np.ndarray, np.ndarray], None] | None = None) -> Coupling:
     """The blocks of ``A^-1`` (1/kg) between the nodes ``node_dofs`` within ``REACH`` decay
     lengths, by probing with colours ``REACH + CLEAR`` decay lengths apart.
 
     Parameters
     ----------
     solve
-        ``X = solve(B)``: ``A X = B`` on the free DOFs, ``B`` of shape (free DOFs, k).
+        ``X = solve(B)``: ``A X = B`` on the free DOFs, ``B`` of shape (free DOFs, k) (on
+        some of the free DOFs only, with ``complete``).
     free_index
         (n,) index of each DOF among the free DOFs, -1 for a held DOF (its rows and columns
         of the blocks are 0).
@@ -129,6 +148,10 @@ def probe(solve: Callable[[np.ndarray], np.ndarray], free_index: np.ndarray,
         (Ns, 3) node positions (m).
     length
         The decay length (m), :func:`decay_length`.
+    complete
+        ``complete(blocks, rows)``: fill in the rows of ``blocks`` (P, 3, 3) that ``solve``
+        does not give: ``blocks[p, a, :]`` read at the free DOF ``rows[p, a]`` (-1: held) of
+        pair ``p``'s node ``i`` (a solve shared over ranks, each solving part of ``A``).
     """
     ns = len(node_dofs)
     start, index = _pairs(points, REACH * length)
@@ -138,25 +161,41 @@ def probe(solve: Callable[[np.ndarray], np.ndarray], free_index: np.ndarray,
     n_free = int(free_index.max()) + 1 if free_index.size else 0
     blocks = np.zeros((len(index), 3, 3))
     n_colours = int(colour.max()) + 1 if ns else 0
-    nodes_of, pairs_of = members(colour, n_colours), members(colour[index], n_colours)
+    nodes_of = members(colour, n_colours)
     free_k, free_i = free[index], free[row]                  # (P, 3): k's and i's free DOFs
     columns = [(c, d) for c in range(n_colours) for d in range(3)]
     for first in range(0, len(columns), BATCH):
         batch = columns[first:first + BATCH]
         rhs = np.zeros((n_free, len(batch)))
+        column_of = np.full((n_colours, 3), -1, dtype=np.int64)
         for j, (c, d) in enumerate(batch):
             nodes = nodes_of[c][free[nodes_of[c], d] >= 0]
             rhs[free[nodes, d], j] = 1.0
+            column_of[c, d] = j
         with threadpool_limits(limits=1, user_api="blas"):   # (a solve that calls BLAS, e.g.
             x = solve(rhs)                                    # SuperLU's, thrashes threaded: 14x)
-        for j, (c, d) in enumerate(batch):
-            # pairs (i, k), k of colour c: column d of C_ik, the response at i to k's load
-            sel = pairs_of[c][free_k[pairs_of[c], d] >= 0]
-            rows = free_i[sel]                               # (m, 3)
-            blocks[sel, :, d] = np.where(rows >= 0, x[np.maximum(rows, 0), j], 0.0)
+        _read_columns(np.ascontiguousarray(x), column_of, colour[index], free_k, free_i,
+                      blocks)
+    if complete is not None:
+        complete(blocks, free_i)
     # C_ik = C_ki^T: the mean of the two probes
     twin = np.lexsort((row, index))                          # pair (k, i) of each (i, k)
     return Coupling(start, index, 0.5 * (blocks + blocks[twin].transpose(0, 2, 1)))
+
+
+@numba.njit(cache=True)
+def _read_columns(x, column_of, colour_k, free_k, free_i, blocks):
+    """For each pair ``p`` = (i, k) and direction ``d`` whose column (k's colour, d) is
+    ``column_of[colour, d]`` of ``x`` (-1: not in it), k's DOF d free: column d of ``C_ik``,
+    ``blocks[p, a, d]`` = the response ``x`` at i's free DOF a (0 where it is held)."""
+    for p in range(blocks.shape[0]):
+        for d in range(3):
+            j = column_of[colour_k[p], d]
+            if j < 0 or free_k[p, d] < 0:
+                continue
+            for a in range(3):
+                r = free_i[p, a]
+                blocks[p, a, d] = x[r, j] if r >= 0 else 0.0
 
 
 @numba.njit(cache=True)

@@ -2,13 +2,13 @@
 amendments split over 2 ranks (each rank its own parts' solves and stiffness rows), holds the
 serial state bit for bit.
 
-Reference: the same :class:`pdfem.fem.implicit.Newmark` on one process, with the same forces
-and impulses: displacement, velocity, acceleration, ``K u``, the companion's ``K_sigma u`` and
-the works, compared with ``numpy.array_equal`` (docs/parallel.md: 1 and N ranks agree; here
-exactly, since every row and every block is the same arithmetic wherever it is done). An
-amendment by an impulse on one part recomputes only that part's rows and solve (with its held
-root's, shipped with the part's rows, and the hub's, which meets every part), which the serial
-reference checks too, against a whole product.
+Reference: the same :class:`pdfem.fem.implicit.Newmark` on one process, with the same forces and
+impulses: displacement, velocity, acceleration, ``K u``, the companion's ``K_sigma u`` and the
+works, and the contact compliance probed over the parts, compared with ``numpy.array_equal``
+(docs/parallel.md: 1 and N ranks agree; here exactly, since every row and every block is the
+same arithmetic wherever it is done). An amendment by an impulse on one part recomputes only
+that part's rows and solve (with its held root's, shipped with the part's rows, and the hub's,
+which meets every part), which the serial reference checks too, against a whole product.
 """
 
 from __future__ import annotations
@@ -69,7 +69,13 @@ def history(comm) -> list[np.ndarray]:
             out.append(np.array([sol.end_impulse(dofs, rng.standard_normal(4) * 1e-3)]))
         out += [sol.u, sol.v, sol.a, sol.stiffness_force(), sol.companion_force(),
                 np.array([sol.work_external, sol.work_supports])]
-    return out
+    # the probed compliance of every node (points on a helix, 0.2 m decay length): each rank
+    # probes its own parts, the rows read there go to every rank
+    nodes = np.arange(NODES)
+    points = np.stack([np.cos(nodes), np.sin(nodes), 0.05 * nodes], axis=1)
+    c = sol.compliance_blocks(1e-3, 3 * nodes[:, None] + np.arange(3), points, 0.2)
+    assert np.any(c.blocks != 0.0)
+    return out + [c.start, c.index, c.blocks]
 
 
 def test_an_amendment_on_one_part_keeps_the_whole_product_s_bits():
@@ -109,4 +115,4 @@ def test_two_ranks_step_and_amend_their_own_parts_and_agree_with_one_bit_for_bit
     script.write_text(SCRIPT)
     here = Path(__file__).parent
     r = run_script(script, 2, here, here.parent, timeout=300)
-    assert r.stdout.split("ok", 1)[1].strip() == str(6 * 6 + 2)
+    assert r.stdout.split("ok", 1)[1].strip() == str(6 * 6 + 2 + 3)
