@@ -126,6 +126,48 @@ def surface_world(r0, u, v, dofs, rot, c, c_dot, w, x, xv):
         xv[k, 2] = c_dot[2] + s2 + (rot[2, 0] * q0 + rot[2, 1] * q1 + rot[2, 2] * q2)
 
 
+@numba.njit(cache=True)
+def momentum_energy(r0, u, v, dofs, mass, rot, c_dot, w, axis):
+    """The angular momentum about ``axis`` (kg m^2/s) and the kinetic energy (J) of all nodes,
+    true motion in the world, lumped mass: ``sum m ((R r) x x') . n`` and ``1/2 sum m |x'|^2``
+    with ``x' = c' + w x (R r) + R u_e'`` (:func:`surface_world`'s velocity), summed node by
+    node.
+
+    Parameters
+    ----------
+    r0
+        (Nn, 3) reference positions from the frame's centre (m).
+    u, v
+        (n,) elastic displacement (m) and velocity (m/s), DOF vectors (frame axes).
+    dofs
+        (3, Nn) DOF of component c at node k.
+    mass
+        (Nn,) lumped node masses (kg).
+    rot, c_dot, w
+        The frame's rotation R (frame axes -> world axes), its centre's velocity (m/s) and
+        angular velocity (rad/s).
+    axis
+        (3,) the unit axis of the angular momentum (world axes).
+    """
+    momentum = 0.0
+    twice_energy = 0.0
+    for k in range(r0.shape[0]):
+        d0, d1, d2 = dofs[0, k], dofs[1, k], dofs[2, k]
+        r_0, r_1, r_2 = r0[k, 0] + u[d0], r0[k, 1] + u[d1], r0[k, 2] + u[d2]
+        a0 = rot[0, 0] * r_0 + rot[0, 1] * r_1 + rot[0, 2] * r_2
+        a1 = rot[1, 0] * r_0 + rot[1, 1] * r_1 + rot[1, 2] * r_2
+        a2 = rot[2, 0] * r_0 + rot[2, 1] * r_1 + rot[2, 2] * r_2
+        s0, s1, s2 = _cross(w[0], w[1], w[2], a0, a1, a2)
+        q0, q1, q2 = v[d0], v[d1], v[d2]
+        x0 = c_dot[0] + s0 + (rot[0, 0] * q0 + rot[0, 1] * q1 + rot[0, 2] * q2)
+        x1 = c_dot[1] + s1 + (rot[1, 0] * q0 + rot[1, 1] * q1 + rot[1, 2] * q2)
+        x2 = c_dot[2] + s2 + (rot[2, 0] * q0 + rot[2, 1] * q1 + rot[2, 2] * q2)
+        l0, l1, l2 = _cross(a0, a1, a2, x0, x1, x2)
+        momentum += mass[k] * (l0 * axis[0] + l1 * axis[1] + l2 * axis[2])
+        twice_energy += mass[k] * (x0 * x0 + x1 * x1 + x2 * x2)
+    return momentum, 0.5 * twice_energy
+
+
 @numba.njit(cache=True, inline="always")
 def _support_force(d, held, s, alpha):
     """The force (N) on DOF ``d`` between the structure and its frame: the support's reaction

@@ -75,7 +75,7 @@ import scipy.sparse as sp
 
 from pdfem.fem.section_stress import Section, section_of, stress_range
 from pdfem.geometry.vectors import cross
-from pdfem.motion.frame_kernels import StepVectors, support_torque_power
+from pdfem.motion.frame_kernels import StepVectors, momentum_energy, support_torque_power
 from pdfem.motion.stress_peaks import StressPeaks
 from pdfem.parallel.comm import SerialComm
 
@@ -225,8 +225,9 @@ class ShaftLoads:
         self._last_dt = 0.0                      # s, the last step (amend_step)
         self.shaft_work = 0.0                    # J
         self.shaft_angular_impulse = 0.0         # N m s
-        self.energy0 = self.kinetic_energy() + self.strain_energy()        # J, at the start
-        self.angular_momentum0 = self.angular_momentum()                   # kg m^2/s
+        momentum, energy = self.momentum_energy()
+        self.energy0 = energy + self.strain_energy()       # J, at the start
+        self.angular_momentum0 = momentum                  # kg m^2/s
 
     def distribute(self, comm) -> None:
         """Share the blades' element stresses over the ranks of ``comm``
@@ -291,26 +292,15 @@ class ShaftLoads:
         self.shaft_torque, self.shaft_power = q, p
 
     # ------------------------------------------------------------------ state
-    def _world_motion(self) -> tuple[np.ndarray, np.ndarray]:
-        """(Nn, 3) node positions relative to the frame's centre (m) and velocities (m/s),
-        world axes, true motion."""
+    def momentum_energy(self) -> tuple[float, float]:
+        """The structure's angular momentum about the shaft axis (kg m^2/s) and its kinetic
+        energy in the world (J), true motion, lumped mass (one pass,
+        :func:`pdfem.motion.frame_kernels.momentum_energy`)."""
         s = self.structure
-        r, v = s.relative_motion()
-        x, w = s.frame.to_world(s.solver.time, r, v)
-        return x - s.frame.state(s.solver.time)["c"], w
-
-    def angular_momentum(self, motion: tuple | None = None) -> float:
-        """The structure's angular momentum about the shaft axis (kg m^2/s), true motion
-        (``motion``: :meth:`_world_motion`, if known)."""
-        x, w = self._world_motion() if motion is None else motion
-        return float((cross(x, w) * self.structure.node_mass[:, None]).sum(axis=0)
-                     @ self.axis)
-
-    def kinetic_energy(self, motion: tuple | None = None) -> float:
-        """The structure's kinetic energy in the world (J), true velocity, lumped mass
-        (``motion``: :meth:`_world_motion`, if known)."""
-        _, w = self._world_motion() if motion is None else motion
-        return 0.5 * float(np.sum(self.structure.node_mass[:, None] * w * w))
+        f = s.frame.state(s.solver.time)
+        momentum, energy = momentum_energy(self._r0, s.solver.u, s.solver.v, self._dofs,
+                                           s.node_mass, f["R"], f["c_dot"], f["w"], self.axis)
+        return float(momentum), float(energy)
 
     def strain_energy(self) -> float:
         """Strain energy ``1/2 u . K u`` (J), with the integrator's ``K u`` (no product)."""
@@ -323,57 +313,65 @@ class ShaftLoads:
 
     def rows(self) -> dict[str, dict[str, float | np.ndarray]]:
         """The rows of the coupling step ending now (forces are the step's impulses over its
-        length) and restart the step's sums: ``""`` (the shaft) and one per blade label."""
+        length) and restart the step's sums: ``""`` (the shaft) and one per blade label, each
+        blade's on the rank that evaluates its stresses (shared with its peak). Collective
+        when the blades are dealt out."""
         s = self.structure
         step = s.solver.time - self.last_time
         scale = 1.0 / step if step > 0.0 else 0.0
         force = self.impulse_world.sum(axis=0) * scale
         moment = self.moment_frame.sum(axis=0) * scale
-        (peak, element), blade_peaks = self._peaks.peaks(s.solver.u)
-        motion = self._world_motion()
+        held = self.held_reactions()
+        r_held = self._r0[self._held_nodes] + s.dofmap.to_nodal(s.solver.u)[self._held_nodes]
+        (peak, element), _, blade_rows = self._peaks.peaks_with(
+            s.solver.u, lambda b, bpeak: self._blade_row(b, bpeak, held, r_held, scale))
+        momentum, energy = self.momentum_energy()
         out = {"": {"frame_angle": s.frame.angle(s.solver.time),
                     "ice_torque": -float(moment @ self.axis), "thrust": float(force @ self.axis),
                     "ice_force": force, "shaft_torque": self.shaft_torque,
                     "shaft_power": self.shaft_power, "shaft_work": self.shaft_work,
                     "shaft_angular_impulse": self.shaft_angular_impulse,
                     "ice_work": self.ice_work, "ice_angular_impulse": self.ice_angular_impulse,
-                    "angular_momentum_change": self.angular_momentum(motion)
-                    - self.angular_momentum0,
-                    "energy_change": self.kinetic_energy(motion) + self.strain_energy()
-                    - self.energy0,
+                    "angular_momentum_change": momentum - self.angular_momentum0,
+                    "energy_change": energy + self.strain_energy() - self.energy0,
                     "damping_dissipated": s.solver.damping_dissipated,
                     "max_von_mises": peak,
                     "max_von_mises_location": self._centre(element)}}
-        held = self.held_reactions()
-        r_held = self._r0[self._held_nodes] + s.dofmap.to_nodal(s.solver.u)[self._held_nodes]
-        on_blade = self._on_blade
-        j_world, j_frame = on_blade @ self.impulse_world, on_blade @ self.impulse_frame
-        m_frame = on_blade @ self.moment_frame
-        for b, ((label, mask, p, axes), rows, section, (bpeak, belement)) in enumerate(
-                zip(self.blades, self._root_rows, self._sections, blade_peaks)):
-            root_moment = -cross(r_held[rows] - p, held[rows]).sum(axis=0)
-            jf = j_frame[b] * scale
-            m = (m_frame[b] - cross(p, j_frame[b])) * scale
-            out[label] = {"force": j_world[b] * scale,
-                          "force_blade": axes @ jf,
-                          "ice_torque": -float(m_frame[b] @ self.axis) * scale,
-                          "thrust": float(jf @ self.axis),
-                          "spindle_torque": float(axes[0] @ m),
-                          "bending_out_of_plane": float(axes[1] @ m),
-                          "bending_in_plane": float(axes[2] @ m),
-                          "root_moment": axes @ root_moment,
-                          "max_von_mises": bpeak,
-                          "max_von_mises_location": self._centre(belement)}
-            if section is not None:   # the same resultants about the section's centroid
-                force_on_root = -held[rows].sum(axis=0)
-                out[label].update(root_stress(
-                    section, force_on_root,
-                    root_moment + cross(p - section.centroid, force_on_root)))
+        out.update((blade[0], row) for blade, row in zip(self.blades, blade_rows))
         self.impulse_world[:] = 0.0
         self.impulse_frame[:] = 0.0
         self.moment_frame[:] = 0.0
         self.last_time = s.solver.time
         return out
+
+    def _blade_row(self, b: int, peak: tuple[float, int], held: np.ndarray, r_held: np.ndarray,
+                   scale: float) -> dict[str, float | np.ndarray]:
+        """Blade ``b``'s row: the ice's loads on it (its impulses times ``scale``, 1/s), its
+        root moment and stresses from the supports' forces ``held`` (N) on the held nodes at
+        ``r_held`` (m, frame axes from the centre), and its element stress ``peak`` (Pa,
+        element)."""
+        label, mask, p, axes = self.blades[b]
+        rows, section, on = self._root_rows[b], self._sections[b], self._on_blade[b]
+        j_world, j_frame, m_frame = (on @ self.impulse_world, on @ self.impulse_frame,
+                                     on @ self.moment_frame)
+        root_moment = -cross(r_held[rows] - p, held[rows]).sum(axis=0)
+        jf = j_frame * scale
+        m = (m_frame - cross(p, j_frame)) * scale
+        row = {"force": j_world * scale,
+               "force_blade": axes @ jf,
+               "ice_torque": -float(m_frame @ self.axis) * scale,
+               "thrust": float(jf @ self.axis),
+               "spindle_torque": float(axes[0] @ m),
+               "bending_out_of_plane": float(axes[1] @ m),
+               "bending_in_plane": float(axes[2] @ m),
+               "root_moment": axes @ root_moment,
+               "max_von_mises": peak[0],
+               "max_von_mises_location": self._centre(peak[1])}
+        if section is not None:   # the same resultants about the section's centroid
+            force_on_root = -held[rows].sum(axis=0)
+            row.update(root_stress(section, force_on_root,
+                                   root_moment + cross(p - section.centroid, force_on_root)))
+        return row
 
     def checkpoint_state(self) -> dict[str, np.ndarray | float]:
         """The step's sums and the running integrals, for a checkpoint."""

@@ -1,22 +1,23 @@
 """The largest element von Mises stress of a structure and of each of its parts (a propeller's
 blades), every coupling step, each part's elements evaluated once over the ranks.
 
-A rotating structure reports every step the peak von Mises stress over all its elements and
-over each blade (:mod:`pdfem.motion.shaft_loads`). The stress at an element's centre is one
-sparse product of the displacement (:func:`pdfem.motion.shaft_loads.gradient_operator`) and
-Hooke's law, element by element. :class:`StressPeaks` keeps that product split by part: with a
+A rotating structure reports every step the peak von Mises stress over all its elements and over
+each blade (:mod:`pdfem.motion.shaft_loads`). The stress at an element's centre is one sparse
+product of the displacement (:func:`pdfem.motion.shaft_loads.gradient_operator`) and Hooke's
+law, element by element. :class:`StressPeaks` keeps that product split by part: with a
 communicator of several ranks the parts are dealt out by their element counts
-(:class:`pdfem.parallel.deal.Dealt`), each rank evaluates its own parts' elements, and the parts'
-peaks (value and element) are shared. The elements in no part are evaluated on every rank. The
-peaks are those of the whole field bit for bit: each element's stress is the same arithmetic
-on any rank (its own row of the product, element-wise operations after it), and the overall
-peak is the largest of the parts' peaks, the first element on a tie, as ``numpy.argmax`` over
-all elements picks it. Stresses in Pa.
+(:class:`pdfem.parallel.deal.Dealt`), each rank evaluates its own parts' elements, and the
+parts' peaks (value and element) are shared, with anything else the caller makes of each part
+there (:meth:`StressPeaks.peaks_with`: a blade's row of the shaft loads). The elements in no
+part are evaluated on every rank. The peaks are those of the whole field bit for bit: each
+element's stress is the same arithmetic on any rank (its own row of the product, element-wise
+operations after it), and the overall peak is the largest of the parts' peaks, the first element
+on a tie, as ``numpy.argmax`` over all elements picks it. Stresses in Pa.
 """
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -92,8 +93,20 @@ class StressPeaks:
     def peaks(self, u: np.ndarray) -> tuple[tuple[float, int], list[tuple[float, int]]]:
         """The peak over all elements and that of each part, as ``(von Mises stress (Pa),
         element)``, of the displacement ``u`` (m). Collective when the parts are dealt out."""
-        mine = [_peak(self._von_mises(self._grads[k], u), self.parts[k])
-                for k in self.dealt.mine]
-        parts = [peak for _, peak in sorted(self.dealt.everyone(mine))]
+        overall, parts, _ = self.peaks_with(u)
+        return overall, parts
+
+    def peaks_with(self, u: np.ndarray, report: Callable[[int, tuple[float, int]], object]
+                   | None = None) -> tuple[tuple[float, int], list[tuple[float, int]], list]:
+        """:meth:`peaks`, and each part's ``report(k, peak)`` made on the rank that evaluates
+        part ``k`` and shared with its peak (None without ``report``): the overall peak, the
+        parts' peaks and their reports, in part order. Collective when the parts are dealt
+        out."""
+        mine = []
+        for k in self.dealt.mine:
+            peak = _peak(self._von_mises(self._grads[k], u), self.parts[k])
+            mine.append((peak, None if report is None else report(k, peak)))
+        every = [part for _, part in sorted(self.dealt.everyone(mine), key=lambda kp: kp[0])]
+        parts = [peak for peak, _ in every]
         rest = _peak(self._von_mises(self._rest_grad, u), self.rest)
-        return _largest(parts + [rest]), parts
+        return _largest(parts + [rest]), parts, [r for _, r in every]

@@ -2,13 +2,14 @@
 
 Reference: the d'Alembert loads of a rotating, accelerating frame, f = -m [R^T a_c + w' x r
 + w x (w x r) + 2 w x u_e'], and the rigid-body kinematics x = c + R r, v = c' + w x (R r) +
-R u_e' (docs/rotating_structures.md), written with numpy.cross on random states.
+R u_e' (docs/rotating_structures.md), written with numpy.cross on random states; with them
+the angular momentum sum m (R r) x v . n and kinetic energy 1/2 sum m |v|^2.
 """
 
 import numpy as np
 
-from pdfem.motion.frame_kernels import (StepVectors, inertial_loads, support_torque_power,
-                                        surface_world)
+from pdfem.motion.frame_kernels import (StepVectors, inertial_loads, momentum_energy,
+                                        support_torque_power, surface_world)
 from pdfem.motion.rotation import axis_rotation
 
 
@@ -49,6 +50,21 @@ def test_surface_world_is_the_rigid_motion_plus_the_elastic_one():
     r = r0 + u[table]
     assert np.allclose(x, c + r @ R.T, rtol=0, atol=1e-14)
     assert np.allclose(xv, c_dot + np.cross(w, r @ R.T) + v[table] @ R.T, rtol=0, atol=1e-14)
+
+
+def test_momentum_and_energy_of_the_nodes_true_motion():
+    rng, dofs, r0, u, v = _state()
+    mass = rng.uniform(0.1, 2.0, len(r0))
+    axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    R = axis_rotation(axis, 0.7)
+    c_dot, w = rng.standard_normal((2, 3))
+    momentum, energy = momentum_energy(r0, u, v, dofs, mass, R, c_dot, w, axis)
+    rr = (r0 + u[dofs.T]) @ R.T
+    vel = c_dot + np.cross(w, rr) + v[dofs.T] @ R.T
+    expected_l = float((mass[:, None] * np.cross(rr, vel)).sum(axis=0) @ axis)
+    expected_e = 0.5 * float(np.sum(mass[:, None] * vel * vel))
+    assert abs(momentum - expected_l) < 1e-13 * np.sum(mass * np.abs(np.cross(rr, vel)).sum(1))
+    assert abs(energy - expected_e) < 1e-14 * expected_e
 
 
 def test_support_torque_and_power_of_the_held_and_damped_nodes():

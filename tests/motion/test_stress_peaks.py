@@ -79,6 +79,13 @@ SCRIPT = textwrap.dedent('''
     split, serial = StressPeaks(grad, material, parts, comm), StressPeaks(grad, material, parts)
     assert split.peaks(u) == serial.peaks(u), "not the serial peaks"
     evaluated = comm.gather(split.dealt.mine)   # the parts whose stresses it evaluates
+    # each part's report is made once, on the rank of the part, and reaches every rank
+    made = []
+    report = lambda k, peak: (made.append(k), (k, comm.rank, peak))[1]
+    overall, peaks, reports = split.peaks_with(u, report)
+    assert made == split.dealt.mine
+    assert (overall, peaks) == serial.peaks(u)
+    assert reports == [(k, int(split.dealt.owner[k]), peak) for k, peak in enumerate(peaks)]
     if comm.rank == 0:
         print("ok", evaluated)
 ''')
