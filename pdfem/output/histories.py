@@ -118,7 +118,11 @@ class History:
                              f"{sorted(self.shapes)}, got {sorted(values)}")
         c = self.count
         for k, v in values.items():
-            if np.shape(v) != self.shapes[k]:
+            # (the shape of a float or an array without numpy.shape's call: a row is written
+            # every coupling step, some thirty groups of them)
+            shape = (() if type(v) is float else v.shape if isinstance(v, (np.ndarray, np.generic))
+                     else np.shape(v))
+            if shape != self.shapes[k]:
                 raise ValueError(f"history {self.path!r}: {k!r} has shape {np.shape(v)}, "
                                  f"expected {self.shapes[k]} as in the first row")
             self.buffers[k][c] = v
