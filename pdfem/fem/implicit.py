@@ -13,15 +13,15 @@ step does not follow the elements' critical step, so a structure advanced this w
 ice's coupling step without subcycling. The matrix ``A = M + dt/2 C + dt^2/4 K`` of the free DOFs
 is factorised once per step size, block by independent block (:mod:`pdfem.fem.block_factor`:
 SuperLU's minimum-degree ordering of ``A + A^T``, kept as ``L D L^T``) and each step is two
-matrix-vector products (``K u_p``, and ``K u_new``, kept for the supports, the strain energy
-and the shaft) and one pair of triangular solves. The blocks may be shared out over the ranks
+matrix-vector products (``K u_p``, and ``K u_new``, kept for the supports, the strain energy and
+the shaft) and one pair of triangular solves. The blocks may be shared out over the ranks
 (:meth:`Newmark.distribute`): each rank then solves its own blocks and computes their rows of
 the two products, with the rows of the held nodes that meet only that block (a blade's clamped
-root), the ranks share them in one exchange a step, and every rank computes the rows of the
-held nodes that meet several blocks: every rank holds the whole state, the serial bits. Accuracy: the period of a mode
-of circular frequency omega lengthens by about ``(omega dt)^2 / 12``; 20 steps per period keep it
-within 1 % (Hughes, Table 9.1.1 and Eq. 9.1.79), so the modes the coupled step resolves (the
-step is the ice's) are integrated as accurately as by the explicit scheme.
+root), the ranks share them in one exchange a step, and every rank computes the rows of the held
+nodes that meet several blocks: every rank holds the whole state, the serial bits. Accuracy: the
+period of a mode of circular frequency omega lengthens by about ``(omega dt)^2 / 12``; 20 steps
+per period keep it within 1 % (Hughes, Table 9.1.1 and Eq. 9.1.79), so the modes the coupled
+step resolves (the step is the ice's) are integrated as accurately as by the explicit scheme.
 
 Energy. The two update rules give ``u_new - u = dt (v + v_new) / 2``, and with that the change of
 ``1/2 v . M v + 1/2 u . K u`` over a step is exactly the trapezoidal work
@@ -43,13 +43,14 @@ response to that end force, ``A a' = 2 J / dt``::
 
 and the force is then taken out of the end acceleration (``a_new -= 2 J / (dt m)`` on the free
 DOFs), so the next step starts from ``M a + C v + K u = f`` without it and the impulse acts
-once. Only the blocks the impulses touch move: only their solves and their rows of ``K u``
-(with the rows of their held nodes, and of those that meet several blocks) are done again (an ice contact on one blade amends that blade). Its work is the trapezoidal work of that force, ``J . (u_new - u) / dt``, with the
-amended ``u_new``: the energy identity above then holds with it, to round-off. The mean
-displacement of the step per unit impulse, ``(dt/2) A^-1 / dt = A^-1 / 2``, is the structure's
-compliance for the contact (:mod:`pdfem.fem.step_compliance`); as ``dt -> 0`` it is half the
-explicit scheme's ``M^-1`` (there the impulse is a velocity jump at the substep's start, here
-a force ramp over the step).
+once. Only the blocks the impulses touch move: only their solves and their rows of ``K u`` (with
+the rows of their held nodes, and of those that meet several blocks) are done again (an ice
+contact on one blade amends that blade). Its work is the trapezoidal work of that force,
+``J . (u_new - u) / dt``, with the amended ``u_new``: the energy identity above then holds with
+it, to round-off. The mean displacement of the step per unit impulse,
+``(dt/2) A^-1 / dt = A^-1 / 2``, is the structure's compliance for the contact
+(:mod:`pdfem.fem.step_compliance`); as ``dt -> 0`` it is half the explicit scheme's ``M^-1``
+(there the impulse is a velocity jump at the substep's start, here a force ramp over the step).
 
 Units as in :mod:`pdfem.fem.explicit`: m, m/s, m/s^2, N, kg, s.
 """
