@@ -69,7 +69,8 @@ class StressPeaks:
         self.material = material
         n_el = grad.shape[0] // 9
         self._whole = any(p is None for p in parts)
-        self.parts = [np.arange(n_el) if p is None else np.asarray(p, dtype=np.int64)
+        # ascending: a part's first peak is then its smallest element, as argmax over all
+        self.parts = [np.arange(n_el) if p is None else np.unique(np.asarray(p, dtype=np.int64))
                       for p in parts]
         covered = np.zeros(n_el, dtype=bool)
         for p in self.parts:

@@ -51,6 +51,20 @@ def test_peaks_part_by_part_are_the_whole_field_s():
     assert overall == ref_overall and per_part == ref_parts
 
 
+def test_a_non_finite_stress_is_the_peak_at_its_first_element():
+    """A NaN displacement: the peak is NaN at the lowest-numbered element it reaches, as
+    ``numpy.argmax`` takes it, also from a part that lists those elements backwards."""
+    grad, u, material, _ = problem(2)
+    u[7] = np.nan
+    hit = np.unique(grad[:, 7].nonzero()[0] % N_EL)          # the elements the DOF reaches
+    vm = reference(grad, u, material, [hit])[2]
+    parts = [hit[::-1], np.setdiff1d(np.arange(N_EL), hit)]
+    overall, per_part = StressPeaks(grad, material, parts).peaks(u)
+    assert len(hit) > 2 and np.isnan(vm).sum() == len(hit)
+    assert np.isnan(overall[0]) and overall[1] == int(np.argmax(vm)) == hit[0]
+    assert np.isnan(per_part[0][0]) and per_part[0][1] == hit[0]
+
+
 def test_a_tie_goes_to_the_first_element_and_a_part_of_none_is_everything():
     """Two parts whose elements have the same gradient rows (a symmetric propeller's blades):
     the overall peak is the lower-numbered element, as ``numpy.argmax`` takes it."""
