@@ -225,12 +225,15 @@ class Newmark(CentralDifference):
             ku, cu = old[0].copy(), None if old[1] is None else old[1].copy()
         self._rows(u, self._nodes_of(self._row_nodes, mine), ku, cu)
         dofs, rows = self._block_dofs, self._row_dofs
-        parts = [(y[lu.blocks[k]], ku[rows[k]], None if cu is None else cu[rows[k]])
-                 for k in mine]
-        for k, (yk, kk, ck) in lu.dealt.everyone(parts, blocks):
-            x[dofs[k]], ku[rows[k]] = yk, kk
+        parts = [np.concatenate([y[lu.blocks[k]], ku[rows[k]]]
+                                + ([] if cu is None else [cu[rows[k]]])) for k in mine]
+        sizes = [len(dofs[k]) + len(rows[k]) * (1 if cu is None else 2)
+                 for k in range(len(dofs))]
+        for k, part in lu.dealt.everyone_arrays(parts, sizes, blocks):
+            n_y, n_r = len(dofs[k]), len(rows[k])
+            x[dofs[k]], ku[rows[k]] = part[:n_y], part[n_y:n_y + n_r]
             if cu is not None:
-                cu[rows[k]] = ck
+                cu[rows[k]] = part[n_y + n_r:]
         u = state(x)
         if self._held_nodes.size:
             self._rows(u, self._held_nodes, ku, cu)

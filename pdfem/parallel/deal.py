@@ -66,6 +66,26 @@ class Dealt:
         return [(int(k), part) for rank, rank_parts in enumerate(self.comm.allgather(parts))
                 for k, part in zip(every[self.owner[every] == rank], rank_parts)]
 
+    def everyone_arrays(self, parts: list[np.ndarray], sizes: Sequence[int],
+                        pieces: Sequence[int] | None = None) -> list[tuple[int, np.ndarray]]:
+        """:meth:`everyone` for float64 results whose lengths every rank knows (``sizes[k]`` for
+        piece ``k``): one all-gather of their concatenation as a buffer, nothing pickled.
+        ``parts`` are this rank's results (flat) of its pieces among ``pieces``, in that
+        order. Collective when pieces are dealt out."""
+        if not self._shared:
+            return list(zip(self.mine_of(pieces), parts))
+        every = (np.arange(len(self.owner)) if pieces is None
+                 else np.asarray(pieces, dtype=np.int64))
+        by_rank = [every[self.owner[every] == rank] for rank in range(self.comm.size)]
+        counts = [int(sum(sizes[k] for k in ks)) for ks in by_rank]
+        flat = self.comm.allgatherv(np.concatenate(parts) if parts else np.zeros(0), counts)
+        out, at = [], 0
+        for ks in by_rank:
+            for k in ks:
+                out.append((int(k), flat[at:at + sizes[k]]))
+                at += sizes[k]
+        return out
+
     def mine_of(self, pieces: Sequence[int] | None = None) -> list[int]:
         """This rank's pieces among ``pieces`` (ascending; default all): :attr:`mine` there."""
         if pieces is None:

@@ -23,7 +23,7 @@ import scipy.sparse as sp
 from pdfem.fem.implicit import Newmark
 from pdfem.fem.node_blocks import NodeBlockOperator
 
-from support.mpi import run_script
+from support.mpi import script_says
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_block_factor import blocky_spd  # noqa: E402
@@ -111,8 +111,4 @@ SCRIPT = textwrap.dedent('''
 
 
 def test_two_ranks_step_and_amend_their_own_parts_and_agree_with_one_bit_for_bit(tmp_path):
-    script = tmp_path / "implicit.py"
-    script.write_text(SCRIPT)
-    here = Path(__file__).parent
-    r = run_script(script, 2, here, here.parent, timeout=300)
-    assert r.stdout.split("ok", 1)[1].strip() == str(6 * 6 + 2 + 3)
+    assert script_says(SCRIPT, 2, tmp_path, __file__) == str(6 * 6 + 2 + 3)

@@ -38,3 +38,15 @@ def run_script(script: Path, ranks: int, *args: str | Path, **kwargs
                ) -> subprocess.CompletedProcess:
     """Run the Python file ``script`` with ``ARGS`` on ``ranks`` ranks (see :func:`run_ranks`)."""
     return run_ranks(ranks, sys.executable, script, *args, **kwargs)
+
+
+def script_says(text: str, ranks: int, tmp_path: Path, test_file: str) -> str:
+    """Run the Python source ``text`` on ``ranks`` ranks, with the test's folder and the tests'
+    folder as its arguments (``sys.argv[1:]``, for its imports), and return what it printed
+    after "ok" (rank 0's report); the test fails if a rank fails or nothing says "ok"."""
+    script = tmp_path / "ranks_script.py"
+    script.write_text(text)
+    here = Path(test_file).parent
+    r = run_script(script, ranks, here, here.parent, timeout=300)
+    assert "ok" in r.stdout, r.stdout
+    return r.stdout.split("ok", 1)[1].strip()
