@@ -156,6 +156,10 @@ class Newmark(CentralDifference):
         self._row_dofs = [self._dofs_of(nodes) for nodes in self._row_nodes]
         self._held_nodes = held[met < 0]
         self._my_nodes = self._nodes_of(self._block_nodes, self._lu.dealt.mine)
+        # floats a block sends in a step's exchange: its solution, its rows of K u (and of the
+        # companion's product)
+        self._exchange_sizes = [len(d) + len(r) * (1 if self._pair is None else 2)
+                                for d, r in zip(self._block_dofs, self._row_dofs)]
 
     def _block_met(self, nodes: np.ndarray) -> np.ndarray:
         """(N,) the one block that the rows of ``nodes`` in ``K`` (and in the companion) meet,
@@ -227,9 +231,7 @@ class Newmark(CentralDifference):
         dofs, rows = self._block_dofs, self._row_dofs
         parts = [np.concatenate([y[lu.blocks[k]], ku[rows[k]]]
                                 + ([] if cu is None else [cu[rows[k]]])) for k in mine]
-        sizes = [len(dofs[k]) + len(rows[k]) * (1 if cu is None else 2)
-                 for k in range(len(dofs))]
-        for k, part in lu.dealt.everyone_arrays(parts, sizes, blocks):
+        for k, part in lu.dealt.everyone_arrays(parts, self._exchange_sizes, blocks):
             n_y, n_r = len(dofs[k]), len(rows[k])
             x[dofs[k]], ku[rows[k]] = part[:n_y], part[n_y:n_y + n_r]
             if cu is not None:
@@ -356,13 +358,9 @@ class Newmark(CentralDifference):
         lu = self._lu
         if not lu.dealt.shared:
             return probe(lu.solve, self._free_index, node_dofs, points, length)
-        block_of = np.empty(lu.n, dtype=np.int64)      # the block of each free DOF
-        for k, idx in enumerate(lu.blocks):
-            block_of[idx] = k
-
         def complete(blocks: np.ndarray, rows: np.ndarray) -> None:
             """Each rank solved its own blocks: the rows read there go to every rank."""
-            block = np.where(rows >= 0, block_of[np.maximum(rows, 0)], -1)
+            block = np.where(rows >= 0, self._dof_block[self._free_idx[np.maximum(rows, 0)]], -1)
             parts = [blocks[block == k] for k in lu.dealt.mine]
             for k, part in lu.dealt.everyone(parts):
                 blocks[block == k] = part

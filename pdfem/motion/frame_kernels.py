@@ -91,6 +91,22 @@ def inertial_loads(r0, u, v, dofs, mass, acc_c, w_dot, w, s2, ksu, out):
         out[d2] = f2
 
 
+@numba.njit(cache=True, inline="always")
+def _node_motion(r0, u, v, k, d0, d1, d2, rot, c_dot, w):
+    """Node ``k``'s turned position ``R r`` (m, from the frame's centre, world axes) and its
+    true velocity ``c' + w x (R r) + R u_e'`` (m/s), ``r = X - c0 + u_e``; its DOFs d0-d2."""
+    r_0, r_1, r_2 = r0[k, 0] + u[d0], r0[k, 1] + u[d1], r0[k, 2] + u[d2]
+    a0 = rot[0, 0] * r_0 + rot[0, 1] * r_1 + rot[0, 2] * r_2
+    a1 = rot[1, 0] * r_0 + rot[1, 1] * r_1 + rot[1, 2] * r_2
+    a2 = rot[2, 0] * r_0 + rot[2, 1] * r_1 + rot[2, 2] * r_2
+    s0, s1, s2 = _cross(w[0], w[1], w[2], a0, a1, a2)
+    q0, q1, q2 = v[d0], v[d1], v[d2]
+    return (a0, a1, a2,
+            c_dot[0] + s0 + (rot[0, 0] * q0 + rot[0, 1] * q1 + rot[0, 2] * q2),
+            c_dot[1] + s1 + (rot[1, 0] * q0 + rot[1, 1] * q1 + rot[1, 2] * q2),
+            c_dot[2] + s2 + (rot[2, 0] * q0 + rot[2, 1] * q1 + rot[2, 2] * q2))
+
+
 @numba.njit(cache=True)
 def surface_world(r0, u, v, dofs, rot, c, c_dot, w, x, xv):
     """World positions ``x`` (m) and velocities ``xv`` (m/s), (Ns, 3), of surface nodes.
@@ -111,19 +127,11 @@ def surface_world(r0, u, v, dofs, rot, c, c_dot, w, x, xv):
         (Ns, 3) outputs.
     """
     for k in range(r0.shape[0]):
-        d0, d1, d2 = dofs[k, 0], dofs[k, 1], dofs[k, 2]
-        r_0, r_1, r_2 = r0[k, 0] + u[d0], r0[k, 1] + u[d1], r0[k, 2] + u[d2]
-        a0 = rot[0, 0] * r_0 + rot[0, 1] * r_1 + rot[0, 2] * r_2
-        a1 = rot[1, 0] * r_0 + rot[1, 1] * r_1 + rot[1, 2] * r_2
-        a2 = rot[2, 0] * r_0 + rot[2, 1] * r_1 + rot[2, 2] * r_2
+        a0, a1, a2, xv[k, 0], xv[k, 1], xv[k, 2] = _node_motion(
+            r0, u, v, k, dofs[k, 0], dofs[k, 1], dofs[k, 2], rot, c_dot, w)
         x[k, 0] = c[0] + a0
         x[k, 1] = c[1] + a1
         x[k, 2] = c[2] + a2
-        s0, s1, s2 = _cross(w[0], w[1], w[2], a0, a1, a2)
-        q0, q1, q2 = v[d0], v[d1], v[d2]
-        xv[k, 0] = c_dot[0] + s0 + (rot[0, 0] * q0 + rot[0, 1] * q1 + rot[0, 2] * q2)
-        xv[k, 1] = c_dot[1] + s1 + (rot[1, 0] * q0 + rot[1, 1] * q1 + rot[1, 2] * q2)
-        xv[k, 2] = c_dot[2] + s2 + (rot[2, 0] * q0 + rot[2, 1] * q1 + rot[2, 2] * q2)
 
 
 @numba.njit(cache=True)
@@ -152,16 +160,8 @@ def momentum_energy(r0, u, v, dofs, mass, rot, c_dot, w, axis):
     momentum = 0.0
     twice_energy = 0.0
     for k in range(r0.shape[0]):
-        d0, d1, d2 = dofs[0, k], dofs[1, k], dofs[2, k]
-        r_0, r_1, r_2 = r0[k, 0] + u[d0], r0[k, 1] + u[d1], r0[k, 2] + u[d2]
-        a0 = rot[0, 0] * r_0 + rot[0, 1] * r_1 + rot[0, 2] * r_2
-        a1 = rot[1, 0] * r_0 + rot[1, 1] * r_1 + rot[1, 2] * r_2
-        a2 = rot[2, 0] * r_0 + rot[2, 1] * r_1 + rot[2, 2] * r_2
-        s0, s1, s2 = _cross(w[0], w[1], w[2], a0, a1, a2)
-        q0, q1, q2 = v[d0], v[d1], v[d2]
-        x0 = c_dot[0] + s0 + (rot[0, 0] * q0 + rot[0, 1] * q1 + rot[0, 2] * q2)
-        x1 = c_dot[1] + s1 + (rot[1, 0] * q0 + rot[1, 1] * q1 + rot[1, 2] * q2)
-        x2 = c_dot[2] + s2 + (rot[2, 0] * q0 + rot[2, 1] * q1 + rot[2, 2] * q2)
+        a0, a1, a2, x0, x1, x2 = _node_motion(r0, u, v, k, dofs[0, k], dofs[1, k], dofs[2, k],
+                                              rot, c_dot, w)
         l0, l1, l2 = _cross(a0, a1, a2, x0, x1, x2)
         momentum += mass[k] * (l0 * axis[0] + l1 * axis[1] + l2 * axis[2])
         twice_energy += mass[k] * (x0 * x0 + x1 * x1 + x2 * x2)

@@ -211,7 +211,7 @@ class ShaftLoads:
         self._root_rows = [np.flatnonzero(np.isin(self._held_nodes, root)) for root in self._roots]
         self._r0 = r0                                             # m, X - c0
         n = len(structure.surface_nodes)
-        # (B, Ns) 1 where a surface node is on blade b: the blades' sums in one product
+        # (B, Ns) 1 where a surface node is on blade b: a blade's sums as one product
         self._on_blade = np.array([mask for _, mask, _, _ in self.blades], dtype=np.float64
                                   ).reshape(len(self.blades), n)
         self.impulse_world = np.zeros((n, 3))    # N s, since the last row
@@ -350,7 +350,7 @@ class ShaftLoads:
         root moment and stresses from the supports' forces ``held`` (N) on the held nodes at
         ``r_held`` (m, frame axes from the centre), and its element stress ``peak`` (Pa,
         element)."""
-        label, mask, p, axes = self.blades[b]
+        _, _, p, axes = self.blades[b]
         rows, section, on = self._root_rows[b], self._sections[b], self._on_blade[b]
         j_world, j_frame, m_frame = (on @ self.impulse_world, on @ self.impulse_frame,
                                      on @ self.moment_frame)

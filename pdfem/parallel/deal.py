@@ -61,10 +61,9 @@ class Dealt:
         order). Collective when pieces are dealt out (every rank passes the same ``pieces``)."""
         if not self._shared:
             return list(zip(self.mine_of(pieces), parts))
-        every = (np.arange(len(self.owner)) if pieces is None
-                 else np.asarray(pieces, dtype=np.int64))
-        return [(int(k), part) for rank, rank_parts in enumerate(self.comm.allgather(parts))
-                for k, part in zip(every[self.owner[every] == rank], rank_parts)]
+        return [(int(k), part)
+                for ks, rank_parts in zip(self._by_rank(pieces), self.comm.allgather(parts))
+                for k, part in zip(ks, rank_parts)]
 
     def everyone_arrays(self, parts: list[np.ndarray], sizes: Sequence[int],
                         pieces: Sequence[int] | None = None) -> list[tuple[int, np.ndarray]]:
@@ -74,9 +73,7 @@ class Dealt:
         order. Collective when pieces are dealt out."""
         if not self._shared:
             return list(zip(self.mine_of(pieces), parts))
-        every = (np.arange(len(self.owner)) if pieces is None
-                 else np.asarray(pieces, dtype=np.int64))
-        by_rank = [every[self.owner[every] == rank] for rank in range(self.comm.size)]
+        by_rank = self._by_rank(pieces)
         counts = [int(sum(sizes[k] for k in ks)) for ks in by_rank]
         flat = self.comm.allgatherv(np.concatenate(parts) if parts else np.zeros(0), counts)
         out, at = [], 0
@@ -85,6 +82,12 @@ class Dealt:
                 out.append((int(k), flat[at:at + sizes[k]]))
                 at += sizes[k]
         return out
+
+    def _by_rank(self, pieces: Sequence[int] | None) -> list[np.ndarray]:
+        """The pieces of ``pieces`` (ascending; default all) that each rank does."""
+        every = (np.arange(len(self.owner)) if pieces is None
+                 else np.asarray(pieces, dtype=np.int64))
+        return [every[self.owner[every] == rank] for rank in range(self.comm.size)]
 
     def mine_of(self, pieces: Sequence[int] | None = None) -> list[int]:
         """This rank's pieces among ``pieces`` (ascending; default all): :attr:`mine` there."""
